@@ -1,0 +1,147 @@
+"""The `mavswarm` command line."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import math
+import multiprocessing
+import signal
+import sys
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+from emulator.clock import ClockConfig
+from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
+from emulator.swarm import PortPlan, Swarm
+
+__all__ = ["main"]
+
+MAX_VEHICLES_PER_NETWORK = 250
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mavswarm", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    up = sub.add_parser("up", help="run a swarm of emulated PX4 quadrotors until Ctrl-C")
+    up.add_argument("--drones", type=int, help="number of vehicles (default 5, or the session's)")
+    up.add_argument("--session", type=Path, help="MultiUAV-Plat or mavswarm session JSON file")
+    up.add_argument("--speed", type=float, default=1.0, help="simulation speed x real time")
+    up.add_argument("--stepped", action="store_true",
+                    help="advance simulated time only while a vehicle executes a goal")
+    up.add_argument("--physics-hz", type=float, default=50.0, help="physics step rate")
+    up.add_argument("--bind-host", default="0.0.0.0")
+    up.add_argument("--bind-port", type=int, default=None,
+                    help="swarm socket port (default 14580; per-vehicle: base, default 18570)")
+    up.add_argument("--api-port", type=int, default=14540, help="MAVSDK port (0: none)")
+    up.add_argument("--gcs-port", type=int, default=14550, help="QGroundControl port (0: none)")
+    up.add_argument("--per-vehicle-ports", action="store_true",
+                    help="one socket and port pair per vehicle (PX4 multi-instance style)")
+    up.add_argument("--truth-out", type=Path, help="write the ground-truth record here on exit")
+    return parser
+
+
+def _scenario(args: argparse.Namespace) -> Scenario:
+    if args.session is None:
+        return default_scenario(args.drones if args.drones is not None else 5)
+    scenario = load_scenario(args.session)
+    if args.drones is not None:
+        if not 1 <= args.drones <= len(scenario.vehicles):
+            raise ScenarioError(
+                f"{args.session}: --drones {args.drones} but the session has "
+                f"{len(scenario.vehicles)} drones"
+            )
+        scenario = replace(scenario, vehicles=scenario.vehicles[: args.drones])
+    return scenario
+
+
+async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
+                 truth_out: Path | None) -> None:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError):
+            loop.add_signal_handler(sig, stop.set)
+    async with Swarm(scenario, clock=clock, ports=ports) as swarm:
+        mode = "stepped" if clock.stepped else f"{clock.speed:g}x real time"
+        print(f"{label}{swarm.n} vehicles from {scenario.source}, {mode}, "
+              f"physics {clock.physics_hz:g} Hz", flush=True)
+        for url in swarm.connection_urls():
+            print(f"{label}  {url}", flush=True)
+        await stop.wait()
+        stats = swarm.stats()
+        print(f"{label}stopping after {stats.sim_time_s:.1f} s simulated in "
+              f"{stats.wall_time_s:.1f} s (real-time factor {stats.real_time_factor:.2f}); "
+              f"{stats.frames_bad} malformed frames dropped", flush=True)
+        if truth_out is not None:
+            path = swarm.export_truth(truth_out)
+            print(f"{label}ground truth written to {path}", flush=True)
+
+
+def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
+                 truth_out: Path | None) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(_serve(scenario, clock, ports, label, truth_out))
+
+
+def _up(args: argparse.Namespace) -> int:
+    clock = ClockConfig(physics_hz=args.physics_hz, speed=args.speed, stepped=args.stepped)
+    total = args.drones if args.drones is not None else None
+    if args.session is None and total is not None and total > MAX_VEHICLES_PER_NETWORK:
+        return _up_networks(args, clock, total)
+    scenario = _scenario(args)
+    bind = args.bind_port if args.bind_port is not None else (
+        18570 if args.per_vehicle_ports else 14580)
+    ports = PortPlan(bind_host=args.bind_host, bind_port=bind, api_port=args.api_port,
+                     gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(_serve(scenario, clock, ports, "", args.truth_out))
+    return 0
+
+
+def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> int:
+    """More than 250 vehicles: one process per MAVLink network of at most 250."""
+    if args.per_vehicle_ports:
+        raise ValueError("--per-vehicle-ports is limited to 250 vehicles")
+    count = math.ceil(total / MAX_VEHICLES_PER_NETWORK)
+    bind = args.bind_port if args.bind_port is not None else 14580
+    procs = []
+    for j in range(count):
+        n = min(MAX_VEHICLES_PER_NETWORK, total - j * MAX_VEHICLES_PER_NETWORK)
+        ports = PortPlan(bind_host=args.bind_host, bind_port=bind + j,
+                         api_port=args.api_port + j if args.api_port else 0,
+                         gcs_port=args.gcs_port + j if args.gcs_port else 0)
+        truth = args.truth_out.with_suffix(f".net{j}.npz") if args.truth_out else None
+        proc = multiprocessing.Process(
+            target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth),
+            name=f"mavswarm-net{j}",
+        )
+        proc.start()
+        procs.append(proc)
+    try:
+        for proc in procs:
+            proc.join()
+    except KeyboardInterrupt:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            proc.join()
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _build_parser().parse_args(argv)
+    try:
+        if args.command == "up":
+            return _up(args)
+    except (ScenarioError, ValueError, OSError) as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

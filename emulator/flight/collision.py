@@ -1,0 +1,74 @@
+"""Collision prevention's safety net: no vehicle ever enters an obstacle volume.
+
+Goals are already cut short at the safety margin when they are set (World.first_blockage);
+this guard covers what a straight-line check cannot (curved paths when a goal changes in
+flight, velocity set-points, wind drift). It is cheap because it is lazy: after measuring a
+vehicle's clearance D to the nearest obstacle volume, the vehicle cannot reach any obstacle
+before D / v_max seconds, so it is not looked at again until then.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import shapely
+
+from emulator.world import World
+
+__all__ = ["ClearanceGuard"]
+
+RECHECK_MIN_S = 0.0
+
+
+class ClearanceGuard:
+    """Per-vehicle clearance bookkeeping for one world."""
+
+    def __init__(self, world: World, n: int) -> None:
+        obstacles = world.obstacles
+        self.enabled = bool(obstacles)
+        self._footprints = np.array([o.footprint for o in obstacles], dtype=object)
+        self._heights = np.array([o.height_m for o in obstacles], dtype=float)
+        self._capped = self._heights > 0.0
+        if self.enabled:
+            shapely.prepare(self._footprints)
+        self.check_at_s = np.zeros(n)
+
+    def clearance_m(self, x_m: float, y_m: float, z_m: float) -> float:
+        """Distance from a point to the nearest obstacle volume (0 when inside one)."""
+        if not self.enabled:
+            return math.inf
+        d_xy = shapely.distance(self._footprints, shapely.Point(x_m, y_m))
+        above = np.where(self._capped, np.maximum(0.0, z_m - self._heights), 0.0)
+        return float(np.sqrt(d_xy * d_xy + above * above).min())
+
+    def forget(self, k: int) -> None:
+        """Force a fresh check of vehicle k (its motion limits changed)."""
+        self.check_at_s[k] = 0.0
+
+    def check(self, now_s: float, candidates: np.ndarray, new_pos: np.ndarray,
+              max_speed_m_s: Callable[[int], float], dt_s: float) -> np.ndarray:
+        """Indices among `candidates` whose new position lies inside an obstacle.
+
+        Vehicles whose clearance deadline has passed are measured at `new_pos`; the rest
+        provably cannot have reached an obstacle yet.
+        """
+        if not self.enabled or candidates.size == 0:
+            return candidates[:0]
+        due = candidates[self.check_at_s[candidates] <= now_s]
+        if due.size == 0:
+            return due
+        hits = []
+        for k in due:
+            x, y, z = new_pos[k]
+            clearance = self.clearance_m(float(x), float(y), float(z))
+            if clearance <= 0.0:
+                hits.append(k)
+                self.check_at_s[k] = 0.0
+            else:
+                # Travel time to the nearest volume, less one step of slack.
+                self.check_at_s[k] = now_s + max(
+                    RECHECK_MIN_S, clearance / max(max_speed_m_s(int(k)), 0.1) - dt_s
+                )
+        return np.asarray(hits, dtype=np.intp)

@@ -1,0 +1,220 @@
+"""Vectorised point-mass kinematics for the whole fleet, stepped at a fixed dt.
+
+Every vehicle is a point mass whose velocity follows a commanded set-point under
+acceleration limits: horizontal speed, climb and descent rates, horizontal and vertical
+acceleration, a yaw-rate limit and a maximum airspeed against the session's wind. A position
+goal is flown along the straight 3D line to it with a braking profile, so arrival is smooth
+and never overshoots; nothing ever jumps. State is stored as ``(n, 3)`` arrays in ENU metres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "CONTROL_NONE",
+    "CONTROL_POSITION",
+    "CONTROL_VELOCITY",
+    "TRACK_NONE",
+    "TRACK_PASS",
+    "TRACK_SETTLE",
+    "FleetDynamics",
+    "StepEvents",
+]
+
+CONTROL_NONE = 0  # resting on the ground: no motion
+CONTROL_POSITION = 1  # fly to `goal_m`
+CONTROL_VELOCITY = 2  # follow `velocity_sp_m_s`
+
+TRACK_NONE = 0  # no arrival report wanted
+TRACK_PASS = 1  # report once inside the acceptance radius
+TRACK_SETTLE = 2  # report once inside the acceptance radius and settled
+
+SETTLED_SPEED_M_S = 0.3
+YAW_REACHED_DEG = 1.0
+_EMPTY = np.empty(0, dtype=np.intp)
+
+
+@dataclass(frozen=True, slots=True)
+class StepEvents:
+    """Indices of vehicles for which something happened during one step."""
+
+    arrived: np.ndarray
+    yaw_reached: np.ndarray
+    touched_down: np.ndarray
+    obstacle_stop: np.ndarray
+
+    @property
+    def empty(self) -> bool:
+        return not (
+            self.arrived.size or self.yaw_reached.size or self.touched_down.size
+            or self.obstacle_stop.size
+        )
+
+
+_NO_EVENTS = StepEvents(_EMPTY, _EMPTY, _EMPTY, _EMPTY)
+
+
+class FleetDynamics:
+    """State and limits of n vehicles; `step(dt_s)` advances all of them at once."""
+
+    def __init__(self, n: int) -> None:
+        if not 1 <= n <= 250:
+            raise ValueError(f"a fleet holds 1 to 250 vehicles, got {n}")
+        self.n = n
+        self.position_m = np.zeros((n, 3))
+        self.velocity_m_s = np.zeros((n, 3))
+        self.accel_m_s2 = np.zeros((n, 3))
+        self.yaw_deg = np.zeros(n)
+        # commands
+        self.control = np.zeros(n, dtype=np.int8)
+        self.goal_m = np.zeros((n, 3))
+        self.goal_yaw_deg = np.full(n, np.nan)
+        self.velocity_sp_m_s = np.zeros((n, 3))
+        self.tracking = np.zeros(n, dtype=np.int8)
+        self.yaw_tracking = np.zeros(n, dtype=bool)
+        # limits
+        self.speed_xy_m_s = np.full(n, 8.0)
+        self.airspeed_max_m_s = np.full(n, 12.0)
+        self.climb_m_s = np.full(n, 3.0)
+        self.descent_m_s = np.full(n, 1.5)
+        self.accel_xy_m_s2 = np.full(n, 3.0)
+        self.accel_z_m_s2 = np.full(n, 4.0)
+        self.yaw_rate_deg_s = np.full(n, 45.0)
+        self.acceptance_m = np.full(n, 2.0)
+        self.wind_m_s = np.zeros(2)
+
+    # ------------------------------------------------------------------ step
+    def step(self, dt_s: float, guard=None) -> StepEvents:
+        """Advance every vehicle by dt_s.
+
+        `guard(candidates, new_position) -> indices` is collision prevention's safety net: a
+        vehicle whose next position it rejects stops where it is.
+        """
+        control = self.control
+        active = control != CONTROL_NONE
+        if not active.any():
+            return _NO_EVENTS
+        pos = self.position_m
+        err = self.goal_m - pos
+        d_xy = np.hypot(err[:, 0], err[:, 1])
+        v_des = self._desired_velocity(err, d_xy, dt_s)
+        v_new = self._accel_limited(v_des, dt_s)
+        v_new[~active] = 0.0
+        new_pos = pos + v_new * dt_s
+        below = new_pos[:, 2] < 0.0
+        if below.any():
+            new_pos[below, 2] = 0.0
+            v_new[below, 2] = np.maximum(v_new[below, 2], 0.0)
+        stopped = _EMPTY
+        if guard is not None:
+            moving = np.flatnonzero(active & (np.abs(v_new).sum(axis=1) > 0.0))
+            stopped = guard(moving, new_pos)
+            if stopped.size:
+                new_pos[stopped] = pos[stopped]
+                v_new[stopped] = 0.0
+        self.accel_m_s2 = (v_new - self.velocity_m_s) * (1.0 / dt_s)
+        self.velocity_m_s = v_new
+        self.position_m = new_pos
+        yaw_reached = self._step_yaw(dt_s, active, err, d_xy)
+        return StepEvents(self._arrivals(), yaw_reached, self._touchdowns(below), stopped)
+
+    def _desired_velocity(self, err: np.ndarray, d_xy: np.ndarray, dt_s: float) -> np.ndarray:
+        d_z = err[:, 2]
+        dist = np.sqrt(d_xy * d_xy + d_z * d_z)
+        inv = 1.0 / np.maximum(dist, 1e-9)
+        h = d_xy * inv
+        w = np.abs(d_z) * inv
+        vz_lim = np.where(d_z >= 0.0, self.climb_m_s, self.descent_m_s)
+        # Speed along the line so that neither the horizontal nor the vertical limit is broken.
+        s_max = np.minimum(self.speed_xy_m_s * (1.0 / np.maximum(h, 1e-9)),
+                           vz_lim * (1.0 / np.maximum(w, 1e-9)))
+        a_eff = np.minimum(self.accel_xy_m_s2 * (1.0 / np.maximum(h, 1e-9)),
+                           self.accel_z_m_s2 * (1.0 / np.maximum(w, 1e-9)))
+        speed = np.minimum(np.minimum(s_max, np.sqrt(2.0 * a_eff * dist)), dist * (1.0 / dt_s))
+        v_des = err * (speed * inv)[:, None]
+        is_vel = self.control == CONTROL_VELOCITY
+        if is_vel.any():
+            sp = self.velocity_sp_m_s[is_vel].copy()
+            sp[:, 2] = np.clip(sp[:, 2], -self.descent_m_s[is_vel], self.climb_m_s[is_vel])
+            v_des[is_vel] = sp
+        return v_des
+
+    def _accel_limited(self, v_des: np.ndarray, dt_s: float) -> np.ndarray:
+        vel = self.velocity_m_s
+        dv = v_des - vel
+        dv_xy = np.hypot(dv[:, 0], dv[:, 1])
+        scale = np.minimum(1.0, self.accel_xy_m_s2 * dt_s / np.maximum(dv_xy, 1e-12))
+        dv[:, :2] *= scale[:, None]
+        lim_z = self.accel_z_m_s2 * dt_s
+        np.clip(dv[:, 2], -lim_z, lim_z, out=dv[:, 2])
+        v_new = vel + dv
+        # The airframe cannot exceed its airspeed limit: in strong wind it drifts.
+        if self.wind_m_s.any() or (dv_xy > 0).any():
+            air = v_new[:, :2] - self.wind_m_s
+            air_speed = np.hypot(air[:, 0], air[:, 1])
+            over = air_speed > self.airspeed_max_m_s
+            if over.any():
+                air[over] *= (self.airspeed_max_m_s[over] / air_speed[over])[:, None]
+                v_new[:, :2] = air + self.wind_m_s
+        return v_new
+
+    def _step_yaw(self, dt_s: float, active: np.ndarray, err: np.ndarray,
+                  d_xy: np.ndarray) -> np.ndarray:
+        goal = self.goal_yaw_deg
+        free = np.isnan(goal)
+        far = free & (self.control == CONTROL_POSITION) & (d_xy > 2.0)
+        if far.any():
+            bearing = np.degrees(np.arctan2(err[:, 0], err[:, 1]))
+            desired = np.where(far, bearing, np.where(free, self.yaw_deg, goal))
+        elif free.all():
+            return _EMPTY
+        else:
+            desired = np.where(free, self.yaw_deg, goal)
+        diff = (desired - self.yaw_deg + 540.0) % 360.0 - 180.0
+        limit = self.yaw_rate_deg_s * dt_s
+        step = np.clip(diff, -limit, limit)
+        step[~active] = 0.0
+        self.yaw_deg = (self.yaw_deg + step) % 360.0
+        if not self.yaw_tracking.any():
+            return _EMPTY
+        done = self.yaw_tracking & (np.abs(diff - step) < YAW_REACHED_DEG)
+        idx = np.flatnonzero(done)
+        if idx.size:
+            self.yaw_tracking[idx] = False
+        return idx
+
+    def _arrivals(self) -> np.ndarray:
+        tracking = self.tracking
+        if not tracking.any():
+            return _EMPTY
+        err = self.goal_m - self.position_m
+        inside = np.einsum("ij,ij->i", err, err) <= self.acceptance_m**2
+        settled = np.einsum("ij,ij->i", self.velocity_m_s, self.velocity_m_s) <= (
+            SETTLED_SPEED_M_S**2
+        )
+        done = inside & ((tracking == TRACK_PASS) | ((tracking == TRACK_SETTLE) & settled))
+        idx = np.flatnonzero(done)
+        if idx.size:
+            tracking[idx] = TRACK_NONE
+        return idx
+
+    def _touchdowns(self, below: np.ndarray) -> np.ndarray:
+        if not below.any():
+            return _EMPTY
+        descending = np.where(self.control == CONTROL_VELOCITY, self.velocity_sp_m_s[:, 2],
+                              self.goal_m[:, 2]) < 0.0
+        landing = below & descending & (self.control != CONTROL_NONE)
+        return np.flatnonzero(landing)
+
+    # ----------------------------------------------------------------- helpers
+    def speed_m_s(self, k: int) -> float:
+        v = self.velocity_m_s[k]
+        return math.sqrt(float(v @ v))
+
+    def airspeed_m_s(self) -> np.ndarray:
+        air = self.velocity_m_s[:, :2] - self.wind_m_s
+        return np.hypot(air[:, 0], air[:, 1])

@@ -1,0 +1,125 @@
+"""The PX4-named parameter set each emulated vehicle exposes and obeys.
+
+Only parameters the emulator really uses are listed: changing one changes the flight. Values
+are validated against their range before they are stored, so a bad PARAM_SET changes nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+__all__ = ["PARAM_DEFINITIONS", "ParamDefinition", "ParamError", "ParamStore"]
+
+
+class ParamError(ValueError):
+    """Raised when a parameter name is unknown or a value is outside its range."""
+
+
+@dataclass(frozen=True, slots=True)
+class ParamDefinition:
+    name: str
+    default: float
+    minimum: float
+    maximum: float
+    is_int: bool = False
+    description: str = ""
+
+
+def _p(name: str, default: float, lo: float, hi: float, desc: str, *, is_int: bool = False) -> ParamDefinition:
+    return ParamDefinition(name, default, lo, hi, is_int, desc)
+
+
+PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
+    _p("MIS_TAKEOFF_ALT", 10.0, 1.0, 120.0, "takeoff altitude above home when none is given (m)"),
+    _p("MPC_XY_CRUISE", 8.0, 0.5, 30.0, "default horizontal speed in missions and goto (m/s)"),
+    _p("MPC_XY_VEL_MAX", 12.0, 0.5, 30.0, "maximum horizontal airspeed (m/s)"),
+    _p("MPC_Z_VEL_MAX_UP", 3.0, 0.5, 8.0, "maximum climb rate (m/s)"),
+    _p("MPC_Z_VEL_MAX_DN", 1.5, 0.5, 4.0, "maximum descent rate (m/s)"),
+    _p("MPC_TKO_SPEED", 1.5, 0.5, 5.0, "takeoff climb rate (m/s)"),
+    _p("MPC_LAND_SPEED", 0.7, 0.2, 2.0, "final landing descent rate (m/s)"),
+    _p("MPC_LAND_ALT2", 5.0, 0.0, 50.0, "altitude below which landing slows to MPC_LAND_SPEED (m)"),
+    _p("MPC_ACC_HOR", 3.0, 0.5, 15.0, "horizontal acceleration limit (m/s^2)"),
+    _p("MPC_ACC_UP_MAX", 4.0, 0.5, 15.0, "vertical acceleration limit (m/s^2)"),
+    _p("MPC_YAWRAUTO_MAX", 45.0, 5.0, 360.0, "yaw rate limit in auto modes (deg/s)"),
+    _p("NAV_ACC_RAD", 2.0, 0.05, 200.0, "acceptance radius of waypoints and goto (m)"),
+    _p("RTL_RETURN_ALT", 30.0, 0.0, 150.0, "minimum altitude for the return leg of RTL (m)"),
+    _p("COM_DISARM_LAND", 2.0, -1.0, 20.0, "auto-disarm delay after landing (s, -1 off)"),
+    _p("COM_DISARM_PRFLT", 10.0, -1.0, 60.0, "auto-disarm delay when armed without takeoff (s)"),
+    _p("COM_OF_LOSS_T", 1.0, 0.1, 60.0, "offboard setpoint loss timeout (wall s)"),
+    _p("CP_DIST", 2.0, 0.0, 15.0, "collision prevention: stop distance before obstacles (m)"),
+    _p("GF_MAX_VER_DIST", 120.0, 1.0, 10000.0, "altitude ceiling above home (m)"),
+    _p("GF_MAX_HOR_DIST", 10000.0, 10.0, 100000.0, "maximum horizontal distance from home (m)"),
+    _p("BAT_LOW_THR", 0.15, 0.12, 0.5, "low battery warning threshold (fraction)"),
+    _p("BAT_CRIT_THR", 0.07, 0.05, 0.5, "critical battery threshold: return home (fraction)"),
+    _p("BAT_EMERGEN_THR", 0.05, 0.03, 0.5, "emergency battery threshold: land (fraction)"),
+    _p("BAT_CAPACITY", 5000.0, 100.0, 100000.0, "battery capacity (mAh)"),
+    _p("BAT_N_CELLS", 4, 1, 14, "number of cells in series", is_int=True),
+    _p("BAT_V_CHARGED", 4.2, 3.5, 4.5, "cell voltage when full (V)"),
+    _p("BAT_V_EMPTY", 3.5, 2.5, 4.0, "cell voltage when empty (V)"),
+    _p("SIM_HOVER_ENDUR", 1200.0, 60.0, 36000.0, "hover endurance on a full battery (s)"),
+    _p("SIM_SENS_RAD", 50.0, 1.0, 10000.0, "sensor (perceived) radius (m)"),
+    _p("SIM_TASK_RAD", 20.0, 0.1, 10000.0, "task radius (m)"),
+    _p("MAV_SYS_ID", 1, 1, 250, "MAVLink system id", is_int=True),
+    _p("MAV_TYPE", 2, 0, 50, "MAVLink vehicle type (2 = quadrotor)", is_int=True),
+    _p("SYS_AUTOSTART", 10016, 0, 9999999, "airframe id (SITL quadrotor)", is_int=True),
+    _p("SYS_HITL", 0, 0, 2, "hardware in the loop", is_int=True),
+    _p("CAL_ACC0_ID", 1310988, 0, 2**31 - 1, "accelerometer calibration id", is_int=True),
+    _p("CAL_GYRO0_ID", 1310988, 0, 2**31 - 1, "gyro calibration id", is_int=True),
+    _p("CAL_MAG0_ID", 197388, 0, 2**31 - 1, "magnetometer calibration id", is_int=True),
+    _p("COM_RC_IN_MODE", 4, 0, 4, "RC input mode (4 = none needed)", is_int=True),
+)
+
+_BY_NAME: dict[str, ParamDefinition] = {d.name: d for d in PARAM_DEFINITIONS}
+
+
+class ParamStore(Mapping[str, float]):
+    """One vehicle's parameter values, in definition order (PARAM_VALUE index order)."""
+
+    __slots__ = ("_values",)
+
+    def __init__(self, overrides: Mapping[str, float] | None = None) -> None:
+        self._values: dict[str, float] = {d.name: float(d.default) for d in PARAM_DEFINITIONS}
+        for name, value in (overrides or {}).items():
+            self.set(name, value)
+
+    def __getitem__(self, name: str) -> float:
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    @staticmethod
+    def definition(name: str) -> ParamDefinition:
+        try:
+            return _BY_NAME[name]
+        except KeyError:
+            raise ParamError(f"unknown parameter {name!r}") from None
+
+    @staticmethod
+    def index_of(name: str) -> int:
+        return list(_BY_NAME).index(name)
+
+    @staticmethod
+    def name_at(index: int) -> str:
+        if not 0 <= index < len(PARAM_DEFINITIONS):
+            raise ParamError(f"parameter index {index} outside 0..{len(PARAM_DEFINITIONS) - 1}")
+        return PARAM_DEFINITIONS[index].name
+
+    def set(self, name: str, value: float) -> float:
+        """Validate and store a value; returns the stored value. Raises ParamError."""
+        d = self.definition(name)
+        if not isinstance(value, int | float) or not math.isfinite(value):
+            raise ParamError(f"{name}: value must be a finite number, got {value!r}")
+        if d.is_int:
+            if value != int(value):
+                raise ParamError(f"{name}: integer parameter, got {value}")
+            value = int(value)
+        if not d.minimum <= value <= d.maximum:
+            raise ParamError(f"{name}: {value:g} outside [{d.minimum:g}, {d.maximum:g}]")
+        self._values[name] = float(value)
+        return float(value)

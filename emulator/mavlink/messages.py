@@ -1,0 +1,210 @@
+"""Builders of the MAVLink messages a vehicle sends, from its autopilot's state."""
+
+from __future__ import annotations
+
+import math
+
+from emulator.flight.autopilot import Autopilot
+from emulator.flight.battery import (
+    BATTERY_CRITICAL,
+    BATTERY_EMERGENCY,
+    BATTERY_LOW,
+    cell_voltage_v,
+)
+from emulator.flight.modes import FlightMode
+from emulator.mavlink.codec import mavlink
+
+__all__ = [
+    "MAV_AUTOPILOT_PX4",
+    "MAV_TYPE_QUADROTOR",
+    "attitude",
+    "autopilot_version",
+    "battery_status",
+    "extended_sys_state",
+    "global_position_int",
+    "gps_raw_int",
+    "heartbeat",
+    "home_position",
+    "local_position_ned",
+    "mission_current",
+    "statustext",
+    "sys_status",
+    "vfr_hud",
+]
+
+MAV_TYPE_QUADROTOR = 2
+MAV_AUTOPILOT_PX4 = 12
+GRAVITY_M_S2 = 9.80665
+
+_MODE_FLAG_CUSTOM = 1
+_MODE_FLAG_AUTO = 4
+_MODE_FLAG_GUIDED = 8
+_MODE_FLAG_STABILIZE = 16
+_MODE_FLAG_ARMED = 128
+_STATE_STANDBY, _STATE_ACTIVE, _STATE_CRITICAL, _STATE_EMERGENCY = 3, 4, 5, 6
+
+# SYS_STATUS sensor bits: gyro, accel, mag, baro, GPS, rate/attitude/yaw/z/xy control,
+# motor outputs, geofence, AHRS, battery, pre-arm check.
+_SENSORS = (
+    0x1 | 0x2 | 0x4 | 0x8 | 0x20 | 0x400 | 0x800 | 0x1000 | 0x2000 | 0x4000 | 0x8000
+    | 0x100000 | 0x200000 | 0x2000000
+)
+_PREARM_CHECK = 0x10000000
+
+_CAP_MISSION_FLOAT, _CAP_PARAM_FLOAT, _CAP_MISSION_INT, _CAP_COMMAND_INT = 1, 2, 4, 8
+_CAP_PARAM_BYTEWISE, _CAP_POS_LOCAL_NED, _CAP_POS_GLOBAL_INT, _CAP_MAVLINK2 = 16, 256, 512, 8192
+CAPABILITIES = (
+    _CAP_MISSION_FLOAT | _CAP_PARAM_FLOAT | _CAP_MISSION_INT | _CAP_COMMAND_INT
+    | _CAP_PARAM_BYTEWISE | _CAP_POS_LOCAL_NED | _CAP_POS_GLOBAL_INT | _CAP_MAVLINK2
+)
+FLIGHT_SW_VERSION = (1 << 24) | (15 << 16) | (0 << 8) | 0xFF  # 1.15.0 release
+
+
+def _e7(deg: float) -> int:
+    return int(round(deg * 1e7))
+
+
+def _geo(ap: Autopilot, p: tuple[float, float, float]) -> tuple[int, int, int]:
+    lat, lon, alt = ap.fleet.world.origin.to_geodetic(*p)
+    return _e7(lat), _e7(lon), int(round(alt * 1000.0))
+
+
+def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:
+    mode = ap.mode
+    base = _MODE_FLAG_CUSTOM | _MODE_FLAG_STABILIZE | _MODE_FLAG_GUIDED
+    if mode is not FlightMode.OFFBOARD:
+        base |= _MODE_FLAG_AUTO
+    if ap.armed:
+        base |= _MODE_FLAG_ARMED
+    level = int(ap.fleet.bat.level[ap.k])
+    if level == BATTERY_EMERGENCY:
+        state = _STATE_EMERGENCY
+    elif level == BATTERY_CRITICAL:
+        state = _STATE_CRITICAL
+    else:
+        state = _STATE_ACTIVE if ap.armed else _STATE_STANDBY
+    return mavlink.MAVLink_heartbeat_message(
+        MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, base, mode.custom_mode, state, 3
+    )
+
+
+def _voltage_mv(ap: Autopilot) -> int:
+    p = ap.params
+    cell = cell_voltage_v(ap.battery_pct, p["BAT_V_EMPTY"], p["BAT_V_CHARGED"])
+    return int(cell * p["BAT_N_CELLS"] * 1000.0)
+
+
+def sys_status(ap: Autopilot) -> mavlink.MAVLink_message:
+    health = _SENSORS
+    if ap.fleet.bat.level[ap.k] < BATTERY_CRITICAL:
+        health |= _PREARM_CHECK
+    present = _SENSORS | _PREARM_CHECK
+    return mavlink.MAVLink_sys_status_message(
+        present, present, health, 150, _voltage_mv(ap), -1, int(ap.battery_pct), 0, 0, 0, 0, 0, 0
+    )
+
+
+_CHARGE_STATE = {0: 1, BATTERY_LOW: 2, BATTERY_CRITICAL: 3, BATTERY_EMERGENCY: 4}
+
+
+def battery_status(ap: Autopilot) -> mavlink.MAVLink_message:
+    f, k = ap.fleet, ap.k
+    pct = ap.battery_pct
+    capacity = ap.params["BAT_CAPACITY"]
+    charging = f.bat.charge_rate_pct_s[k] > 0.0
+    state = 7 if charging else _CHARGE_STATE[int(f.bat.level[k])]
+    cells = [65535] * 10
+    cells[0] = min(_voltage_mv(ap), 65534)
+    remaining_s = int(pct / 100.0 * f.bat.hover_endurance_s[k])
+    return mavlink.MAVLink_battery_status_message(
+        0, 1, 1, 32767, cells, -1, int((100.0 - pct) / 100.0 * capacity), -1, int(pct),
+        remaining_s, state,
+    )
+
+
+def extended_sys_state(ap: Autopilot) -> mavlink.MAVLink_message:
+    return mavlink.MAVLink_extended_sys_state_message(0, ap.landed_state.value)
+
+
+def global_position_int(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_message:
+    f, k = ap.fleet, ap.k
+    p = ap.position_m
+    lat, lon, alt = _geo(ap, p)
+    v = f.dyn.velocity_m_s[k]
+    hdg = int(round(f.dyn.yaw_deg[k] * 100.0)) % 36000
+    rel_mm = int(round((p[2] - ap.home_m[2]) * 1000.0))
+    return mavlink.MAVLink_global_position_int_message(
+        time_boot_ms, lat, lon, alt, rel_mm,
+        int(round(v[1] * 100.0)), int(round(v[0] * 100.0)), int(round(-v[2] * 100.0)), hdg,
+    )
+
+
+def local_position_ned(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_message:
+    x, y, z = ap.position_m
+    v = ap.fleet.dyn.velocity_m_s[ap.k]
+    return mavlink.MAVLink_local_position_ned_message(
+        time_boot_ms, y, x, -z, float(v[1]), float(v[0]), float(-v[2])
+    )
+
+
+def attitude(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_message:
+    f, k = ap.fleet, ap.k
+    yaw = math.radians(float(f.dyn.yaw_deg[k]))
+    a = f.dyn.accel_m_s2[k]
+    a_north, a_east = float(a[1]), float(a[0])
+    forward = a_north * math.cos(yaw) + a_east * math.sin(yaw)
+    right = -a_north * math.sin(yaw) + a_east * math.cos(yaw)
+    pitch = -math.atan2(forward, GRAVITY_M_S2)
+    roll = math.atan2(right, GRAVITY_M_S2)
+    yaw_wrapped = math.atan2(math.sin(yaw), math.cos(yaw))
+    return mavlink.MAVLink_attitude_message(time_boot_ms, roll, pitch, yaw_wrapped, 0.0, 0.0, 0.0)
+
+
+def gps_raw_int(ap: Autopilot, time_usec: int) -> mavlink.MAVLink_message:
+    f, k = ap.fleet, ap.k
+    lat, lon, alt = _geo(ap, ap.position_m)
+    v = f.dyn.velocity_m_s[k]
+    ground = math.hypot(float(v[0]), float(v[1]))
+    cog = int(round(math.degrees(math.atan2(v[0], v[1])) * 100.0)) % 36000 if ground > 0.1 else 0
+    return mavlink.MAVLink_gps_raw_int_message(
+        time_usec, 3, lat, lon, alt, 80, 120, int(round(ground * 100.0)), cog, 14,
+        alt, 500, 800, 100, 0, 0,
+    )
+
+
+def vfr_hud(ap: Autopilot) -> mavlink.MAVLink_message:
+    f, k = ap.fleet, ap.k
+    v = f.dyn.velocity_m_s[k]
+    air = f.dyn.airspeed_m_s()[k]
+    ground = math.hypot(float(v[0]), float(v[1]))
+    throttle = 50 if ap.in_air else (10 if ap.armed else 0)
+    alt = ap.fleet.world.origin.altitude_amsl_m + ap.position_m[2]
+    return mavlink.MAVLink_vfr_hud_message(
+        float(air), ground, int(f.dyn.yaw_deg[k]) % 360, throttle, alt, float(v[2])
+    )
+
+
+def home_position(ap: Autopilot, time_usec: int) -> mavlink.MAVLink_message:
+    lat, lon, alt = _geo(ap, ap.home_m)
+    hx, hy, hz = ap.home_m
+    return mavlink.MAVLink_home_position_message(
+        lat, lon, alt, hy, hx, -hz, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0, time_usec
+    )
+
+
+def mission_current(ap: Autopilot) -> mavlink.MAVLink_message:
+    m = ap.mission
+    return mavlink.MAVLink_mission_current_message(
+        m.current, m.total, m.state, 1 if ap.mode is FlightMode.MISSION else 0
+    )
+
+
+def autopilot_version(ap: Autopilot) -> mavlink.MAVLink_message:
+    return mavlink.MAVLink_autopilot_version_message(
+        CAPABILITIES, FLIGHT_SW_VERSION, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0x26AC, 0x0011,
+        0x4D53570000000000 + ap.k + 1,
+    )
+
+
+def statustext(severity: int, text: str) -> mavlink.MAVLink_message:
+    return mavlink.MAVLink_statustext_message(severity, text.encode("ascii", "replace")[:50])

@@ -1,0 +1,94 @@
+"""Periodic telemetry streams, scheduled on the wall clock for every vehicle at once.
+
+Rates are wall-clock rates whatever the simulation speed, so a ground station is neither
+flooded at a high speed-up nor starved when simulated time stands still. Phases are
+staggered by vehicle so a large swarm does not send in bursts.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["CAMERA_HEARTBEAT", "DEFAULT_STREAMS", "StreamSchedule", "StreamSpec"]
+
+CAMERA_HEARTBEAT = -1  # pseudo message id: the camera component's heartbeat
+
+
+@dataclass(frozen=True, slots=True)
+class StreamSpec:
+    msg_id: int
+    name: str
+    default_hz: float
+
+
+DEFAULT_STREAMS: tuple[StreamSpec, ...] = (
+    StreamSpec(0, "HEARTBEAT", 1.0),
+    StreamSpec(1, "SYS_STATUS", 1.0),
+    StreamSpec(245, "EXTENDED_SYS_STATE", 1.0),
+    StreamSpec(33, "GLOBAL_POSITION_INT", 10.0),
+    StreamSpec(32, "LOCAL_POSITION_NED", 10.0),
+    StreamSpec(30, "ATTITUDE", 10.0),
+    StreamSpec(24, "GPS_RAW_INT", 1.0),
+    StreamSpec(74, "VFR_HUD", 2.0),
+    StreamSpec(42, "MISSION_CURRENT", 1.0),
+    StreamSpec(147, "BATTERY_STATUS", 0.5),
+    StreamSpec(242, "HOME_POSITION", 0.5),
+    StreamSpec(CAMERA_HEARTBEAT, "CAMERA_HEARTBEAT", 1.0),
+)
+
+
+class StreamSchedule:
+    """When each (vehicle, stream) pair is next due, in wall-clock seconds."""
+
+    def __init__(self, n: int, wall_now_s: float, rates_hz: Mapping[str, float] | None = None,
+                 streams: tuple[StreamSpec, ...] = DEFAULT_STREAMS) -> None:
+        rates = dict(rates_hz or {})
+        unknown = set(rates) - {s.name for s in streams}
+        if unknown:
+            raise ValueError(f"unknown telemetry streams {sorted(unknown)}")
+        self.streams = streams
+        self.column = {s.msg_id: i for i, s in enumerate(streams)}
+        hz = np.array([rates.get(s.name, s.default_hz) for s in streams], dtype=float)
+        if (hz < 0).any():
+            raise ValueError("telemetry rates must be >= 0 Hz (0 disables a stream)")
+        with np.errstate(divide="ignore"):
+            period = np.where(hz > 0, 1.0 / hz, math.inf)
+        self.default_period_s = period
+        self.period_s = np.tile(period, (n, 1))
+        stagger = (np.arange(n) / max(n, 1))[:, None]
+        self.next_due_s = wall_now_s + np.where(np.isfinite(period), period * stagger, math.inf)
+
+    def due(self, wall_now_s: float) -> Iterator[tuple[int, np.ndarray]]:
+        """(msg_id, vehicle indices) for every stream with something due; reschedules them."""
+        due = self.next_due_s <= wall_now_s
+        if not due.any():
+            return
+        for col in np.flatnonzero(due.any(axis=0)):
+            ks = np.flatnonzero(due[:, col])
+            period = self.period_s[ks, col]
+            nxt = self.next_due_s[ks, col] + period
+            late = nxt <= wall_now_s
+            nxt[late] = wall_now_s + period[late]
+            self.next_due_s[ks, col] = nxt
+            yield self.streams[col].msg_id, ks
+
+    def set_interval(self, k: int, msg_id: int, interval_s: float | None, wall_now_s: float) -> bool:
+        """Change one vehicle's stream period (None: default, inf: off). False if unknown."""
+        col = self.column.get(msg_id)
+        if col is None:
+            return False
+        period = self.default_period_s[col] if interval_s is None else interval_s
+        self.period_s[k, col] = period
+        self.next_due_s[k, col] = wall_now_s + period if math.isfinite(period) else math.inf
+        return True
+
+    def interval_s(self, k: int, msg_id: int) -> float | None:
+        col = self.column.get(msg_id)
+        return None if col is None else float(self.period_s[k, col])
+
+    def next_wakeup_s(self) -> float:
+        return float(self.next_due_s.min())

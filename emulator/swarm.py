@@ -1,0 +1,294 @@
+"""A running swarm: the fleet, its MAVLink links and sockets, driven by one scheduler loop."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from emulator.clock import ClockConfig, RealTimePacer
+from emulator.flight.fleet import Fleet
+from emulator.mavlink.streams import StreamSchedule
+from emulator.mavlink.vehicle_link import VehicleLink
+from emulator.scenario import Scenario
+from emulator.transport import UdpEndpoint
+
+__all__ = ["PortPlan", "Swarm", "SwarmStats"]
+
+LOOP_TICK_S = 0.005
+STEP_BUDGET_S = 0.02
+LINK_TICK_S = 0.05
+
+
+@dataclass(frozen=True, slots=True)
+class PortPlan:
+    """Where the swarm listens and sends.
+
+    Shared (default): one socket bound at `bind_port` for every vehicle, sending to
+    `api_port` (MAVSDK: ``udpin://0.0.0.0:14540``) and `gcs_port` (QGroundControl).
+    Per-vehicle: vehicle k binds `bind_port + k - 1` and sends to `api_port + k - 1` and
+    `gcs_port`, PX4 multi-instance style. 0 for `api_port`/`gcs_port` disables that target.
+    """
+
+    bind_host: str = "0.0.0.0"
+    bind_port: int = 0
+    api_host: str = "127.0.0.1"
+    api_port: int = 14540
+    gcs_port: int = 14550
+    per_vehicle: bool = False
+
+    def check(self, n: int) -> None:
+        for name in ("bind_port", "api_port", "gcs_port"):
+            port = getattr(self, name)
+            if not 0 <= port <= 65535:
+                raise ValueError(f"{name} {port} outside 0..65535")
+        if not self.per_vehicle:
+            if self.bind_port and self.bind_port in (self.api_port, self.gcs_port):
+                raise ValueError(f"bind port {self.bind_port} is also a destination port")
+            return
+        if self.bind_port == 0:
+            raise ValueError("per-vehicle ports need an explicit bind port base")
+        binds = range(self.bind_port, self.bind_port + n)
+        apis = range(self.api_port, self.api_port + n) if self.api_port else range(0)
+        if self.gcs_port and self.gcs_port in apis:
+            raise ValueError(
+                f"{n} vehicles need API ports {apis.start}-{apis.stop - 1}, which include the "
+                f"GCS port {self.gcs_port}; choose another --api-port"
+            )
+        if set(binds) & (set(apis) | {self.gcs_port}):
+            raise ValueError(
+                f"bind ports {binds.start}-{binds.stop - 1} overlap destination ports"
+            )
+        if binds.stop - 1 > 65535 or (apis and apis.stop - 1 > 65535):
+            raise ValueError("port range exceeds 65535")
+
+
+@dataclass(frozen=True, slots=True)
+class SwarmStats:
+    sim_time_s: float
+    wall_time_s: float
+    real_time_factor: float
+    steps: int
+    slipped_s: float
+    frames_ok: int
+    frames_bad: int
+    datagrams_in: int
+    datagrams_out: int
+
+
+class Swarm:
+    """N emulated PX4 quadrotors on UDP. Use `async with Swarm(...) as swarm:`."""
+
+    def __init__(self, scenario: Scenario, *, clock: ClockConfig | None = None,
+                 ports: PortPlan | None = None,
+                 telemetry_hz: Mapping[str, float] | None = None) -> None:
+        self.clock = clock or ClockConfig()
+        self.ports = ports or PortPlan()
+        self.ports.check(len(scenario.vehicles))
+        self.fleet = Fleet(scenario, physics_hz=self.clock.physics_hz)
+        wall = time.monotonic()
+        self.streams = StreamSchedule(self.fleet.n, wall, telemetry_hz)
+        self._endpoint_of: list[UdpEndpoint] = []
+        self.links = [
+            VehicleLink(ap, self._emit, self.streams, time.monotonic)
+            for ap in self.fleet.autopilots
+        ]
+        self.endpoints: list[UdpEndpoint] = []
+        self._task: asyncio.Task[None] | None = None
+        self._wake = asyncio.Event()
+        self._advance_to_s = 0.0
+        self._advance_waiters: list[tuple[float, asyncio.Future[None]]] = []
+        self._idle_waiters: list[asyncio.Future[None]] = []
+        self._pacer: RealTimePacer | None = None
+        self._wall_start_s = wall
+        self._sim_start_s = 0.0
+
+    # -------------------------------------------------------------- lifecycle
+    async def __aenter__(self) -> Swarm:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()
+
+    async def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        p = self.ports
+        groups = [[link] for link in self.links] if p.per_vehicle else [self.links]
+        try:
+            for i, group in enumerate(groups):
+                dests = []
+                if p.api_port:
+                    dests.append((p.api_host, p.api_port + (i if p.per_vehicle else 0)))
+                if p.gcs_port:
+                    dests.append((p.api_host, p.gcs_port))
+                port = p.bind_port + i if p.per_vehicle else p.bind_port
+                endpoint = UdpEndpoint(group, dests, time.monotonic, self._wake.set)
+                await loop.create_datagram_endpoint(
+                    lambda e=endpoint: e, local_addr=(p.bind_host, port)
+                )
+                self.endpoints.append(endpoint)
+                self._endpoint_of.extend([endpoint] * len(group))
+        except OSError as error:
+            for endpoint in self.endpoints:
+                endpoint.close()
+            raise OSError(f"cannot open the swarm's UDP sockets: {error}") from error
+        self._wall_start_s = time.monotonic()
+        self._sim_start_s = self.fleet.now_s
+        self._pacer = None if self.clock.stepped else RealTimePacer(self.clock, self._wall_start_s)
+        self._task = asyncio.create_task(self._run(), name="mavswarm-scheduler")
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+        for endpoint in self.endpoints:
+            endpoint.close()
+        for _, fut in self._advance_waiters:
+            if not fut.done():
+                fut.cancel()
+        for fut in self._idle_waiters:
+            if not fut.done():
+                fut.cancel()
+
+    def _emit(self, k: int, data: bytes) -> None:
+        if self._endpoint_of:
+            self._endpoint_of[k].emit(k, data)
+
+    # ----------------------------------------------------------------- access
+    @property
+    def n(self) -> int:
+        return self.fleet.n
+
+    @property
+    def recorder(self):
+        """Ground truth: for validators and tests, never for agents."""
+        return self.fleet.recorder
+
+    def connection_urls(self) -> list[str]:
+        p = self.ports
+        urls = []
+        if p.api_port:
+            if p.per_vehicle:
+                urls.append(f"udpin://0.0.0.0:{p.api_port} .. {p.api_port + self.n - 1} "
+                            "(one per vehicle)")
+            else:
+                urls.append(f"MAVSDK:         udpin://0.0.0.0:{p.api_port}")
+        if p.gcs_port:
+            urls.append(f"QGroundControl: UDP {p.gcs_port} (default link)")
+        if self.endpoints and not p.per_vehicle:
+            host, port = self.endpoints[0].local_address
+            urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{port}")
+        return urls
+
+    def stats(self) -> SwarmStats:
+        wall = time.monotonic() - self._wall_start_s
+        sim = self.fleet.now_s - self._sim_start_s
+        return SwarmStats(
+            sim_time_s=sim, wall_time_s=wall, real_time_factor=sim / wall if wall > 0 else 0.0,
+            steps=self.fleet.step_count,
+            slipped_s=self._pacer.slipped_s if self._pacer else 0.0,
+            frames_ok=sum(e.decoder.frames_ok for e in self.endpoints),
+            frames_bad=sum(e.decoder.frames_bad for e in self.endpoints),
+            datagrams_in=sum(e.stats.datagrams_in for e in self.endpoints),
+            datagrams_out=sum(e.stats.datagrams_out for e in self.endpoints),
+        )
+
+    def export_truth(self, path: str | Path) -> Path:
+        return self.fleet.recorder.export(path)
+
+    # -------------------------------------------------------------- stepping
+    async def advance(self, seconds: float) -> None:
+        """Advance simulated time by `seconds` (stepped mode; in real time, just wait)."""
+        if not (math.isfinite(seconds) and seconds >= 0.0):
+            raise ValueError(f"cannot advance by {seconds!r} s")
+        target = self.fleet.now_s + seconds
+        if not self.clock.stepped:
+            await asyncio.sleep(seconds / self.clock.speed)
+            return
+        self._advance_to_s = max(self._advance_to_s, target)
+        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self._advance_waiters.append((target, fut))
+        self._wake.set()
+        await fut
+
+    async def wait_idle(self) -> None:
+        """Return once no vehicle is executing a goal (stepped mode: the clock stops)."""
+        if not self.fleet.any_busy:
+            return
+        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self._idle_waiters.append(fut)
+        self._wake.set()
+        await fut
+
+    def _should_step(self) -> bool:
+        return self.fleet.any_busy or self.fleet.now_s + 1e-9 < self._advance_to_s
+
+    async def _run(self) -> None:
+        fleet = self.fleet
+        next_link_tick = next_peer_tick = 0.0
+        while True:
+            wall = time.monotonic()
+            if self.clock.stepped:
+                deadline = wall + STEP_BUDGET_S
+                count = 0
+                while self._should_step():
+                    fleet.step()
+                    count += 1
+                    if count % 16 == 0 and time.monotonic() > deadline:
+                        break
+                    if self._advance_waiters and fleet.now_s + 1e-9 >= self._advance_waiters[0][0]:
+                        self._release_waiters()
+                self._release_waiters()
+            else:
+                assert self._pacer is not None
+                for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
+                    fleet.step()
+                self._release_waiters()
+            wall = time.monotonic()
+            for msg_id, ks in self.streams.due(wall):
+                links = self.links
+                for k in ks:
+                    links[k].send_stream(msg_id)
+            if wall >= next_link_tick:
+                next_link_tick = wall + LINK_TICK_S
+                for link in self.links:
+                    if link.missions.uploading or link.ap.mode.name == "OFFBOARD":
+                        link.tick(wall)
+            if wall >= next_peer_tick:
+                next_peer_tick = wall + 1.0
+                for endpoint in self.endpoints:
+                    endpoint.expire_peers(wall)
+            if self.clock.stepped and self._should_step():
+                await asyncio.sleep(0)
+                continue
+            self._wake.clear()
+            timeout = min(LOOP_TICK_S, max(0.0, self.streams.next_wakeup_s() - time.monotonic()))
+            if self.clock.stepped:
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(self._wake.wait(), timeout=max(timeout, 0.0005))
+            else:
+                await asyncio.sleep(max(timeout, 0.0005))
+
+    def _release_waiters(self) -> None:
+        now = self.fleet.now_s
+        if self._advance_waiters:
+            keep = []
+            for target, fut in self._advance_waiters:
+                if now + 1e-9 >= target:
+                    if not fut.done():
+                        fut.set_result(None)
+                else:
+                    keep.append((target, fut))
+            self._advance_waiters = keep
+        if self._idle_waiters and not self.fleet.any_busy:
+            for fut in self._idle_waiters:
+                if not fut.done():
+                    fut.set_result(None)
+            self._idle_waiters = []

@@ -1,0 +1,399 @@
+"""Ground-truth history of the emulated world, read only by validators.
+
+:meth:`TruthRecorder.record_step` runs once per physics step with arrays for every vehicle. A
+row ``(t_s, x_m, y_m, z_m, yaw_deg, battery_pct)`` is stored for a vehicle on the first step,
+on every step it moves, on the step it stops (its resting sample), and for every vehicle on
+each keyframe tick: the first step at or after ``first_t_s + k * keyframe_s`` (k = 1, 2, ...),
+so a resting vehicle's battery drain shows. Rows are staged with fixed numpy work per step and
+moved to per-vehicle chunk lists in batches; a query joins a vehicle's chunks into one array.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+from abc import ABC, abstractmethod
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ["TRAJECTORY_COLUMNS", "TruthEvent", "TruthHistory", "TruthLog", "TruthRecorder"]
+
+FORMAT_VERSION = 1
+TRAJECTORY_COLUMNS: tuple[str, ...] = ("t_s", "x_m", "y_m", "z_m", "yaw_deg", "battery_pct")
+
+_N_COLS = len(TRAJECTORY_COLUMNS)
+_KEYFRAME_TOLERANCE_S = 1e-9
+_MIN_STAGE_ROWS = 4096
+_STAGE_ROWS_PER_VEHICLE = 64
+_FIRST_CHUNK_ROWS = 64
+_MAX_CHUNK_ROWS = 4096
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, np.ndarray | np.generic):
+        return value.tolist()
+    if isinstance(value, Mapping):
+        return dict(value)
+    raise TypeError(f"event data value of type {type(value).__name__} is not JSON-serialisable")
+
+
+def _freeze(value: Any) -> Any:
+    if isinstance(value, dict):
+        return MappingProxyType({key: _freeze(item) for key, item in value.items()})
+    if isinstance(value, list):
+        return tuple(_freeze(item) for item in value)
+    return value
+
+
+def _read_only_rows(rows: npt.ArrayLike) -> np.ndarray:
+    array = np.array(rows, dtype=np.float64).reshape(-1, _N_COLS)
+    if np.any(np.diff(array[:, 0]) < 0.0):
+        raise ValueError("trajectory rows are not sorted by time")
+    array.setflags(write=False)
+    return array
+
+
+def _as_time(value: float | None, name: str, default: float) -> float:
+    t = default if value is None else float(value)
+    if math.isnan(t):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    return t
+
+
+@dataclass(frozen=True, slots=True)
+class TruthEvent:
+    """Something that happened to one vehicle at one instant; ``data`` is read-only JSON."""
+
+    t_s: float
+    vehicle_id: str
+    kind: str
+    data: Mapping[str, Any]
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.t_s):
+            raise ValueError(f"event t_s must be finite, got {self.t_s!r}")
+        for name in ("vehicle_id", "kind"):
+            if not isinstance(value := getattr(self, name), str) or not value:
+                raise ValueError(f"event {name} must be a non-empty string, got {value!r}")
+        try:
+            plain = json.loads(json.dumps(dict(self.data), default=_json_default))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"event {self.kind!r} data is not JSON-serialisable: {exc}") from exc
+        object.__setattr__(self, "t_s", float(self.t_s))
+        object.__setattr__(self, "data", _freeze(plain))
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON-ready form; ``TruthEvent(**event.to_json())`` rebuilds the event."""
+        data = json.loads(json.dumps(self.data, default=_json_default))
+        return {"t_s": self.t_s, "vehicle_id": self.vehicle_id, "kind": self.kind, "data": data}
+
+
+class TruthHistory(ABC):
+    """Queries shared by the live :class:`TruthRecorder` and a loaded :class:`TruthLog`."""
+
+    def __init__(self, vehicle_ids: Sequence[str], keyframe_s: float) -> None:
+        if isinstance(vehicle_ids, str):
+            raise TypeError("vehicle_ids must be a sequence of ids, not a single string")
+        ids = tuple(vehicle_ids)
+        if bad := [v for v in ids if not isinstance(v, str) or not v]:
+            raise ValueError(f"vehicle ids must be non-empty strings, got {bad!r}")
+        if duplicates := sorted(v for v, count in Counter(ids).items() if count > 1):
+            raise ValueError(f"duplicate vehicle ids: {', '.join(duplicates)}")
+        if not (math.isfinite(keyframe_s) and keyframe_s > 0.0):
+            raise ValueError(f"keyframe_s must be a positive finite number, got {keyframe_s!r}")
+        self.vehicle_ids: tuple[str, ...] = ids
+        self.keyframe_s: float = float(keyframe_s)
+        self._index_of: dict[str, int] = {v: i for i, v in enumerate(ids)}
+        self._events: list[TruthEvent] = []
+        self._events_by_vehicle: list[list[TruthEvent]] = [[] for _ in ids]
+
+    @property
+    @abstractmethod
+    def end_t_s(self) -> float:
+        """Time of the latest recorded step; NaN when no step was recorded."""
+
+    @abstractmethod
+    def _samples(self, index: int) -> np.ndarray:
+        """Every row of vehicle ``index`` as an (M, 6) float64 array sorted by t; do not modify."""
+
+    @property
+    def stored_rows(self) -> int:
+        """Total trajectory rows held for all vehicles."""
+        return sum(self._samples(i).shape[0] for i in range(len(self.vehicle_ids)))
+
+    def _vehicle_index(self, vehicle_id: str) -> int:
+        try:
+            return self._index_of[vehicle_id]
+        except KeyError:
+            known = ", ".join(self.vehicle_ids) or "(none)"
+            raise KeyError(f"unknown vehicle {vehicle_id!r}; known vehicles: {known}") from None
+
+    def _add_event(self, event: TruthEvent) -> None:
+        index = self._vehicle_index(event.vehicle_id)
+        self._events_by_vehicle[index].append(event)
+        self._events.append(event)
+
+    def trajectory(
+        self, vehicle_id: str, t0_s: float | None = None, t1_s: float | None = None
+    ) -> np.ndarray:
+        """Rows (t_s, x_m, y_m, z_m, yaw_deg, battery_pct) as a new (M, 6) float64 array.
+
+        With ``t0_s`` the first row is the last sample at or before ``t0_s`` re-stamped to
+        ``t0_s`` (when one exists), followed by every sample in ``(t0_s, t1_s]``.
+        """
+        rows = self._samples(self._vehicle_index(vehicle_id))
+        t0 = _as_time(t0_s, "t0_s", -math.inf)
+        t1 = _as_time(t1_s, "t1_s", math.inf)
+        if t1 < t0:
+            raise ValueError(f"empty window: t1_s={t1} is before t0_s={t0}")
+        times = rows[:, 0]
+        stop = int(np.searchsorted(times, t1, side="right"))
+        first_after = int(np.searchsorted(times, t0, side="right"))
+        if t0_s is None or first_after == 0:
+            return rows[:stop].copy()
+        window = rows[first_after - 1 : stop].copy()
+        window[0, 0] = t0
+        return window
+
+    def position_at(self, vehicle_id: str, t_s: float) -> tuple[float, float, float]:
+        """ENU position interpolated linearly between samples, clamped to the first/last one."""
+        rows = self._samples(self._vehicle_index(vehicle_id))
+        if rows.shape[0] == 0:
+            raise ValueError(f"no samples recorded for vehicle {vehicle_id!r}")
+        t = _as_time(t_s, "t_s", math.nan)
+        after = int(np.searchsorted(rows[:, 0], t, side="right"))
+        if after == 0:
+            xyz = rows[0, 1:4]
+        elif after == rows.shape[0]:
+            xyz = rows[-1, 1:4]
+        else:
+            lo, hi = rows[after - 1], rows[after]
+            fraction = (t - lo[0]) / (hi[0] - lo[0])
+            xyz = lo[1:4] + fraction * (hi[1:4] - lo[1:4])
+        return (float(xyz[0]), float(xyz[1]), float(xyz[2]))
+
+    def events(
+        self,
+        vehicle_id: str | None = None,
+        t0_s: float | None = None,
+        t1_s: float | None = None,
+        kinds: Iterable[str] | None = None,
+    ) -> list[TruthEvent]:
+        """Events in recording order, filtered by vehicle, ``t0_s <= t_s <= t1_s`` and kind."""
+        t0 = _as_time(t0_s, "t0_s", -math.inf)
+        t1 = _as_time(t1_s, "t1_s", math.inf)
+        if isinstance(kinds, str):
+            kinds = (kinds,)
+        wanted = None if kinds is None else frozenset(kinds)
+        index = None if vehicle_id is None else self._vehicle_index(vehicle_id)
+        candidates = self._events if index is None else self._events_by_vehicle[index]
+        return [e for e in candidates if t0 <= e.t_s <= t1 and (wanted is None or e.kind in wanted)]
+
+    def export(self, path: str | Path) -> Path:
+        """Write the whole history to one compressed ``.npz`` file, atomically."""
+        target = Path(path)
+        arrays: dict[str, Any] = {
+            f"trajectory_{i:05d}": self._samples(i) for i in range(len(self.vehicle_ids))
+        }
+        end_t_s = None if math.isnan(self.end_t_s) else self.end_t_s
+        meta: dict[str, Any] = {"vehicle_ids": list(self.vehicle_ids), "end_t_s": end_t_s}
+        meta.update(columns=list(TRAJECTORY_COLUMNS), keyframe_s=self.keyframe_s)
+        arrays["meta_json"] = np.str_(json.dumps(meta))
+        arrays["events_json"] = np.str_(json.dumps([e.to_json() for e in self._events]))
+        arrays["format_version"] = np.array(FORMAT_VERSION)
+        fd, temp_name = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
+        try:
+            with os.fdopen(fd, "wb") as handle:
+                np.savez_compressed(handle, **arrays)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.replace(temp_name, target)
+        except BaseException:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(temp_name)
+            raise
+        return target
+
+
+class TruthLog(TruthHistory):
+    """Read-only truth history, e.g. loaded from an exported file."""
+
+    def __init__(
+        self,
+        vehicle_ids: Sequence[str],
+        trajectories: Sequence[npt.ArrayLike],
+        events: Iterable[TruthEvent] = (),
+        *,
+        end_t_s: float = math.nan,
+        keyframe_s: float = 1.0,
+    ) -> None:
+        super().__init__(vehicle_ids, keyframe_s)
+        if len(trajectories) != len(self.vehicle_ids):
+            raise ValueError(f"{len(trajectories)} trajectories for {len(self.vehicle_ids)} ids")
+        self._trajectories = tuple(_read_only_rows(rows) for rows in trajectories)
+        for event in events:
+            self._add_event(event)
+        self._end_t_s = float(end_t_s)
+
+    @property
+    def end_t_s(self) -> float:
+        return self._end_t_s
+
+    def _samples(self, index: int) -> np.ndarray:
+        return self._trajectories[index]
+
+    @classmethod
+    def load(cls, path: str | Path) -> TruthLog:
+        """Read a file written by :meth:`TruthHistory.export`."""
+        with np.load(Path(path), allow_pickle=False) as archive:
+            version = int(archive["format_version"]) if "format_version" in archive else None
+            if version != FORMAT_VERSION:
+                raise ValueError(f"{path}: truth log format {version}, expected {FORMAT_VERSION}")
+            meta = json.loads(str(archive["meta_json"]))
+            ids = meta["vehicle_ids"]
+            trajectories = [archive[f"trajectory_{i:05d}"] for i in range(len(ids))]
+            events = [TruthEvent(**e) for e in json.loads(str(archive["events_json"]))]
+        end_t_s = math.nan if meta["end_t_s"] is None else meta["end_t_s"]
+        return cls(ids, trajectories, events, end_t_s=end_t_s, keyframe_s=meta["keyframe_s"])
+
+
+class TruthRecorder(TruthHistory):
+    """Records every vehicle's trajectory at physics-step resolution, plus events."""
+
+    def __init__(self, vehicle_ids: Sequence[str], *, keyframe_s: float = 1.0) -> None:
+        super().__init__(vehicle_ids, keyframe_s)
+        n = len(self.vehicle_ids)
+        self._n = n
+        self._all_index = np.arange(n, dtype=np.intp)
+        self._shapes = ((n, 3), (n,), (n,), (n,))
+        self._was_moving = np.zeros(n, dtype=bool)
+        stage_rows = max(_MIN_STAGE_ROWS, _STAGE_ROWS_PER_VEHICLE * n)
+        self._stage = np.empty((stage_rows, _N_COLS + 1), dtype=np.float64)
+        self._stage_len = 0
+        self._owner_dtype = np.uint16 if n <= 2**16 else np.intp
+        self._chunks = [[np.empty((_FIRST_CHUNK_ROWS, _N_COLS))] for _ in range(n)]
+        self._fill = [0] * n
+        self._end_t_s = -math.inf
+        self._first_t_s = math.nan
+        self._next_keyframe_t_s = -math.inf
+
+    @property
+    def end_t_s(self) -> float:
+        return math.nan if self._end_t_s == -math.inf else self._end_t_s
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the staging and per-vehicle buffers."""
+        return self._stage.nbytes + sum(c.nbytes for chunks in self._chunks for c in chunks)
+
+    def record_step(
+        self,
+        t_s: float,
+        position_m: npt.ArrayLike,
+        yaw_deg: npt.ArrayLike,
+        battery_pct: npt.ArrayLike,
+        moving: npt.ArrayLike,
+    ) -> None:
+        """Record one physics step: position_m (N, 3) ENU, yaw_deg, battery_pct, moving (N,)."""
+        t = float(t_s)
+        if not self._end_t_s <= t < math.inf:
+            raise ValueError(
+                f"t_s must be finite and non-decreasing: got {t_s!r} after {self.end_t_s!r}"
+            )
+        position_m = np.asarray(position_m)
+        yaw_deg, battery_pct = np.asarray(yaw_deg), np.asarray(battery_pct)
+        moving = np.asarray(moving, dtype=bool)
+        shapes = (position_m.shape, yaw_deg.shape, battery_pct.shape, moving.shape)
+        if shapes != self._shapes:
+            raise ValueError(
+                f"record_step expects shapes {self._shapes} for position_m, yaw_deg, "
+                f"battery_pct, moving; got {shapes}"
+            )
+        if t >= self._next_keyframe_t_s:
+            self._schedule_next_keyframe(t)
+            index = self._all_index
+        else:
+            index = (moving | self._was_moving).nonzero()[0]
+        np.copyto(self._was_moving, moving)
+        self._end_t_s = t
+        if not index.size:
+            return
+        if self._stage_len + index.size > self._stage.shape[0]:
+            self._flush()
+        start = self._stage_len
+        self._stage_len = end = start + index.size
+        rows = self._stage[start:end]
+        rows[:, 0] = t
+        rows[:, 1:4] = position_m.take(index, 0)
+        rows[:, 4] = yaw_deg.take(index)
+        rows[:, 5] = battery_pct.take(index)
+        rows[:, 6] = index
+
+    def record_event(self, t_s: float, vehicle_id: str, kind: str, **data: Any) -> TruthEvent:
+        """Record an event for a known vehicle; ``data`` must be JSON-serialisable."""
+        event = TruthEvent(t_s=float(t_s), vehicle_id=vehicle_id, kind=kind, data=data)
+        self._add_event(event)
+        return event
+
+    def snapshot(self) -> TruthLog:
+        """An independent read-only copy of everything recorded so far."""
+        ids, rows = self.vehicle_ids, [self._samples(i) for i in range(self._n)]
+        return TruthLog(ids, rows, self._events, end_t_s=self.end_t_s, keyframe_s=self.keyframe_s)
+
+    @classmethod
+    def load(cls, path: str | Path) -> TruthLog:
+        """Read an exported history as a read-only :class:`TruthLog`."""
+        return TruthLog.load(path)
+
+    def _schedule_next_keyframe(self, t: float) -> None:
+        if math.isnan(self._first_t_s):
+            self._first_t_s = t
+        elapsed_s = t - self._first_t_s + _KEYFRAME_TOLERANCE_S
+        ticks_done = math.floor(elapsed_s / self.keyframe_s)
+        next_tick_s = self._first_t_s + (ticks_done + 1) * self.keyframe_s
+        self._next_keyframe_t_s = next_tick_s - _KEYFRAME_TOLERANCE_S
+
+    def _samples(self, index: int) -> np.ndarray:
+        if self._stage_len:
+            self._flush()
+        chunks, fill = self._chunks[index], self._fill[index]
+        if len(chunks) > 1:
+            chunks[:] = [np.concatenate([*chunks[:-1], chunks[-1][:fill]])]
+            fill = self._fill[index] = chunks[0].shape[0]
+        return chunks[0][:fill]
+
+    def _flush(self) -> None:
+        staged = self._stage[: self._stage_len]
+        owners = staged[:, _N_COLS].astype(self._owner_dtype)
+        grouped = staged[np.argsort(owners, kind="stable"), :_N_COLS]
+        counts = np.bincount(owners, minlength=self._n).tolist()
+        start = 0
+        for vehicle, count in enumerate(counts):
+            if count:
+                self._append(vehicle, grouped[start : start + count])
+                start += count
+        self._stage_len = 0
+
+    def _append(self, vehicle: int, rows: np.ndarray) -> None:
+        chunks, fill = self._chunks[vehicle], self._fill[vehicle]
+        last = chunks[-1]
+        room = last.shape[0] - fill
+        if rows.shape[0] <= room:
+            last[fill : fill + rows.shape[0]] = rows
+            self._fill[vehicle] = fill + rows.shape[0]
+            return
+        last[fill:], rest = rows[:room], rows[room:]
+        size = max(rest.shape[0], min(2 * last.shape[0], _MAX_CHUNK_ROWS))
+        chunks.append(np.empty((size, _N_COLS), dtype=np.float64))
+        chunks[-1][: rest.shape[0]] = rest
+        self._fill[vehicle] = rest.shape[0]

@@ -1,0 +1,1 @@
+"""mavlink_gateway"""
