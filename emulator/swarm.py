@@ -22,6 +22,7 @@ __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 LOOP_TICK_S = 0.005
 STEP_BUDGET_S = 0.02
 LINK_TICK_S = 0.05
+MAX_STEPS_PER_RUN = 2000
 
 
 @dataclass(frozen=True, slots=True)
@@ -227,6 +228,19 @@ class Swarm:
         self._wake.set()
         await fut
 
+    def _steps_allowed(self) -> int:
+        """Steps the stepped clock may run now: up to the next advance target when idle."""
+        if self.fleet.any_busy:
+            limit = MAX_STEPS_PER_RUN
+        else:
+            limit = 0
+        targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
+        ahead = [t for t in targets if t > self.fleet.now_s + 1e-9]
+        if ahead:
+            to_target = math.ceil((min(ahead) - self.fleet.now_s) / self.fleet.dt_s - 1e-9)
+            limit = to_target if limit == 0 else min(limit, to_target)
+        return max(1, limit)
+
     def _should_step(self) -> bool:
         return self.fleet.any_busy or self.fleet.now_s + 1e-9 < self._advance_to_s
 
@@ -237,15 +251,9 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
-                count = 0
-                while self._should_step():
-                    fleet.step()
-                    count += 1
-                    if count % 16 == 0 and time.monotonic() > deadline:
-                        break
-                    if self._advance_waiters and fleet.now_s + 1e-9 >= self._advance_waiters[0][0]:
-                        self._release_waiters()
-                self._release_waiters()
+                while self._should_step() and time.monotonic() < deadline:
+                    fleet.run(self._steps_allowed())
+                    self._release_waiters()
             else:
                 assert self._pacer is not None
                 for _ in range(self._pacer.steps_due(wall, fleet.step_count)):

@@ -339,6 +339,61 @@ class TruthRecorder(TruthHistory):
         rows[:, 5] = battery_pct.take(index)
         rows[:, 6] = index
 
+    def record_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,
+                     battery_pct: np.ndarray, moving: np.ndarray) -> None:
+        """Record K consecutive steps at once, with the same rows `record_step` would store.
+
+        t_s (K,) increasing, position_m (K, N, 3), battery_pct (K, N); yaw_deg (N,) and the
+        moving mask (N,) are constant over the K steps (steady flight).
+        """
+        t_s = np.asarray(t_s, dtype=float)
+        count = t_s.shape[0]
+        if count == 0:
+            return
+        if not (self._end_t_s <= t_s[0] and np.all(np.diff(t_s) >= 0) and np.isfinite(t_s[-1])):
+            raise ValueError("t_s must be finite and non-decreasing")
+        moving = np.asarray(moving, dtype=bool)
+        # Steps that carry a keyframe (every vehicle) instead of only the moving ones.
+        keyframe = np.zeros(count, dtype=bool)
+        k = 0
+        while k < count:
+            if t_s[k] >= self._next_keyframe_t_s:
+                keyframe[k] = True
+                self._schedule_next_keyframe(float(t_s[k]))
+                k += 1
+            else:
+                k = int(np.searchsorted(t_s, self._next_keyframe_t_s, side="left"))
+        first = (moving | self._was_moving).nonzero()[0]
+        rest = moving.nonzero()[0]
+        blocks = []
+        for step in range(count):
+            index = self._all_index if keyframe[step] else (first if step == 0 else rest)
+            if index.size:
+                blocks.append((step, index))
+        np.copyto(self._was_moving, moving)
+        self._end_t_s = float(t_s[-1])
+        if not blocks:
+            return
+        steps = np.concatenate([np.full(ix.size, st) for st, ix in blocks])
+        index = np.concatenate([ix for _, ix in blocks])
+        rows = np.empty((index.size, _N_COLS + 1))
+        rows[:, 0] = t_s[steps]
+        rows[:, 1:4] = position_m[steps, index]
+        rows[:, 4] = np.asarray(yaw_deg)[index]
+        rows[:, 5] = battery_pct[steps, index]
+        rows[:, 6] = index
+        self._stage_rows(rows)
+
+    def _stage_rows(self, rows: np.ndarray) -> None:
+        if self._stage_len + rows.shape[0] > self._stage.shape[0]:
+            self._flush()
+        if rows.shape[0] > self._stage.shape[0]:
+            self._group_into_chunks(rows)
+            return
+        start = self._stage_len
+        self._stage_len = start + rows.shape[0]
+        self._stage[start : self._stage_len] = rows
+
     def record_event(self, t_s: float, vehicle_id: str, kind: str, **data: Any) -> TruthEvent:
         """Record an event for a known vehicle; ``data`` must be JSON-serialisable."""
         event = TruthEvent(t_s=float(t_s), vehicle_id=vehicle_id, kind=kind, data=data)
@@ -373,7 +428,10 @@ class TruthRecorder(TruthHistory):
         return chunks[0][:fill]
 
     def _flush(self) -> None:
-        staged = self._stage[: self._stage_len]
+        self._group_into_chunks(self._stage[: self._stage_len])
+        self._stage_len = 0
+
+    def _group_into_chunks(self, staged: np.ndarray) -> None:
         owners = staged[:, _N_COLS].astype(self._owner_dtype)
         grouped = staged[np.argsort(owners, kind="stable"), :_N_COLS]
         counts = np.bincount(owners, minlength=self._n).tolist()
@@ -382,7 +440,6 @@ class TruthRecorder(TruthHistory):
             if count:
                 self._append(vehicle, grouped[start : start + count])
                 start += count
-        self._stage_len = 0
 
     def _append(self, vehicle: int, rows: np.ndarray) -> None:
         chunks, fill = self._chunks[vehicle], self._fill[vehicle]

@@ -368,20 +368,18 @@ def _pieces(ids: np.ndarray, edges: list[np.ndarray], polygons: np.ndarray,
     if d2 == 0.0:
         inside = ids[shapely.intersects_xy(polygons[ids], x0, y0)]
         return [(int(o), -math.inf, math.inf) for o in inside]
-    e = np.concatenate([edges[i] for i in ids])
-    # Columns: side of each edge end (cross product with the direction), then projections.
-    m = np.array([[-dy, 0.0, dx, 0.0], [dx, 0.0, dy, 0.0],
-                  [0.0, -dy, 0.0, dx], [0.0, dx, 0.0, dy]])
-    s = e @ m
-    side_0, along_0 = dx * y0 - dy * x0, dx * x0 + dy * y0
-    s -= (side_0, side_0, along_0, along_0)
-    mask = (s[:, 0] >= 0.0) != (s[:, 1] >= 0.0)
+    e = np.concatenate([edges[i] for i in ids]) - (x0, y0, x0, y0)
+    # Elementwise (not BLAS) so a vertex shared by two edges gets the very same side value.
+    side_a = dx * e[:, 1] - dy * e[:, 0]
+    side_b = dx * e[:, 3] - dy * e[:, 2]
+    mask = (side_a >= 0.0) != (side_b >= 0.0)
     if not mask.any():
         return []
     owners = np.repeat(ids, [len(edges[i]) for i in ids])[mask]
-    c = s[mask]
-    u = c[:, 0] / (c[:, 0] - c[:, 1])
-    t = (c[:, 2] + u * (c[:, 3] - c[:, 2])) / d2
+    c, sa, sb = e[mask], side_a[mask], side_b[mask]
+    u = sa / (sa - sb)
+    along_a = dx * c[:, 0] + dy * c[:, 1]
+    t = (along_a + u * (dx * c[:, 2] + dy * c[:, 3] - along_a)) / d2
     order = np.lexsort((t, owners))
     ts: list[float] = t[order].tolist()
     os_: list[int] = owners[order].tolist()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -96,7 +97,7 @@ def test_heights_block_altitudes() -> None:
         lambda: Target.disc("t", "t", "ufo", (0, 0, 0), 5.0),
     ],
 )
-def test_invalid_entities_are_rejected(build) -> None:  # type: ignore[no-untyped-def]
+def test_invalid_entities_are_rejected(build: Callable[[], object]) -> None:
     with pytest.raises(ValueError):
         build()
 
@@ -127,7 +128,9 @@ def test_targets() -> None:
         (360.0, (0.0, -1.0)),
     ],
 )
-def test_wind_vector_points_where_the_air_goes(from_deg: float, expected) -> None:  # type: ignore[no-untyped-def]
+def test_wind_vector_points_where_the_air_goes(
+    from_deg: float, expected: tuple[float, float]
+) -> None:
     vx, vy = Wind(4.0, from_deg).velocity_enu_m_s()
     assert (vx, vy) == pytest.approx((4.0 * expected[0], 4.0 * expected[1]), abs=1e-12)
 
@@ -200,7 +203,9 @@ _coordinate = st.one_of(st.integers(-35, 35).map(float),
 @given(st.lists(st.tuples(_coordinate, _coordinate, st.sampled_from([0.0, 4.9, 5.0, 7.0, 12.0,
                                                                       20.0, 20.5, 99.0])),
                 min_size=1, max_size=40))
-def test_inside_obstacles_matches_per_point_shapely(points) -> None:  # type: ignore[no-untyped-def]
+def test_inside_obstacles_matches_per_point_shapely(
+    points: list[tuple[float, float, float]],
+) -> None:
     x, y, z = (np.array(c, dtype=float) for c in zip(*points, strict=True))
     mask = _WORLD_FOR_POINTS.inside_obstacles(x, y, z)
     expected = [_inside_reference(_WORLD_FOR_POINTS, *p) for p in points]
@@ -402,7 +407,9 @@ _z = st.sampled_from([0.0, 5.0, 11.0, 12.0, 20.0, 30.0, 100.0])
 
 @settings(max_examples=200, deadline=None)
 @given(_xy, _xy, _xy, _xy, _z)
-def test_level_flight_matches_shapely_entry(x0, y0, x1, y1, z) -> None:  # type: ignore[no-untyped-def]
+def test_level_flight_matches_shapely_entry(
+    x0: float, y0: float, x1: float, y1: float, z: float
+) -> None:
     start = shapely.Point(x0, y0)
     zone = [b for b, o in zip(_BUFFERED, _RANDOM_OBSTACLES, strict=True)
             if o.height_m == 0.0 or z <= o.height_m + MARGIN_M]
@@ -427,7 +434,9 @@ def test_level_flight_matches_shapely_entry(x0, y0, x1, y1, z) -> None:  # type:
 
 @settings(max_examples=150, deadline=None)
 @given(_xy, _xy, _z, _xy, _xy, _z)
-def test_flown_part_never_enters_a_protected_volume(x0, y0, z0, x1, y1, z1) -> None:  # type: ignore[no-untyped-def]
+def test_flown_part_never_enters_a_protected_volume(
+    x0: float, y0: float, z0: float, x1: float, y1: float, z1: float
+) -> None:
     """Outside the margin zone a vehicle keeps the margin; inside it, it keeps out of the raw
     volume of the obstacle whose zone it started in."""
     if not _RANDOM_WORLD.clearance_ok(x0, y0, z0):

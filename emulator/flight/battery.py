@@ -22,6 +22,7 @@ __all__ = [
     "SPEED_POWER_PER_M2_S2",
     "FleetBattery",
     "cell_voltage_v",
+    "power_factor",
 ]
 
 SPEED_POWER_PER_M2_S2 = 0.004  # +0.4 % power per (m/s)^2 of airspeed: +40 % at 10 m/s
@@ -44,6 +45,13 @@ class FleetBattery:
         self.charge_rate_pct_s = np.zeros(n)  # > 0 while resting on a charging station
         self.level = np.zeros(n, dtype=np.int8)
 
+    def drain_pct_s(self, airborne: np.ndarray, armed: np.ndarray, airspeed_m_s: np.ndarray,
+                    climb_m_s: np.ndarray) -> np.ndarray:
+        """Discharge rate of every vehicle in percent per second (before charging)."""
+        power = np.where(airborne, power_factor(airspeed_m_s, climb_m_s),
+                         np.where(armed, GROUND_IDLE_POWER, 0.0))
+        return (100.0 / self.hover_endurance_s) * power
+
     def step(
         self,
         dt_s: float,
@@ -52,12 +60,9 @@ class FleetBattery:
         airspeed_m_s: np.ndarray,
         climb_m_s: np.ndarray,
     ) -> np.ndarray:
-        """Drain (or charge) for one step; returns indices whose level changed."""
-        power = 1.0 + SPEED_POWER_PER_M2_S2 * airspeed_m_s**2
-        power += CLIMB_POWER_PER_M_S * np.maximum(climb_m_s, 0.0)
-        power = np.where(airborne, power, np.where(armed, GROUND_IDLE_POWER, 0.0))
-        delta = -(100.0 / self.hover_endurance_s) * power * dt_s
-        delta += self.charge_rate_pct_s * dt_s
+        """Drain (or charge) for dt_s; returns indices whose level changed."""
+        rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
+        delta = (self.charge_rate_pct_s - rate) * dt_s
         self.pct = np.clip(self.pct + delta, 0.0, 100.0)
         return self._update_levels()
 
@@ -74,6 +79,12 @@ class FleetBattery:
         changed = np.flatnonzero(level != self.level)
         self.level = level
         return changed
+
+
+def power_factor(airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
+    """Electrical power relative to hover, from airspeed and climb rate."""
+    return 1.0 + SPEED_POWER_PER_M2_S2 * airspeed_m_s**2 + CLIMB_POWER_PER_M_S * np.maximum(
+        climb_m_s, 0.0)
 
 
 def cell_voltage_v(pct: float, empty_v: float, full_v: float) -> float:

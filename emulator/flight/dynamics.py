@@ -86,6 +86,7 @@ class FleetDynamics:
         self.yaw_rate_deg_s = np.full(n, 45.0)
         self.acceptance_m = np.full(n, 2.0)
         self.wind_m_s = np.zeros(2)
+        self.last_yaw_step_deg = 0.0  # largest yaw change of the last step
 
     # ------------------------------------------------------------------ step
     def step(self, dt_s: float, guard=None) -> StepEvents:
@@ -171,6 +172,7 @@ class FleetDynamics:
             bearing = np.degrees(np.arctan2(err[:, 0], err[:, 1]))
             desired = np.where(far, bearing, np.where(free, self.yaw_deg, goal))
         elif free.all():
+            self.last_yaw_step_deg = 0.0
             return _EMPTY
         else:
             desired = np.where(free, self.yaw_deg, goal)
@@ -178,6 +180,7 @@ class FleetDynamics:
         limit = self.yaw_rate_deg_s * dt_s
         step = np.clip(diff, -limit, limit)
         step[~active] = 0.0
+        self.last_yaw_step_deg = float(np.abs(step).max())
         self.yaw_deg = (self.yaw_deg + step) % 360.0
         if not self.yaw_tracking.any():
             return _EMPTY

@@ -8,6 +8,7 @@ import numpy as np
 from emulator.flight.autopilot import Autopilot, AutopilotListener
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
+from emulator.flight.cruise import steady_steps
 from emulator.flight.dynamics import CONTROL_NONE, FleetDynamics
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
@@ -37,6 +38,7 @@ class Fleet:
         self.sensor = Sensor(self.world)
         self.dt_s = 1.0 / physics_hz
         self.step_count = 0
+        self.battery_every_steps = BATTERY_EVERY_STEPS
         self.dyn = FleetDynamics(n)
         self.dyn.wind_m_s = np.asarray(self.world.wind.velocity_enu_m_s(), dtype=float)
         self.bat = FleetBattery(n)
@@ -106,11 +108,49 @@ class Fleet:
         return float(dyn.airspeed_max_m_s[k] + np.hypot(*dyn.wind_m_s)
                      + max(dyn.climb_m_s[k], dyn.descent_m_s[k]))
 
-    def run_steps(self, count: int) -> None:
-        for _ in range(count):
-            self.step()
+    def run(self, max_steps: int, *, fast_forward: bool = True) -> int:
+        """Advance up to max_steps, fast-forwarding through steady flight; returns steps run.
+
+        Stops early after any step in which no vehicle is busy any more, so a caller in
+        stepped mode never runs past the moment the swarm comes to rest.
+        """
+        done = 0
+        while done < max_steps:
+            leap = steady_steps(self, max_steps - done) if fast_forward else 0
+            if leap:
+                self._leap(leap)
+                done += leap
+            else:
+                self.step()
+                done += 1
+            if not self.busy.any():
+                break
+        return done
+
+    def _leap(self, count: int) -> None:
+        """`count` steps of pure constant-velocity motion (see emulator.flight.cruise)."""
+        dyn, dt = self.dyn, self.dt_s
+        first = self.step_count + 1
+        steps = np.arange(first, first + count)
+        positions = dyn.position_m + dyn.velocity_m_s * dt * (steps - self.step_count)[:, None, None]
+        battery = np.empty((count, self.n))
+        start = 0
+        for i in np.flatnonzero(steps % BATTERY_EVERY_STEPS == 0):
+            battery[start:i] = self.bat.pct
+            self.bat.step(dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
+                          dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
+            start = i
+        battery[start:] = self.bat.pct
+        self.step_count += count
+        dyn.position_m = positions[-1].copy()
+        self.recorder.record_steps(steps * dt, positions, dyn.yaw_deg, battery,
+                                   self._moving_mask())
+
+    def _moving_mask(self) -> np.ndarray:
+        dyn = self.dyn
+        return (dyn.control != CONTROL_NONE) & (dyn.velocity_m_s.any(axis=1) | dyn.yaw_tracking)
 
     def _record(self) -> None:
         dyn = self.dyn
-        moving = (dyn.control != CONTROL_NONE) & (dyn.velocity_m_s.any(axis=1) | dyn.yaw_tracking)
-        self.recorder.record_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct, moving)
+        self.recorder.record_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
+                                  self._moving_mask())

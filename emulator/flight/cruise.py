@@ -1,0 +1,90 @@
+"""Fast-forward through steady flight: how many physics steps provably change nothing but
+positions along straight lines at constant velocity.
+
+When every vehicle is either resting at its goal or cruising at its speed limit towards it,
+the next steps are pure constant-velocity motion until something can happen: braking
+begins, an acceptance radius or the ground is reached, a timer fires, a battery level or a
+collision-prevention check falls due. `steady_steps` computes that horizon; the fleet then
+applies those steps in one go, still recording every step of the trajectory.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from emulator.flight.battery import power_factor
+from emulator.flight.dynamics import CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
+
+if TYPE_CHECKING:
+    from emulator.flight.fleet import Fleet
+
+__all__ = ["steady_steps"]
+
+ACCEL_STEADY_M_S2 = 1e-6
+AT_GOAL_M = 1e-6
+
+
+def steady_steps(fleet: Fleet, limit: int) -> int:
+    """Steps (>= 2) the fleet can fast-forward through, or 0 if it must step normally."""
+    if limit < 2:
+        return 0
+    dyn, dt = fleet.dyn, fleet.dt_s
+    if np.abs(dyn.accel_m_s2).max() > ACCEL_STEADY_M_S2 or dyn.yaw_tracking.any():
+        return 0
+    if dyn.last_yaw_step_deg > 1e-9:
+        return 0
+    active = dyn.control != CONTROL_NONE
+    if (active & (dyn.control != CONTROL_POSITION)).any():
+        return 0
+    horizon = float(limit)
+    speed = np.sqrt(np.einsum("ij,ij->i", dyn.velocity_m_s, dyn.velocity_m_s))
+    moving = active & (speed > 1e-9)
+    err = dyn.goal_m - dyn.position_m
+    dist = np.sqrt(np.einsum("ij,ij->i", err, err))
+    if (active & ~moving & (dist > AT_GOAL_M)).any():
+        return 0  # about to start moving
+    if moving.any():
+        idx = np.flatnonzero(moving)
+        s, d, e = speed[idx], dist[idx], err[idx]
+        h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
+        w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
+        a_eff = np.minimum(dyn.accel_xy_m_s2[idx] / np.maximum(h, 1e-9),
+                           dyn.accel_z_m_s2[idx] / np.maximum(w, 1e-9))
+        step_m = s * dt
+        braking_m = s * s / (2.0 * a_eff)
+        free_m = d - braking_m
+        tracked = dyn.tracking[idx] != TRACK_NONE
+        free_m = np.where(tracked, np.minimum(free_m, d - dyn.acceptance_m[idx]), free_m)
+        vz = dyn.velocity_m_s[idx, 2]
+        ground_m = np.where(vz < 0.0, dyn.position_m[idx, 2] / np.maximum(-vz, 1e-9) * s, np.inf)
+        free_m = np.minimum(free_m, ground_m)
+        horizon = min(horizon, float((free_m / step_m).min()) - 2.0)
+        if fleet.guard.enabled:
+            due = fleet.guard.check_at_s[idx].min()
+            horizon = min(horizon, (due - fleet.now_s) / dt - 1.0)
+    timer = fleet.timer_s.min()
+    if math.isfinite(timer):
+        horizon = min(horizon, (timer - fleet.now_s) / dt - 1.0)
+    horizon = min(horizon, _battery_horizon_steps(fleet, moving))
+    return int(horizon) if horizon >= 2.0 else 0
+
+
+def _battery_horizon_steps(fleet: Fleet, moving: np.ndarray) -> float:
+    """Steps before any battery could cross a level (low, critical, emergency, empty, full)."""
+    bat, dyn, dt = fleet.bat, fleet.dyn, fleet.dt_s
+    rate = bat.drain_pct_s(fleet.airborne, fleet.armed, dyn.airspeed_m_s(),
+                           dyn.velocity_m_s[:, 2]) - bat.charge_rate_pct_s
+    pct = bat.pct
+    horizon = math.inf
+    draining = rate > 0.0
+    if draining.any():
+        levels = np.stack([bat.low_pct, bat.critical_pct, bat.emergency_pct, np.zeros_like(pct)])
+        gaps = np.where(levels < pct, pct - levels, np.inf).min(axis=0)
+        horizon = float((gaps[draining] / rate[draining]).min()) / dt
+    charging = rate < 0.0
+    if charging.any():
+        horizon = min(horizon, float(((100.0 - pct[charging]) / -rate[charging]).min()) / dt)
+    return horizon - 2.0 * fleet.battery_every_steps

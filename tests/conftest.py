@@ -1,0 +1,102 @@
+"""Shared fixtures: free UDP ports, running swarms, and a MAVSDK client that finds them."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import contextlib
+import socket
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+
+import pytest
+
+from emulator.clock import ClockConfig
+from emulator.scenario import Scenario, default_scenario
+from emulator.swarm import PortPlan, Swarm
+
+_handed_out: set[int] = set()
+
+
+def unused_udp_port(host: str = "127.0.0.1") -> int:
+    """A UDP port nobody is bound to now, never the same one twice in a session."""
+    for _ in range(100):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.bind((host, 0))
+            port = s.getsockname()[1]
+        if port not in _handed_out:
+            _handed_out.add(port)
+            return port
+    raise RuntimeError("no unused UDP port found")
+
+
+@pytest.fixture
+def udp_port() -> Callable[[], int]:
+    """Call it for a fresh unused UDP port on 127.0.0.1."""
+    return unused_udp_port
+
+
+SwarmFactory = Callable[..., Awaitable[Swarm]]
+
+
+@pytest.fixture
+async def swarm_factory() -> AsyncIterator[SwarmFactory]:
+    """`await swarm_factory(n)` starts a swarm on 127.0.0.1 and closes it after the test.
+
+    The swarm binds an ephemeral port and sends to a fresh API port (`swarm.ports.api_port`);
+    no GCS port. Keywords: `scenario` (default: `default_scenario(n)`), `speed` (real-time
+    factor, default 20), `clock` (overrides `speed`), `telemetry_hz`.
+    """
+    swarms: list[Swarm] = []
+
+    async def make(n: int = 1, *, scenario: Scenario | None = None, speed: float = 20.0,
+                   clock: ClockConfig | None = None, **kwargs: object) -> Swarm:
+        ports = PortPlan(bind_host="127.0.0.1", bind_port=0, api_port=unused_udp_port(),
+                         gcs_port=0)
+        swarm = Swarm(scenario or default_scenario(n), clock=clock or ClockConfig(speed=speed),
+                      ports=ports, **kwargs)  # type: ignore[arg-type]
+        await swarm.start()
+        swarms.append(swarm)
+        return swarm
+
+    try:
+        yield make
+    finally:
+        for swarm in reversed(swarms):
+            await swarm.close()
+
+
+@contextlib.asynccontextmanager
+async def mavsdk_systems(port: int, n: int, *, timeout_s: float = 10.0,
+                         url: str | None = None) -> AsyncIterator[list]:
+    """A GROUND_STATION MAVSDK listening on `udpin://127.0.0.1:port`, until `n` systems are
+    connected with an autopilot; yields them sorted by system id (mavsdk.asyncio Systems).
+
+    Enlarges the loop's default executor first: the binding runs every blocking call on it.
+    """
+    from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
+
+    loop = asyncio.get_running_loop()
+    loop.set_default_executor(concurrent.futures.ThreadPoolExecutor(max(32, 2 * n + 8)))
+    config = Configuration.create_with_component_type(ComponentType.GROUND_STATION)
+    async with Mavsdk(config) as mavsdk:
+        await mavsdk.add_any_connection(url or f"udpin://127.0.0.1:{port}")
+        deadline = time.monotonic() + timeout_s
+        while True:
+            ready = []
+            for system in await mavsdk.get_systems():
+                if await system.is_connected() and await system.has_autopilot():
+                    ready.append((await system.get_system_id(), system))
+            if len(ready) >= n:
+                break
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"MAVSDK found {len(ready)} of {n} systems in {timeout_s} s")
+            await asyncio.sleep(0.05)
+        ready.sort(key=lambda pair: pair[0])
+        yield [system for _, system in ready]
+
+
+@pytest.fixture
+def mavsdk_client() -> Callable[..., contextlib.AbstractAsyncContextManager[list]]:
+    """`async with mavsdk_client(swarm.ports.api_port, n) as systems:` (see mavsdk_systems)."""
+    return mavsdk_systems
