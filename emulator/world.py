@@ -226,7 +226,8 @@ class World:
         heights = np.array([o.height_m for o in self._obstacles], dtype=float)
         self._zlim_raw = np.where(heights == 0.0, np.inf, heights)
         self._zlim_raw_list: list[float] = self._zlim_raw.tolist()
-        self._zlim_buf_list: list[float] = (self._zlim_raw + self._margin_m).tolist()
+        self._zlim_buf = self._zlim_raw + self._margin_m
+        self._zlim_buf_list: list[float] = self._zlim_buf.tolist()
         self._raw = np.array([o.footprint for o in self._obstacles], dtype=object)
         self._buffered = np.array([_buffer(o, self._margin_m) for o in self._obstacles],
                                   dtype=object)
@@ -316,6 +317,7 @@ class World:
                                   & (z0 <= self._zlim_raw))
             return Blockage(self._obstacles[hits[0]], 0.0, (x0, y0, z0)) if hits.size else None
         cand = self._candidates(x0, y0, dx, dy)
+        cand = cand[self._zlim_buf[cand] >= min(z0, z1)]  # others are below the whole move
         if cand.size == 0:
             return None
         planar_m = math.hypot(dx, dy)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from emulator.flight.battery import power_factor
-from emulator.flight.dynamics import CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
+from emulator.flight.dynamics import BRAKING_SHARE, CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
 
 if TYPE_CHECKING:
     from emulator.flight.fleet import Fleet
@@ -54,7 +54,7 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
         a_eff = np.minimum(dyn.accel_xy_m_s2[idx] / np.maximum(h, 1e-9),
                            dyn.accel_z_m_s2[idx] / np.maximum(w, 1e-9))
         step_m = s * dt
-        braking_m = s * s / (2.0 * a_eff)
+        braking_m = s * s / (2.0 * BRAKING_SHARE * a_eff)
         free_m = d - braking_m
         tracked = dyn.tracking[idx] != TRACK_NONE
         free_m = np.where(tracked, np.minimum(free_m, d - dyn.acceptance_m[idx]), free_m)

@@ -34,6 +34,7 @@ TRACK_PASS = 1  # report once inside the acceptance radius
 TRACK_SETTLE = 2  # report once inside the acceptance radius and settled
 
 SETTLED_SPEED_M_S = 0.3
+BRAKING_SHARE = 0.8
 YAW_REACHED_DEG = 1.0
 _EMPTY = np.empty(0, dtype=np.intp)
 
@@ -135,7 +136,10 @@ class FleetDynamics:
                            vz_lim * (1.0 / np.maximum(w, 1e-9)))
         a_eff = np.minimum(self.accel_xy_m_s2 * (1.0 / np.maximum(h, 1e-9)),
                            self.accel_z_m_s2 * (1.0 / np.maximum(w, 1e-9)))
-        speed = np.minimum(np.minimum(s_max, np.sqrt(2.0 * a_eff * dist)), dist * (1.0 / dt_s))
+        # Braking follows v = sqrt(2 a' d) with a' a little below the limit, so the discrete
+        # accel-limited velocity can track it and the vehicle stops on the goal, no overshoot.
+        braking = np.sqrt(2.0 * BRAKING_SHARE * a_eff * dist)
+        speed = np.minimum(np.minimum(s_max, braking), dist * (1.0 / dt_s))
         v_des = err * (speed * inv)[:, None]
         is_vel = self.control == CONTROL_VELOCITY
         if is_vel.any():
