@@ -88,8 +88,10 @@ def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
 
 
 def _up(args: argparse.Namespace) -> int:
+    if args.drones is not None and args.drones < 1:
+        raise ValueError(f"--drones must be at least 1, got {args.drones}")
     clock = ClockConfig(physics_hz=args.physics_hz, speed=args.speed, stepped=args.stepped)
-    total = args.drones if args.drones is not None else None
+    total = args.drones
     if args.session is None and total is not None and total > MAX_VEHICLES_PER_NETWORK:
         return _up_networks(args, clock, total)
     scenario = _scenario(args)

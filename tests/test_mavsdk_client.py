@@ -286,7 +286,7 @@ async def test_return_to_launch(swarm_factory, mavsdk_client) -> None:
         assert rows[:, 3].max() == pytest.approx(20.0, abs=0.5)
         events = [e.kind for e in swarm.recorder.events(f"d{sysid}", t_rtl)]
         assert events.index("landed") < events.index("disarm")
-        assert not await telemetry.in_air()
+        await first(telemetry.subscribe_in_air(), lambda v: not v, 3.0, "in_air False")
 
 
 async def test_mission_raw_upload_progress_finish_download(swarm_factory,

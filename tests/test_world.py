@@ -432,11 +432,7 @@ def test_level_flight_matches_shapely_entry(
     assert blockage.fraction * line.length == pytest.approx(min(entries) * line.length, abs=1e-6)
 
 
-@settings(max_examples=150, deadline=None)
-@given(_xy, _xy, _z, _xy, _xy, _z)
-def test_flown_part_never_enters_a_protected_volume(
-    x0: float, y0: float, z0: float, x1: float, y1: float, z1: float
-) -> None:
+def _check_flown_part(x0: float, y0: float, z0: float, x1: float, y1: float, z1: float) -> None:
     """Outside the margin zone a vehicle keeps the margin; inside it, it keeps out of the raw
     volume of the obstacle whose zone it started in."""
     if not _RANDOM_WORLD.clearance_ok(x0, y0, z0):
@@ -447,15 +443,39 @@ def test_flown_part_never_enters_a_protected_volume(
     in_zone = [d <= MARGIN_M and (o.height_m == 0.0 or z0 <= o.height_m + MARGIN_M)
                for d, o in zip(near, _RANDOM_OBSTACLES, strict=True)]
     blockage = _RANDOM_WORLD.first_blockage((x0, y0, z0), (x1, y1, z1))
-    t = np.linspace(0.0, 1.0 if blockage is None else blockage.fraction, 101)
+    t = np.linspace(0.0, 1.0 if blockage is None else blockage.fraction, 201)
     x, y, z = x0 + t * (x1 - x0), y0 + t * (y1 - y0), z0 + t * (z1 - z0)
     distance = shapely.distance(_FOOTPRINTS[:, None], shapely.points(x, y)[None, :])
     raw_only = np.array(in_zone)[:, None]
     heights = np.array([o.height_m for o in _RANDOM_OBSTACLES])[:, None]
-    keep_m = np.where(raw_only, 0.0, MARGIN_M - 0.01)
     top = np.where(heights == 0.0, np.inf, heights + np.where(raw_only, 0.0, MARGIN_M))
     applies = z[None, :] <= top - 1e-6
-    assert np.all(distance[applies] >= np.broadcast_to(keep_m, applies.shape)[applies] - 1e-6)
+    assert np.all(distance[applies & raw_only] > 0.0)
+    assert np.all(distance[applies & ~raw_only] >= MARGIN_M - 0.01)
+
+
+@settings(max_examples=150, deadline=None)
+@given(_xy, _xy, _z, _xy, _xy, _z)
+def test_flown_part_never_enters_a_protected_volume(
+    x0: float, y0: float, z0: float, x1: float, y1: float, z1: float
+) -> None:
+    _check_flown_part(x0, y0, z0, x1, y1, z1)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(0, len(_RANDOM_OBSTACLES) - 1), st.floats(0.0, 1.0), st.floats(0.02, 3.0),
+       _z, st.floats(0.0, 2.0 * math.pi), st.floats(1.0, 200.0), _z)
+def test_moves_starting_close_to_an_obstacle(
+    k: int, along: float, offset_m: float, z0: float, heading_rad: float, length_m: float,
+    z1: float,
+) -> None:
+    footprint = _RANDOM_OBSTACLES[k].footprint
+    rim = footprint.exterior.interpolate(along, normalized=True)
+    centre = footprint.centroid
+    outward = np.array([rim.x - centre.x, rim.y - centre.y])
+    x0, y0 = np.array([rim.x, rim.y]) + offset_m * outward / np.linalg.norm(outward)
+    _check_flown_part(float(x0), float(y0), z0, float(x0 + length_m * math.cos(heading_rad)),
+                      float(y0 + length_m * math.sin(heading_rad)), z1)
 
 
 def test_disc_polygon_helper() -> None:
