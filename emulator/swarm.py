@@ -184,7 +184,7 @@ class Swarm:
         if p.gcs_port:
             urls.append(f"QGroundControl: UDP {p.gcs_port} (default link)")
         if self.endpoints and not p.per_vehicle:
-            host, port = self.endpoints[0].local_address
+            _host, port = self.endpoints[0].local_address
             urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{port}")
         return urls
 
@@ -230,10 +230,7 @@ class Swarm:
 
     def _steps_allowed(self) -> int:
         """Steps the stepped clock may run now: up to the next advance target when idle."""
-        if self.fleet.any_busy:
-            limit = MAX_STEPS_PER_RUN
-        else:
-            limit = 0
+        limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
         targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
         ahead = [t for t in targets if t > self.fleet.now_s + 1e-9]
         if ahead:

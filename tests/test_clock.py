@@ -53,7 +53,7 @@ async def _fly(clock: ClockConfig, pause_s: float) -> tuple[Swarm, float]:
         home = await telemetry.home()
         await action.goto_location(home.latitude_deg + 0.002, home.longitude_deg + 0.001,
                                    home.absolute_altitude_m + 10.0, 0.0)
-        async for position in telemetry.subscribe_position():
+        async for _position in telemetry.subscribe_position():
             ap = swarm.fleet.autopilots[0]
             if not swarm.fleet.any_busy and ap.position_m[1] > 200.0:
                 break

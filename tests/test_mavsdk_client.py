@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import inspect
 import math
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -97,7 +98,7 @@ async def eventually(cond: Callable[[], bool | Awaitable[bool]], timeout_s: floa
     deadline = time.monotonic() + timeout_s
     while True:
         result = cond()
-        if not isinstance(result, bool):
+        if inspect.isawaitable(result):
             result = await result
         if result:
             return

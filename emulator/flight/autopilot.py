@@ -177,7 +177,7 @@ class Autopilot:
         k, f = self.k, self.fleet
         f.busy[k] = (
             self._goal_pending or bool(f.dyn.yaw_tracking[k]) or self._timer_busy
-            or f.bat.charge_rate_pct_s[k] > 0.0 and f.bat.pct[k] < 100.0
+            or (f.bat.charge_rate_pct_s[k] > 0.0 and f.bat.pct[k] < 100.0)
         )
 
     def _set_timer(self, delay_s: float, action: Callable[[], None], *, busy: bool) -> None:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "BATTERY_EMERGENCY",
     "BATTERY_CRITICAL",
+    "BATTERY_EMERGENCY",
     "BATTERY_LOW",
     "BATTERY_OK",
     "CLIMB_POWER_PER_M_S",

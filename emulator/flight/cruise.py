@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from emulator.flight.battery import power_factor
 from emulator.flight.dynamics import BRAKING_SHARE, CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
 
 if TYPE_CHECKING:

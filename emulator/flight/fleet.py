@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from emulator.flight.autopilot import Autopilot, AutopilotListener
@@ -132,7 +133,8 @@ class Fleet:
         dyn, dt = self.dyn, self.dt_s
         first = self.step_count + 1
         steps = np.arange(first, first + count)
-        positions = dyn.position_m + dyn.velocity_m_s * dt * (steps - self.step_count)[:, None, None]
+        offsets = (steps - self.step_count)[:, None, None] * dt
+        positions = dyn.position_m + dyn.velocity_m_s * offsets
         battery = np.empty((count, self.n))
         start = 0
         for i in np.flatnonzero(steps % BATTERY_EVERY_STEPS == 0):

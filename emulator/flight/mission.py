@@ -8,11 +8,11 @@ from dataclasses import dataclass
 from emulator.geo import GeoOrigin
 
 __all__ = [
-    "MissionItem",
-    "MissionResult",
-    "Cmd",
     "NAV_COMMANDS",
     "SUPPORTED_COMMANDS",
+    "Cmd",
+    "MissionItem",
+    "MissionResult",
     "validate_item",
 ]
 

@@ -27,7 +27,8 @@ class ParamDefinition:
     description: str = ""
 
 
-def _p(name: str, default: float, lo: float, hi: float, desc: str, *, is_int: bool = False) -> ParamDefinition:
+def _p(name: str, default: float, lo: float, hi: float, desc: str, *,
+       is_int: bool = False) -> ParamDefinition:
     return ParamDefinition(name, default, lo, hi, is_int, desc)
 
 

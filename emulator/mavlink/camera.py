@@ -98,9 +98,9 @@ class CameraComponent:
         lat, lon, alt = origin.to_geodetic(*capture.position_m)
         yaw = math.radians(capture.yaw_deg)
         q = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
-        rel_mm = int(round((capture.position_m[2] - ap.home_m[2]) * 1000.0))
+        rel_mm = round((capture.position_m[2] - ap.home_m[2]) * 1000.0)
         self._send(mavlink.MAVLink_camera_image_captured_message(
-            int(capture.t_s * 1000.0), 0, 0, int(round(lat * 1e7)), int(round(lon * 1e7)),
-            int(round(alt * 1000.0)), rel_mm, q, capture.index, 1,
+            int(capture.t_s * 1000.0), 0, 0, round(lat * 1e7), round(lon * 1e7),
+            round(alt * 1000.0), rel_mm, q, capture.index, 1,
             f"mavswarm://{ap.vehicle_id}/image_{capture.index:04d}.jpg".encode(),
         ))

@@ -12,7 +12,7 @@ import struct
 
 os.environ.setdefault("MAVLINK20", "1")
 
-from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
+from pymavlink.dialects.v20 import common as mavlink
 
 __all__ = ["DatagramDecoder", "Encoder", "mavlink"]
 

@@ -61,12 +61,12 @@ FLIGHT_SW_VERSION = (1 << 24) | (15 << 16) | (0 << 8) | 0xFF  # 1.15.0 release
 
 
 def _e7(deg: float) -> int:
-    return int(round(deg * 1e7))
+    return round(deg * 1e7)
 
 
 def _geo(ap: Autopilot, p: tuple[float, float, float]) -> tuple[int, int, int]:
     lat, lon, alt = ap.fleet.world.origin.to_geodetic(*p)
-    return _e7(lat), _e7(lon), int(round(alt * 1000.0))
+    return _e7(lat), _e7(lon), round(alt * 1000.0)
 
 
 def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:
@@ -131,11 +131,11 @@ def global_position_int(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_mes
     p = ap.position_m
     lat, lon, alt = _geo(ap, p)
     v = f.dyn.velocity_m_s[k]
-    hdg = int(round(f.dyn.yaw_deg[k] * 100.0)) % 36000
-    rel_mm = int(round((p[2] - ap.home_m[2]) * 1000.0))
+    hdg = round(f.dyn.yaw_deg[k] * 100.0) % 36000
+    rel_mm = round((p[2] - ap.home_m[2]) * 1000.0)
     return mavlink.MAVLink_global_position_int_message(
         time_boot_ms, lat, lon, alt, rel_mm,
-        int(round(v[1] * 100.0)), int(round(v[0] * 100.0)), int(round(-v[2] * 100.0)), hdg,
+        round(v[1] * 100.0), round(v[0] * 100.0), round(-v[2] * 100.0), hdg,
     )
 
 
@@ -165,9 +165,9 @@ def gps_raw_int(ap: Autopilot, time_usec: int) -> mavlink.MAVLink_message:
     lat, lon, alt = _geo(ap, ap.position_m)
     v = f.dyn.velocity_m_s[k]
     ground = math.hypot(float(v[0]), float(v[1]))
-    cog = int(round(math.degrees(math.atan2(v[0], v[1])) * 100.0)) % 36000 if ground > 0.1 else 0
+    cog = round(math.degrees(math.atan2(v[0], v[1])) * 100.0) % 36000 if ground > 0.1 else 0
     return mavlink.MAVLink_gps_raw_int_message(
-        time_usec, 3, lat, lon, alt, 80, 120, int(round(ground * 100.0)), cog, 14,
+        time_usec, 3, lat, lon, alt, 80, 120, round(ground * 100.0), cog, 14,
         alt, 500, 800, 100, 0, 0,
     )
 

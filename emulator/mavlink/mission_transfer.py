@@ -64,7 +64,8 @@ class MissionTransfer:
             return
         if m.count > MAX_ITEMS:
             self._ack(peer, MissionResult.NO_SPACE)
-            self.link.statustext(Severity.WARNING, f"Mission refused: {m.count} items > {MAX_ITEMS}")
+            self.link.statustext(Severity.WARNING,
+                                 f"Mission refused: {m.count} items > {MAX_ITEMS}")
             return
         if self._upload is not None:
             self.link.statustext(Severity.INFO, "Mission upload restarted")
@@ -171,8 +172,8 @@ def _to_item(m, is_int: bool) -> MissionItem:
     if is_int:
         x, y = int(m.x), int(m.y)
     else:
-        x = int(round(m.x * 1e7)) if math.isfinite(m.x) else 2**31 - 1
-        y = int(round(m.y * 1e7)) if math.isfinite(m.y) else 2**31 - 1
+        x = round(m.x * 1e7) if math.isfinite(m.x) else 2**31 - 1
+        y = round(m.y * 1e7) if math.isfinite(m.y) else 2**31 - 1
     return MissionItem(
         seq=m.seq, frame=m.frame, command=m.command, param1=m.param1, param2=m.param2,
         param3=m.param3, param4=m.param4, x=x, y=y, z=m.z, autocontinue=m.autocontinue,

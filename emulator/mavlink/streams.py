@@ -76,7 +76,8 @@ class StreamSchedule:
             self.next_due_s[ks, col] = nxt
             yield self.streams[col].msg_id, ks
 
-    def set_interval(self, k: int, msg_id: int, interval_s: float | None, wall_now_s: float) -> bool:
+    def set_interval(self, k: int, msg_id: int, interval_s: float | None,
+                     wall_now_s: float) -> bool:
         """Change one vehicle's stream period (None: default, inf: off). False if unknown."""
         col = self.column.get(msg_id)
         if col is None:
