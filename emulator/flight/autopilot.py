@@ -15,13 +15,10 @@ from typing import TYPE_CHECKING, Protocol
 
 from emulator.flight import dynamics as dy
 from emulator.flight.autopilot_mission import MissionRunner
-from emulator.flight.battery import (
-    BATTERY_CRITICAL,
-    BATTERY_EMERGENCY,
-    BATTERY_LOW,
-    PHOTO_COST_PCT,
-)
+from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY_LOW
+from emulator.flight.camera import ImageCapture, capture_image
 from emulator.flight.modes import FlightMode, LandedState
+from emulator.flight.offboard import OffboardControl
 from emulator.flight.params import ParamStore
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.geo import wrap_heading_deg
@@ -35,17 +32,6 @@ __all__ = ["Autopilot", "AutopilotListener", "CommandRefused", "ImageCapture", "
 
 Vec3 = tuple[float, float, float]
 GROUND_GOAL_Z_M = -1.0  # landing descends towards a goal below ground until touchdown
-
-
-class ImageCapture:
-    """One photo: where it was taken and what the camera saw."""
-
-    __slots__ = ("index", "position_m", "t_s", "targets", "yaw_deg")
-
-    def __init__(self, index: int, t_s: float, position_m: Vec3, yaw_deg: float,
-                 targets: tuple[str, ...]) -> None:
-        self.index, self.t_s, self.position_m = index, t_s, position_m
-        self.yaw_deg, self.targets = yaw_deg, targets
 
 
 class AutopilotListener(Protocol):
@@ -104,9 +90,7 @@ class Autopilot:
         self._goal_pending = False
         self._timer_action: Callable[[], None] | None = None
         self._timer_busy = False
-        self._offboard_sp: tuple[str, Vec3, float] | None = None
-        self._offboard_wall_s = -math.inf
-        self._offboard_applied: tuple[str, Vec3, float] | None = None
+        self.offboard = OffboardControl(self)
         dyn = fleet.dyn
         dyn.position_m[k] = spec.position_m
         dyn.yaw_deg[k] = wrap_heading_deg(spec.heading_deg)
@@ -358,7 +342,7 @@ class Autopilot:
         if self.mode is FlightMode.MISSION:
             self.mission.start_or_resume()
         elif self.mode is FlightMode.OFFBOARD:
-            self._apply_offboard()
+            self.offboard.apply()
 
     def disarm(self, *, force: bool = False) -> None:
         if not self.armed:
@@ -545,89 +529,15 @@ class Autopilot:
         elif mode is FlightMode.TAKEOFF:
             self.takeoff(None)
         elif mode is FlightMode.OFFBOARD:
-            self._enter_offboard(wall_now_s)
+            self.offboard.enter(wall_now_s)
         else:
             raise CommandRefused(f"Mode {mode.label} refused: no manual control input")
-
-    # --------------------------------------------------------------- offboard
-    def offboard_setpoint(self, kind: str, vector: Vec3, yaw_deg: float,
-                          wall_now_s: float) -> None:
-        """A position ('position', ENU m) or velocity ('velocity', ENU m/s) set-point."""
-        self._offboard_sp = (kind, vector, yaw_deg)
-        self._offboard_wall_s = wall_now_s
-        if self.mode is FlightMode.OFFBOARD and self._offboard_sp != self._offboard_applied:
-            self._apply_offboard()
-
-    def _enter_offboard(self, wall_now_s: float) -> None:
-        if wall_now_s - self._offboard_wall_s > self.params["COM_OF_LOSS_T"]:
-            raise CommandRefused("Offboard refused: no recent setpoint")
-        self.mission.pause()
-        self._set_mode(FlightMode.OFFBOARD)
-        self._apply_offboard()
-
-    def _apply_offboard(self) -> None:
-        sp = self._offboard_sp
-        if sp is None or not self.armed:
-            return
-        self._offboard_applied = sp
-        kind, vec, yaw = sp
-        dyn, k = self.fleet.dyn, self.k
-        rising = vec[2] > 0.5 if kind == "position" else vec[2] > 0.1
-        if not self.in_air:
-            if not rising:
-                return
-            self.fleet.airborne[k] = True
-            self.landed_state = LandedState.IN_AIR
-            self._cancel_timer()
-            self._update_charging()
-            self._event("takeoff", altitude_m=vec[2] if kind == "position" else None)
-        if kind == "position":
-            target = (vec[0], vec[1], max(vec[2], 0.0))
-            self.fly_to(target, tracking=dy.TRACK_SETTLE, yaw_deg=yaw)
-        else:
-            self._on_arrive = None
-            self._blockage = None
-            dyn.control[k] = dy.CONTROL_VELOCITY
-            dyn.velocity_sp_m_s[k] = vec
-            dyn.tracking[k] = dy.TRACK_NONE
-            dyn.goal_yaw_deg[k] = yaw
-            self._goal_pending = False
-            self._refresh_busy()
-
-    def check_offboard_link(self, wall_now_s: float) -> None:
-        """Offboard failsafe: hold when set-points stop arriving (wall-clock timeout)."""
-        if self.mode is FlightMode.OFFBOARD and (
-            wall_now_s - self._offboard_wall_s > self.params["COM_OF_LOSS_T"]
-        ):
-            self._event("failsafe", reason="offboard_lost")
-            self._say(Severity.WARNING, "Offboard setpoints lost: holding")
-            self._offboard_applied = None
-            self.hold()
 
     # ------------------------------------------------------------------ camera
     def take_photo(self) -> ImageCapture:
         """Trigger the camera: record what it captured and announce the image."""
-        capture = self._capture()
+        capture = capture_image(self)
         self.listener.on_image_captured(capture)
-        return capture
-
-    def _capture(self) -> ImageCapture:
-        f, k = self.fleet, self.k
-        pos = self.position_m
-        others = {
-            ap.vehicle_id: ap.position_m for ap in f.autopilots if ap.k != k
-        } if f.n <= 50 else {}
-        seen = f.sensor.sense(pos, self.params["SIM_SENS_RAD"], vehicles=others,
-                              exclude_vehicle=self.vehicle_id)
-        self.photo_count += 1
-        f.bat.spend(k, PHOTO_COST_PCT)
-        capture = ImageCapture(self.photo_count, self.now_s, pos, float(f.dyn.yaw_deg[k]),
-                               tuple(t.id for t in seen.targets))
-        self._event(
-            "photo", index=capture.index, position_m=list(pos),
-            targets=list(capture.targets), obstacles=[o.id for o in seen.obstacles],
-            vehicles=[v.id for v in seen.vehicles],
-        )
         return capture
 
     # ---------------------------------------------------------------- charging

@@ -68,14 +68,16 @@ def apply_local_setpoint(link: VehicleLink, m) -> None:
         if offset:
             x0, y0, z0 = link.ap.position_m
             east, north, up = east + x0, north + y0, up + z0
-        link.ap.offboard_setpoint("position", (east, north, up), _yaw_deg(m), link.wall_now_s)
+        link.ap.offboard.setpoint("position", (east, north, up), _yaw_deg(m),
+                                  link.wall_now_s)
     elif not m.type_mask & _IGNORE_VELOCITY:
         values = (m.vx, m.vy, m.vz)
         if not all(math.isfinite(v) for v in values):
             _complain(link, "nan", "Offboard: set-point with NaN ignored")
             return
         east, north = _rotate_body(link, m.vx, m.vy) if body else (m.vy, m.vx)
-        link.ap.offboard_setpoint("velocity", (east, north, -m.vz), _yaw_deg(m), link.wall_now_s)
+        link.ap.offboard.setpoint("velocity", (east, north, -m.vz), _yaw_deg(m),
+                                  link.wall_now_s)
     else:
         _complain(link, "mask", "Offboard: only position or velocity set-points supported")
 
@@ -94,11 +96,11 @@ def apply_global_setpoint(link: VehicleLink, m) -> None:
         origin = ap.fleet.world.origin
         x, y, _ = origin.to_local(lat, lon, origin.altitude_amsl_m)
         z = m.alt - origin.altitude_amsl_m if frame in _GLOBAL_AMSL else ap.home_m[2] + m.alt
-        ap.offboard_setpoint("position", (x, y, z), _yaw_deg(m), link.wall_now_s)
+        ap.offboard.setpoint("position", (x, y, z), _yaw_deg(m), link.wall_now_s)
     elif not m.type_mask & _IGNORE_VELOCITY:
         if not all(math.isfinite(v) for v in (m.vx, m.vy, m.vz)):
             _complain(link, "nan", "Offboard: set-point with NaN ignored")
             return
-        ap.offboard_setpoint("velocity", (m.vy, m.vx, -m.vz), _yaw_deg(m), link.wall_now_s)
+        ap.offboard.setpoint("velocity", (m.vy, m.vx, -m.vz), _yaw_deg(m), link.wall_now_s)
     else:
         _complain(link, "mask", "Offboard: only position or velocity set-points supported")

@@ -151,7 +151,7 @@ class VehicleLink:
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
         self.missions.tick(wall_now_s)
-        self.ap.check_offboard_link(wall_now_s)
+        self.ap.offboard.check_link(wall_now_s)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
