@@ -7,6 +7,7 @@ import concurrent.futures
 import contextlib
 import socket
 import time
+import weakref
 from collections.abc import AsyncIterator, Awaitable, Callable
 
 import pytest
@@ -16,6 +17,9 @@ from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
 
 _handed_out: set[int] = set()
+_executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
+    weakref.WeakKeyDictionary()
+)
 
 
 def unused_udp_port(host: str = "127.0.0.1") -> int:
@@ -77,7 +81,10 @@ async def mavsdk_systems(port: int, n: int, *, timeout_s: float = 10.0,
     from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
     loop = asyncio.get_running_loop()
-    loop.set_default_executor(concurrent.futures.ThreadPoolExecutor(max(32, 2 * n + 8)))
+    workers = max(32, 2 * n + 8)
+    if _executor_size.get(loop, 0) < workers:
+        loop.set_default_executor(concurrent.futures.ThreadPoolExecutor(workers))
+        _executor_size[loop] = workers
     config = Configuration.create_with_component_type(ComponentType.GROUND_STATION)
     async with Mavsdk(config) as mavsdk:
         await mavsdk.add_any_connection(url or f"udpin://127.0.0.1:{port}")

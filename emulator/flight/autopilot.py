@@ -226,6 +226,8 @@ class Autopilot:
             dyn.climb_m_s[k] = climb_m_s
         if descent_m_s is not None:
             dyn.descent_m_s[k] = descent_m_s
+        if self.in_air:  # any new goal ends a take-off climb or a final descent
+            self.landed_state = LandedState.IN_AIR
         blockage = self.fleet.world.first_blockage(self.position_m, target_m)
         self._blockage = blockage
         self._on_arrive = then
@@ -390,10 +392,10 @@ class Autopilot:
         """Leave the ground and climb vertically to target_m."""
         self._cancel_timer()
         self.fleet.airborne[self.k] = True
-        self.landed_state = LandedState.TAKEOFF
         self._update_charging()
         self._event("takeoff", altitude_m=target_m[2])
         self.fly_to(target_m, then=then, climb_m_s=self.params["MPC_TKO_SPEED"])
+        self.landed_state = LandedState.TAKEOFF
 
     def _takeoff_complete(self) -> None:
         self.landed_state = LandedState.IN_AIR
@@ -422,9 +424,9 @@ class Autopilot:
 
     def _final_descent(self) -> None:
         x, y, _ = self.position_m
-        self.landed_state = LandedState.LANDING
         self.fly_to((x, y, GROUND_GOAL_Z_M), tracking=dy.TRACK_NONE,
                     descent_m_s=self.params["MPC_LAND_SPEED"])
+        self.landed_state = LandedState.LANDING
 
     def return_to_launch(self) -> None:
         self._require_air("Return to launch")
