@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import math
 import time
 from collections.abc import Mapping
@@ -23,6 +24,7 @@ LOOP_TICK_S = 0.005
 STEP_BUDGET_S = 0.02
 LINK_TICK_S = 0.05
 MAX_STEPS_PER_RUN = 2000
+log = logging.getLogger("mavswarm.swarm")
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,6 +81,8 @@ class SwarmStats:
     frames_bad: int
     datagrams_in: int
     datagrams_out: int
+    unroutable: int
+    internal_errors: int
 
 
 class Swarm:
@@ -107,6 +111,7 @@ class Swarm:
         self._pacer: RealTimePacer | None = None
         self._wall_start_s = wall
         self._sim_start_s = 0.0
+        self._telemetry_errors = 0
 
     # -------------------------------------------------------------- lifecycle
     async def __aenter__(self) -> Swarm:
@@ -199,6 +204,9 @@ class Swarm:
             frames_bad=sum(e.decoder.frames_bad for e in self.endpoints),
             datagrams_in=sum(e.stats.datagrams_in for e in self.endpoints),
             datagrams_out=sum(e.stats.datagrams_out for e in self.endpoints),
+            unroutable=sum(e.stats.unroutable for e in self.endpoints),
+            internal_errors=self._telemetry_errors
+            + sum(e.stats.handler_errors for e in self.endpoints),
         )
 
     def export_truth(self, path: str | Path) -> Path:
@@ -257,10 +265,7 @@ class Swarm:
                     fleet.step()
                 self._release_waiters()
             wall = time.monotonic()
-            for msg_id, ks in self.streams.due(wall):
-                links = self.links
-                for k in ks:
-                    links[k].send_stream(msg_id)
+            self._send_telemetry(wall)
             if wall >= next_link_tick:
                 next_link_tick = wall + LINK_TICK_S
                 for link in self.links:
@@ -280,6 +285,16 @@ class Swarm:
                     await asyncio.wait_for(self._wake.wait(), timeout=max(timeout, 0.0005))
             else:
                 await asyncio.sleep(max(timeout, 0.0005))
+
+    def _send_telemetry(self, wall: float) -> None:
+        links = self.links
+        for msg_id, ks in self.streams.due(wall):
+            for k in ks:
+                try:
+                    links[k].send_stream(msg_id)
+                except Exception:  # the I/O edge: log, count, keep the swarm alive
+                    self._telemetry_errors += 1
+                    log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
 
     def _release_waiters(self) -> None:
         now = self.fleet.now_s

@@ -9,6 +9,7 @@ that has talked to the socket in the last `PEER_TIMEOUT_S` (so `udpout://` clien
 from __future__ import annotations
 
 import asyncio
+import logging
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
@@ -19,6 +20,7 @@ __all__ = ["PEER_TIMEOUT_S", "LinkStats", "UdpEndpoint"]
 
 PEER_TIMEOUT_S = 10.0
 Address = tuple[str, int]
+log = logging.getLogger("mavswarm.transport")
 
 
 @dataclass(slots=True)
@@ -27,6 +29,7 @@ class LinkStats:
     datagrams_out: int = 0
     unroutable: int = 0
     send_errors: int = 0
+    handler_errors: int = 0
     peers: set[Address] = field(default_factory=set)
 
 
@@ -78,14 +81,23 @@ class UdpEndpoint(asyncio.DatagramProtocol):
                 if m.get_type() in ("PING", "REQUEST_DATA_STREAM"):
                     continue
                 for link in links.values():
-                    link.handle(m, now)
+                    self._deliver(link, m, now)
             else:
                 link = links.get(target)
                 if link is None:
                     self.stats.unroutable += 1
                 else:
-                    link.handle(m, now)
+                    self._deliver(link, m, now)
         self._on_receive()
+
+    def _deliver(self, link: VehicleLink, m, now: float) -> None:
+        # The I/O edge: a handler bug is logged with its traceback and counted, and the
+        # socket keeps serving every other vehicle instead of closing.
+        try:
+            link.handle(m, now)
+        except Exception:
+            self.stats.handler_errors += 1
+            log.exception("vehicle %d failed to handle %s", link.system_id, m.get_type())
 
     def emit(self, _k: int, data: bytes) -> None:
         transport = self.transport

@@ -12,25 +12,23 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-import os
+import socket
 import time
 from collections.abc import AsyncIterator, Callable, Iterable
 from dataclasses import dataclass
 
-os.environ.setdefault("MAVLINK20", "1")
+from pymavlink.dialects.v20 import common as mavlink
 
-from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
-
-from emulator.clock import ClockConfig  # noqa: E402
-from emulator.scenario import Scenario, default_scenario  # noqa: E402
-from emulator.swarm import PortPlan, Swarm  # noqa: E402
+from emulator.clock import ClockConfig
+from emulator.scenario import Scenario, default_scenario
+from emulator.swarm import PortPlan, Swarm
 
 __all__ = [
     "GCS_COMPONENT",
     "GCS_SYSTEM",
+    "LoopErrors",
     "MavClient",
     "Received",
-    "LoopErrors",
     "mavlink",
     "running_swarm",
     "scheduler_alive",
@@ -71,13 +69,18 @@ class MavClient(asyncio.DatagramProtocol):
         self._arrived = asyncio.Event()
         self.paused = False  # when True, incoming datagrams are dropped unread
         self.drop: Match | None = None  # messages it matches are discarded (simulated loss)
+        self.loop_errors: LoopErrors | None = None  # set by running_swarm
 
     # ------------------------------------------------------------- lifecycle
     @classmethod
     async def connect(cls, remote: Address, **kwargs: int) -> MavClient:
         loop = asyncio.get_running_loop()
         client = cls(remote, **kwargs)
-        await loop.create_datagram_endpoint(lambda: client, local_addr=("127.0.0.1", 0))
+        transport, _ = await loop.create_datagram_endpoint(lambda: client,
+                                                           local_addr=("127.0.0.1", 0))
+        sock = transport.get_extra_info("socket")
+        with contextlib.suppress(OSError):  # room for bursts (capped by net.core.rmem_max)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
         return client
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
@@ -130,7 +133,11 @@ class MavClient(asyncio.DatagramProtocol):
 
     def send_raw(self, data: bytes) -> None:
         assert self.transport is not None, "client is closed"
-        self.transport.sendto(data, self.remote)
+        if data:
+            self.transport.sendto(data, self.remote)
+        else:  # asyncio's sendto silently skips empty datagrams: use a plain socket
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+                sock.sendto(data, self.remote)
 
     def pack(self, msg: mavlink.MAVLink_message) -> bytes:
         """Bytes of one frame as this client would send it (advances the sequence)."""
@@ -281,7 +288,7 @@ class MavClient(asyncio.DatagramProtocol):
                      p4: float = math.nan) -> mavlink.MAVLink_message:
         return self.mav.mission_item_int_encode(
             system, 1, seq, frame, command, 0, 1, p1, p2, p3, p4,
-            int(round(lat_deg * 1e7)), int(round(lon_deg * 1e7)), alt_m, 0,
+            round(lat_deg * 1e7), round(lon_deg * 1e7), alt_m, 0,
         )
 
 
@@ -339,12 +346,14 @@ async def running_swarm(n: int = 3, *, speed: float = 10.0, scenario: Scenario |
     client = None
     try:
         client = await MavClient.connect(swarm.endpoints[0].local_address)
+        client.loop_errors = errors
         client.send(client.mav.heartbeat_encode(6, 8, 0, 0, 4, 3))
-        await client.wait_for("HEARTBEAT", system=1, timeout=3.0)
+        await client.wait_for(system=1, timeout=3.0)  # any message: the swarm knows us
         yield swarm, client
         assert not errors.errors, f"event loop errors: {errors.describe()}"
         assert scheduler_alive(swarm), "the swarm's scheduler task died"
         assert swarm_socket_open(swarm), "the swarm's socket was closed"
+        assert swarm.stats().internal_errors == 0, "a handler or telemetry builder raised"
     finally:
         errors.uninstall()
         if client is not None:

@@ -63,6 +63,9 @@ class DatagramDecoder:
         except _DECODE_ERRORS:
             self.frames_bad += 1
             msgs = []
+        else:
+            if mav.buf_len() > 0:  # a frame cut short by the end of the datagram
+                self.frames_bad += 1
         finally:
             mav.buf = bytearray()
             mav.buf_index = 0

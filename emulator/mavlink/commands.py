@@ -22,6 +22,7 @@ __all__ = ["CommandArgs", "Result", "execute_command"]
 INT32_MAX = 2**31 - 1
 FRAMES_AMSL = frozenset({0, 5})
 FRAMES_RELATIVE = frozenset({3, 6})
+MAX_HOME_HEIGHT_M = 10_000.0  # a home further above/below the ground is refused
 
 
 class Result:
@@ -162,7 +163,10 @@ def _set_home(link: VehicleLink, a: CommandArgs) -> Outcome:
         frame = a.frame if a.frame in FRAMES_RELATIVE else 0
         args = CommandArgs(a.command, a.p1, a.p2, a.p3, a.p4, a.latitude_deg, a.longitude_deg,
                            a.altitude_m, frame)
-        ap.set_home(_local_target(link, args, "Set home"))
+        home = _local_target(link, args, "Set home")
+        if abs(home[2]) > MAX_HOME_HEIGHT_M:
+            return Result.DENIED, f"Set home: altitude {home[2]:.0f} m from the ground"
+        ap.set_home(home)
     return Result.ACCEPTED, None
 
 
@@ -200,7 +204,7 @@ def _message_interval(link: VehicleLink, a: CommandArgs) -> Outcome:
         return Result.DENIED, f"Message interval: {interval_us:g} us is invalid"
     interval = None if interval_us == 0 else math.inf if interval_us == -1 else interval_us / 1e6
     if not link.set_stream_interval(int(a.p1), interval):
-        return Result.DENIED, f"Message interval: message {int(a.p1)} is not streamed"
+        return Result.DENIED, f"Message interval: message {int(a.p1)} rate cannot be set"
     return Result.ACCEPTED, None
 
 

@@ -84,6 +84,9 @@ class MissionTransfer:
         if up is None:
             self._ack(peer, MissionResult.DENIED)
             return
+        if peer != up.peer:  # PX4: "partner id mismatch", the item is ignored
+            self.link.statustext(Severity.WARNING, "Mission item from another GCS ignored")
+            return
         expected = len(up.items)
         up.last_activity_s = now_s
         if m.seq != expected:

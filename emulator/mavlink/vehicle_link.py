@@ -28,6 +28,7 @@ PARAM_TYPE_INT32 = 6
 PARAM_TYPE_REAL32 = 9
 _INT_TYPES = frozenset({1, 2, 3, 4, 5, 6})
 AUTOPILOT_COMPONENT_ID = 1
+MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
 
 
 def _bytewise_int(value: float) -> int:
@@ -120,8 +121,10 @@ class VehicleLink:
             self.send_stream(msg_id)
 
     def set_stream_interval(self, msg_id: int, interval_s: float | None) -> bool:
-        if msg_id == 0 and interval_s is not None and not math.isfinite(interval_s):
-            return False  # the heartbeat cannot be switched off
+        if msg_id == 0:
+            return False  # the 1 Hz heartbeat is the link's pulse: its rate is fixed
+        if interval_s is not None:
+            interval_s = max(interval_s, MIN_STREAM_INTERVAL_S)
         return self._streams.set_interval(self.k, msg_id, interval_s, self.wall_now_s)
 
     # ------------------------------------------------------ autopilot listener
@@ -158,6 +161,8 @@ class VehicleLink:
 
     def _on_command(self, m, args: CommandArgs) -> None:
         target_component = getattr(m, "target_component", 0)
+        if target_component not in (0, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID):
+            return  # for a component this vehicle does not have: not ours to answer
         if target_component == CAMERA_COMPONENT_ID and args.command not in (
             2000, 2001, 521, 522, 525, 527, 530, 512
         ):
