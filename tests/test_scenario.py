@@ -23,12 +23,11 @@ from emulator.scenario import (
     scenario_from_dict,
 )
 
-SESSIONS = Path("/work/shared/sessions")
-if not SESSIONS.is_dir():
-    SESSIONS = Path(__file__).resolve().parents[2] / "shared" / "sessions"
+# The MultiUAV-Plat example sessions live in the shared folder beside the repository.
+SESSIONS = Path(__file__).resolve().parents[2] / "shared" / "sessions"
 AREA_SEARCH = SESSIONS / "Example_Session_Area_Search.json"
 TARGET_ASSIGNMENT = SESSIONS / "Example_Session_Target_Assignment.json"
-needs_examples = pytest.mark.skipif(not AREA_SEARCH.is_file(), reason="example sessions absent")
+needs_examples = pytest.mark.skipif(not AREA_SEARCH.is_file(), reason=f"example sessions not found in {SESSIONS}")
 
 
 # --------------------------------------------------------------------------- example files
