@@ -21,7 +21,8 @@ from emulator.transport import UdpEndpoint
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
 LOOP_TICK_S = 0.005
-STEP_BUDGET_S = 0.02
+STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
+STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
 MAX_STEPS_PER_RUN = 2000
 log = logging.getLogger("mavswarm.swarm")
@@ -81,6 +82,7 @@ class SwarmStats:
     frames_bad: int
     datagrams_in: int
     datagrams_out: int
+    frames_out: int
     unroutable: int
     internal_errors: int
 
@@ -95,6 +97,11 @@ class Swarm:
         self.ports = ports or PortPlan()
         self.ports.check(len(scenario.vehicles))
         self.fleet = Fleet(scenario, physics_hz=self.clock.physics_hz)
+        if self.clock.stepped:
+            # A client's thinking time is not simulated, so "armed but no takeoff for 10 s"
+            # would disarm vehicles while others fly: stepped swarms do not auto-disarm.
+            for ap in self.fleet.autopilots:
+                ap.set_param("COM_DISARM_PRFLT", -1.0)
         wall = time.monotonic()
         self.streams = StreamSchedule(self.fleet.n, wall, telemetry_hz)
         self._endpoint_of: list[UdpEndpoint] = []
@@ -122,7 +129,6 @@ class Swarm:
         await self.close()
 
     async def start(self) -> None:
-        loop = asyncio.get_running_loop()
         p = self.ports
         groups = [[link] for link in self.links] if p.per_vehicle else [self.links]
         try:
@@ -134,9 +140,7 @@ class Swarm:
                     dests.append((p.api_host, p.gcs_port))
                 port = p.bind_port + i if p.per_vehicle else p.bind_port
                 endpoint = UdpEndpoint(group, dests, time.monotonic, self._wake.set)
-                await loop.create_datagram_endpoint(
-                    lambda e=endpoint: e, local_addr=(p.bind_host, port)
-                )
+                endpoint.open(p.bind_host, port)
                 self.endpoints.append(endpoint)
                 self._endpoint_of.extend([endpoint] * len(group))
         except OSError as error:
@@ -204,6 +208,7 @@ class Swarm:
             frames_bad=sum(e.decoder.frames_bad for e in self.endpoints),
             datagrams_in=sum(e.stats.datagrams_in for e in self.endpoints),
             datagrams_out=sum(e.stats.datagrams_out for e in self.endpoints),
+            frames_out=sum(e.stats.frames_out for e in self.endpoints),
             unroutable=sum(e.stats.unroutable for e in self.endpoints),
             internal_errors=self._telemetry_errors
             + sum(e.stats.handler_errors for e in self.endpoints),
@@ -257,7 +262,7 @@ class Swarm:
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
                 while self._should_step() and time.monotonic() < deadline:
-                    fleet.run(self._steps_allowed())
+                    fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
                     self._release_waiters()
             else:
                 assert self._pacer is not None
@@ -288,13 +293,20 @@ class Swarm:
 
     def _send_telemetry(self, wall: float) -> None:
         links = self.links
-        for msg_id, ks in self.streams.due(wall):
-            for k in ks:
-                try:
-                    links[k].send_stream(msg_id)
-                except Exception:  # the I/O edge: log, count, keep the swarm alive
-                    self._telemetry_errors += 1
-                    log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
+        for endpoint in self.endpoints:
+            endpoint.batching = True
+        try:
+            for msg_id, ks in self.streams.due(wall):
+                for k in ks:
+                    try:
+                        links[k].send_stream(msg_id)
+                    except Exception:  # the I/O edge: log, count, keep the swarm alive
+                        self._telemetry_errors += 1
+                        log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
+        finally:
+            for endpoint in self.endpoints:
+                endpoint.batching = False
+                endpoint.flush()
 
     def _release_waiters(self) -> None:
         now = self.fleet.now_s

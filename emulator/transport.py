@@ -1,24 +1,32 @@
 """UDP transport: moves MAVLink datagrams between sockets and vehicle links, nothing else.
 
-One `UdpEndpoint` owns one socket and the vehicles behind it (all of them in the default
-shared topology, one each in per-vehicle mode). Incoming frames are routed by
+One `UdpEndpoint` owns one non-blocking socket and the vehicles behind it (all of them in
+the default shared topology, one each in per-vehicle mode). Incoming frames are routed by
 `target_system`; outgoing frames go to the configured ground-station ports and to every peer
 that has talked to the socket in the last `PEER_TIMEOUT_S` (so `udpout://` clients work).
+
+Every readable datagram is drained at once when the socket becomes readable. Replies go out
+immediately, one frame per datagram; periodic telemetry is packed several frames to a
+datagram (MAVLink is a byte stream: receivers parse every frame in a datagram), which saves
+most of the system calls of a large swarm.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from emulator.mavlink.codec import DatagramDecoder
 from emulator.mavlink.vehicle_link import VehicleLink
 
-__all__ = ["PEER_TIMEOUT_S", "LinkStats", "UdpEndpoint"]
+__all__ = ["MAX_BATCH_BYTES", "PEER_TIMEOUT_S", "LinkStats", "UdpEndpoint"]
 
 PEER_TIMEOUT_S = 10.0
+MAX_BATCH_BYTES = 1200  # stays below any loopback or Ethernet MTU
+RECV_BYTES = 65535
 Address = tuple[str, int]
 log = logging.getLogger("mavswarm.transport")
 
@@ -27,14 +35,15 @@ log = logging.getLogger("mavswarm.transport")
 class LinkStats:
     datagrams_in: int = 0
     datagrams_out: int = 0
+    frames_out: int = 0
     unroutable: int = 0
     send_errors: int = 0
     handler_errors: int = 0
     peers: set[Address] = field(default_factory=set)
 
 
-class UdpEndpoint(asyncio.DatagramProtocol):
-    """One UDP socket serving the vehicles in `links` (system id -> link)."""
+class UdpEndpoint:
+    """One UDP socket serving the vehicles in `links`."""
 
     def __init__(self, links: Iterable[VehicleLink], destinations: Iterable[Address],
                  wall_clock: Callable[[], float], on_receive: Callable[[], None]) -> None:
@@ -46,22 +55,58 @@ class UdpEndpoint(asyncio.DatagramProtocol):
         self._on_receive = on_receive
         self.decoder = DatagramDecoder()
         self.stats = LinkStats()
-        self.transport: asyncio.DatagramTransport | None = None
+        self._sock: socket.socket | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._batch = bytearray()
+        self.batching = False
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self.transport = transport  # type: ignore[assignment]
+    def open(self, host: str, port: int) -> None:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 1 << 21)
+            sock.bind((host, port))
+        except OSError:
+            sock.close()
+            raise
+        sock.setblocking(False)
+        self._sock = sock
+        self._loop = asyncio.get_running_loop()
+        self._loop.add_reader(sock.fileno(), self._drain)
 
-    def connection_lost(self, exc: Exception | None) -> None:
-        self.transport = None
-
-    def error_received(self, exc: Exception) -> None:
-        # ICMP port unreachable from a ground-station port nobody listens on: harmless.
-        self.stats.send_errors += 1
+    @property
+    def is_open(self) -> bool:
+        return self._sock is not None
 
     @property
     def local_address(self) -> Address:
-        assert self.transport is not None
-        return self.transport.get_extra_info("sockname")[:2]
+        assert self._sock is not None
+        return self._sock.getsockname()[:2]
+
+    def close(self) -> None:
+        if self._sock is not None:
+            if self._loop is not None and not self._loop.is_closed():
+                self._loop.remove_reader(self._sock.fileno())
+            self._sock.close()
+            self._sock = None
+
+    # ---------------------------------------------------------------- receive
+    def _drain(self) -> None:
+        sock = self._sock
+        received = False
+        while sock is not None:
+            try:
+                data, addr = sock.recvfrom(RECV_BYTES)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:  # ICMP port unreachable from a ground-station port nobody opened
+                self.stats.send_errors += 1
+                continue
+            received = True
+            self.datagram_received(data, addr)
+            sock = self._sock
+        if received:
+            self._on_receive()
 
     def datagram_received(self, data: bytes, addr: Address) -> None:
         now = self._wall_clock()
@@ -88,23 +133,41 @@ class UdpEndpoint(asyncio.DatagramProtocol):
                     self.stats.unroutable += 1
                 else:
                     self._deliver(link, m, now)
-        self._on_receive()
 
     def _deliver(self, link: VehicleLink, m, now: float) -> None:
         # The I/O edge: a handler bug is logged with its traceback and counted, and the
-        # socket keeps serving every other vehicle instead of closing.
+        # socket keeps serving every other vehicle.
         try:
             link.handle(m, now)
         except Exception:
             self.stats.handler_errors += 1
             log.exception("vehicle %d failed to handle %s", link.system_id, m.get_type())
 
+    # ------------------------------------------------------------------- send
     def emit(self, _k: int, data: bytes) -> None:
-        transport = self.transport
-        if transport is None:
+        self.stats.frames_out += 1
+        if self.batching:
+            if len(self._batch) + len(data) > MAX_BATCH_BYTES:
+                self.flush()
+            self._batch += data
+            return
+        self._send(data)
+
+    def flush(self) -> None:
+        """Send the telemetry frames packed since the last flush."""
+        if self._batch:
+            self._send(bytes(self._batch))
+            self._batch.clear()
+
+    def _send(self, data: bytes) -> None:
+        sock = self._sock
+        if sock is None:
             return
         for addr in self._targets:
-            transport.sendto(data, addr)
+            try:
+                sock.sendto(data, addr)
+            except OSError:  # buffer full, or an unreachable port reported late
+                self.stats.send_errors += 1
         self.stats.datagrams_out += 1
 
     def expire_peers(self, wall_now_s: float) -> None:
@@ -117,7 +180,3 @@ class UdpEndpoint(asyncio.DatagramProtocol):
     def _refresh_targets(self) -> None:
         self._targets = tuple(dict.fromkeys(self._fixed + tuple(self._peers)))
         self.stats.peers = set(self._peers)
-
-    def close(self) -> None:
-        if self.transport is not None:
-            self.transport.close()

@@ -326,7 +326,7 @@ def scheduler_alive(swarm: Swarm) -> bool:
 
 
 def swarm_socket_open(swarm: Swarm) -> bool:
-    return all(e.transport is not None and not e.transport.is_closing() for e in swarm.endpoints)
+    return all(e.is_open for e in swarm.endpoints)
 
 
 @contextlib.asynccontextmanager

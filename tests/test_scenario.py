@@ -27,7 +27,9 @@ from emulator.scenario import (
 SESSIONS = Path(__file__).resolve().parents[2] / "shared" / "sessions"
 AREA_SEARCH = SESSIONS / "Example_Session_Area_Search.json"
 TARGET_ASSIGNMENT = SESSIONS / "Example_Session_Target_Assignment.json"
-needs_examples = pytest.mark.skipif(not AREA_SEARCH.is_file(), reason=f"example sessions not found in {SESSIONS}")
+needs_examples = pytest.mark.skipif(
+    not AREA_SEARCH.is_file(), reason=f"example sessions not found in {SESSIONS}"
+)
 
 
 # --------------------------------------------------------------------------- example files
