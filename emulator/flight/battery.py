@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from emulator.flight.arrays import indices as _indices
+
 __all__ = [
     "BATTERY_CRITICAL",
     "BATTERY_EMERGENCY",
@@ -63,7 +65,7 @@ class FleetBattery:
         """Drain (or charge) for dt_s; returns indices whose level changed."""
         rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
         delta = (self.charge_rate_pct_s - rate) * dt_s
-        self.pct = np.clip(self.pct + delta, 0.0, 100.0)
+        self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
 
     def spend(self, k: int, pct: float) -> None:
@@ -71,12 +73,9 @@ class FleetBattery:
 
     def _update_levels(self) -> np.ndarray:
         pct = self.pct
-        level = np.where(
-            pct <= self.emergency_pct, BATTERY_EMERGENCY,
-            np.where(pct <= self.critical_pct, BATTERY_CRITICAL,
-                     np.where(pct <= self.low_pct, BATTERY_LOW, BATTERY_OK)),
-        ).astype(np.int8)
-        changed = np.flatnonzero(level != self.level)
+        level = (pct <= self.low_pct).view(np.int8) + (pct <= self.critical_pct).view(np.int8)
+        level += (pct <= self.emergency_pct).view(np.int8)
+        changed = _indices(level != self.level)
         self.level = level
         return changed
 

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from emulator.flight.arrays import any_true as _any
+from emulator.flight.arrays import indices as _indices
 from emulator.flight.dynamics import BRAKING_SHARE, CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
 
 if TYPE_CHECKING:
@@ -31,22 +33,22 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
     if limit < 2:
         return 0
     dyn, dt = fleet.dyn, fleet.dt_s
-    if np.abs(dyn.accel_m_s2).max() > ACCEL_STEADY_M_S2 or dyn.yaw_tracking.any():
+    if np.abs(dyn.accel_m_s2).max() > ACCEL_STEADY_M_S2 or _any(dyn.yaw_tracking):
         return 0
     if dyn.last_yaw_step_deg > 1e-9:
         return 0
     active = dyn.control != CONTROL_NONE
-    if (active & (dyn.control != CONTROL_POSITION)).any():
+    if _any(active & (dyn.control != CONTROL_POSITION)):
         return 0
     horizon = float(limit)
     speed = np.sqrt(np.einsum("ij,ij->i", dyn.velocity_m_s, dyn.velocity_m_s))
     moving = active & (speed > 1e-9)
     err = dyn.goal_m - dyn.position_m
     dist = np.sqrt(np.einsum("ij,ij->i", err, err))
-    if (active & ~moving & (dist > AT_GOAL_M)).any():
+    if _any(active & ~moving & (dist > AT_GOAL_M)):
         return 0  # about to start moving
-    if moving.any():
-        idx = np.flatnonzero(moving)
+    if _any(moving):
+        idx = _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
         w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
@@ -79,11 +81,11 @@ def _battery_horizon_steps(fleet: Fleet, moving: np.ndarray) -> float:
     pct = bat.pct
     horizon = math.inf
     draining = rate > 0.0
-    if draining.any():
+    if _any(draining):
         levels = np.stack([bat.low_pct, bat.critical_pct, bat.emergency_pct, np.zeros_like(pct)])
         gaps = np.where(levels < pct, pct - levels, np.inf).min(axis=0)
         horizon = float((gaps[draining] / rate[draining]).min()) / dt
     charging = rate < 0.0
-    if charging.any():
+    if _any(charging):
         horizon = min(horizon, float(((100.0 - pct[charging]) / -rate[charging]).min()) / dt)
     return horizon - 2.0 * fleet.battery_every_steps

@@ -14,6 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from emulator.flight.arrays import any_true as _any
+from emulator.flight.arrays import indices as _indices
+
 __all__ = [
     "CONTROL_NONE",
     "CONTROL_POSITION",
@@ -98,7 +101,7 @@ class FleetDynamics:
         """
         control = self.control
         active = control != CONTROL_NONE
-        if not active.any():
+        if not _any(active):
             return _NO_EVENTS
         pos = self.position_m
         err = self.goal_m - pos
@@ -108,12 +111,12 @@ class FleetDynamics:
         v_new[~active] = 0.0
         new_pos = pos + v_new * dt_s
         below = new_pos[:, 2] < 0.0
-        if below.any():
+        if _any(below):
             new_pos[below, 2] = 0.0
             v_new[below, 2] = np.maximum(v_new[below, 2], 0.0)
         stopped = _EMPTY
         if guard is not None:
-            moving = np.flatnonzero(active & (np.abs(v_new).sum(axis=1) > 0.0))
+            moving = _indices(active & (np.abs(v_new).sum(axis=1) > 0.0))
             stopped = guard(moving, new_pos)
             if stopped.size:
                 new_pos[stopped] = pos[stopped]
@@ -142,7 +145,7 @@ class FleetDynamics:
         speed = np.minimum(np.minimum(s_max, braking), dist * (1.0 / dt_s))
         v_des = err * (speed * inv)[:, None]
         is_vel = self.control == CONTROL_VELOCITY
-        if is_vel.any():
+        if _any(is_vel):
             sp = self.velocity_sp_m_s[is_vel].copy()
             sp[:, 2] = np.clip(sp[:, 2], -self.descent_m_s[is_vel], self.climb_m_s[is_vel])
             v_des[is_vel] = sp
@@ -155,14 +158,14 @@ class FleetDynamics:
         scale = np.minimum(1.0, self.accel_xy_m_s2 * dt_s / np.maximum(dv_xy, 1e-12))
         dv[:, :2] *= scale[:, None]
         lim_z = self.accel_z_m_s2 * dt_s
-        np.clip(dv[:, 2], -lim_z, lim_z, out=dv[:, 2])
+        dv[:, 2] = np.minimum(np.maximum(dv[:, 2], -lim_z), lim_z)
         v_new = vel + dv
         # The airframe cannot exceed its airspeed limit: in strong wind it drifts.
-        if self.wind_m_s.any() or (dv_xy > 0).any():
+        if _any(self.wind_m_s) or _any(dv_xy > 0):
             air = v_new[:, :2] - self.wind_m_s
             air_speed = np.hypot(air[:, 0], air[:, 1])
             over = air_speed > self.airspeed_max_m_s
-            if over.any():
+            if _any(over):
                 air[over] *= (self.airspeed_max_m_s[over] / air_speed[over])[:, None]
                 v_new[:, :2] = air + self.wind_m_s
         return v_new
@@ -172,7 +175,7 @@ class FleetDynamics:
         goal = self.goal_yaw_deg
         free = np.isnan(goal)
         far = free & (self.control == CONTROL_POSITION) & (d_xy > 2.0)
-        if far.any():
+        if _any(far):
             bearing = np.degrees(np.arctan2(err[:, 0], err[:, 1]))
             desired = np.where(far, bearing, np.where(free, self.yaw_deg, goal))
         elif free.all():
@@ -182,21 +185,21 @@ class FleetDynamics:
             desired = np.where(free, self.yaw_deg, goal)
         diff = (desired - self.yaw_deg + 540.0) % 360.0 - 180.0
         limit = self.yaw_rate_deg_s * dt_s
-        step = np.clip(diff, -limit, limit)
+        step = np.minimum(np.maximum(diff, -limit), limit)
         step[~active] = 0.0
         self.last_yaw_step_deg = float(np.abs(step).max())
         self.yaw_deg = (self.yaw_deg + step) % 360.0
-        if not self.yaw_tracking.any():
+        if not _any(self.yaw_tracking):
             return _EMPTY
         done = self.yaw_tracking & (np.abs(diff - step) < YAW_REACHED_DEG)
-        idx = np.flatnonzero(done)
+        idx = _indices(done)
         if idx.size:
             self.yaw_tracking[idx] = False
         return idx
 
     def _arrivals(self) -> np.ndarray:
         tracking = self.tracking
-        if not tracking.any():
+        if not _any(tracking):
             return _EMPTY
         err = self.goal_m - self.position_m
         inside = np.einsum("ij,ij->i", err, err) <= self.acceptance_m**2
@@ -204,18 +207,18 @@ class FleetDynamics:
             SETTLED_SPEED_M_S**2
         )
         done = inside & ((tracking == TRACK_PASS) | ((tracking == TRACK_SETTLE) & settled))
-        idx = np.flatnonzero(done)
+        idx = _indices(done)
         if idx.size:
             tracking[idx] = TRACK_NONE
         return idx
 
     def _touchdowns(self, below: np.ndarray) -> np.ndarray:
-        if not below.any():
+        if not _any(below):
             return _EMPTY
         descending = np.where(self.control == CONTROL_VELOCITY, self.velocity_sp_m_s[:, 2],
                               self.goal_m[:, 2]) < 0.0
         landing = below & descending & (self.control != CONTROL_NONE)
-        return np.flatnonzero(landing)
+        return _indices(landing)
 
     # ----------------------------------------------------------------- helpers
     def speed_m_s(self, k: int) -> float:

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from emulator.flight.arrays import any_true as _any
+from emulator.flight.arrays import indices as _indices
 from emulator.flight.autopilot import Autopilot, AutopilotListener
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
@@ -19,6 +21,7 @@ __all__ = ["BATTERY_EVERY_STEPS", "Fleet"]
 
 BATTERY_EVERY_STEPS = 5  # the battery integrates at physics_hz / 5 (10 Hz at 50 Hz physics)
 _NO_LEVELS = np.empty(0, dtype=np.intp)
+LEAP_RETRY_STEPS = 4  # after a failed fast-forward check, step normally this many times
 
 
 class Fleet:
@@ -40,6 +43,7 @@ class Fleet:
         self.dt_s = 1.0 / physics_hz
         self.step_count = 0
         self.battery_every_steps = BATTERY_EVERY_STEPS
+        self._leap_retry_step = 0
         self.dyn = FleetDynamics(n)
         self.dyn.wind_m_s = np.asarray(self.world.wind.velocity_enu_m_s(), dtype=float)
         self.bat = FleetBattery(n)
@@ -63,7 +67,7 @@ class Fleet:
 
     @property
     def any_busy(self) -> bool:
-        return bool(self.busy.any())
+        return _any(self.busy)
 
     def attach(self, k: int, listener: AutopilotListener) -> None:
         self.autopilots[k].listener = listener
@@ -91,10 +95,10 @@ class Fleet:
         for k in levels:
             aps[k].on_battery_level(int(self.bat.level[k]))
         charging = self.bat.charge_rate_pct_s > 0.0
-        if levels is not _NO_LEVELS and charging.any():
-            for k in np.flatnonzero(charging & (self.bat.pct >= 100.0)):
+        if levels is not _NO_LEVELS and _any(charging):
+            for k in _indices(charging & (self.bat.pct >= 100.0)):
                 aps[k].on_charged()
-        due = np.flatnonzero(self.timer_s <= self.now_s + 1e-9)
+        due = _indices(self.timer_s <= self.now_s + 1e-9)
         for k in due:
             self.timer_s[k] = math.inf
             aps[k].on_timer()
@@ -117,14 +121,18 @@ class Fleet:
         """
         done = 0
         while done < max_steps:
-            leap = steady_steps(self, max_steps - done) if fast_forward else 0
+            leap = 0
+            if fast_forward and self._leap_retry_step <= self.step_count:
+                leap = steady_steps(self, max_steps - done)
+                if not leap:  # not steady: do not ask again for a few steps
+                    self._leap_retry_step = self.step_count + LEAP_RETRY_STEPS
             if leap:
                 self._leap(leap)
                 done += leap
             else:
                 self.step()
                 done += 1
-            if not self.busy.any():
+            if not _any(self.busy):
                 break
         return done
 
@@ -137,7 +145,7 @@ class Fleet:
         positions = dyn.position_m + dyn.velocity_m_s * offsets
         battery = np.empty((count, self.n))
         start = 0
-        for i in np.flatnonzero(steps % BATTERY_EVERY_STEPS == 0):
+        for i in _indices(steps % BATTERY_EVERY_STEPS == 0):
             battery[start:i] = self.bat.pct
             self.bat.step(dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
                           dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
