@@ -186,7 +186,8 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
     def snap() -> dict:
         s = swarm.stats()
         d = {"wall": time.monotonic(), "cpu": time.process_time(), **asdict(s),
-             "sim": s.sim_time_s, "out": s.frames_out, "dgrams": s.datagrams_out, "in": s.datagrams_in,
+             "sim": s.sim_time_s, "out": s.frames_out, "dgrams": s.datagrams_out,
+             "in": s.datagrams_in,
              "slipped": s.slipped_s,
              "send_errors": sum(e.stats.send_errors for e in swarm.endpoints)}
         return d
