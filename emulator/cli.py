@@ -9,6 +9,7 @@ import math
 import multiprocessing
 import signal
 import sys
+import time
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -39,7 +40,9 @@ def _build_parser() -> argparse.ArgumentParser:
     up.add_argument("--gcs-port", type=int, default=14550, help="QGroundControl port (0: none)")
     up.add_argument("--per-vehicle-ports", action="store_true",
                     help="one socket and port pair per vehicle (PX4 multi-instance style)")
-    up.add_argument("--truth-out", type=Path, help="write the ground-truth record here on exit")
+    up.add_argument("--truth-out", type=Path,
+                    help="ground-truth record written on exit (default: runs/<time>.truth.npz)")
+    up.add_argument("--no-truth", action="store_true", help="do not write the ground truth")
     return parser
 
 
@@ -87,7 +90,17 @@ def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
         asyncio.run(_serve(scenario, clock, ports, label, truth_out))
 
 
+def _truth_path(args: argparse.Namespace) -> Path | None:
+    if args.no_truth:
+        return None
+    if args.truth_out is not None:
+        return args.truth_out
+    stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
+    return Path("runs") / f"mavswarm-{stamp}.truth.npz"
+
+
 def _up(args: argparse.Namespace) -> int:
+    args.truth_out = _truth_path(args)
     if args.drones is not None and args.drones < 1:
         raise ValueError(f"--drones must be at least 1, got {args.drones}")
     clock = ClockConfig(physics_hz=args.physics_hz, speed=args.speed, stepped=args.stepped)

@@ -202,6 +202,7 @@ class TruthHistory(ABC):
     def export(self, path: str | Path) -> Path:
         """Write the whole history to one compressed ``.npz`` file, atomically."""
         target = Path(path)
+        target.parent.mkdir(parents=True, exist_ok=True)
         arrays: dict[str, Any] = {
             f"trajectory_{i:05d}": self._samples(i) for i in range(len(self.vehicle_ids))
         }
