@@ -1,1 +1,18 @@
-"""mavlink_gateway"""
+"""mavlink_gateway: tool-call primitives over MAVSDK, with per-drone perception."""
+
+from mavlink_gateway.drone_link import DroneLink, DroneProfile
+from mavlink_gateway.fleet import FleetConnection, FleetError
+from mavlink_gateway.gateway import Gateway, profiles_from_scenario
+from mavlink_gateway.outcomes import DroneState, Outcome, Status
+
+__all__ = [
+    "DroneLink",
+    "DroneProfile",
+    "DroneState",
+    "FleetConnection",
+    "FleetError",
+    "Gateway",
+    "Outcome",
+    "Status",
+    "profiles_from_scenario",
+]

@@ -467,6 +467,9 @@ class Autopilot:
         self.mission.pause()
         self._set_mode(FlightMode.HOLD)
         self.fly_to(target_m, speed_m_s=speed_m_s, yaw_deg=yaw_deg)
+        if math.isfinite(yaw_deg):  # a commanded heading is part of the goal
+            self.fleet.dyn.yaw_tracking[self.k] = True
+            self._refresh_busy()
 
     def change_speed(self, kind: int, speed_m_s: float) -> None:
         limit = self.params["MPC_XY_VEL_MAX"] if kind in (0, 1) else 10.0

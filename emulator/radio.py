@@ -1,0 +1,93 @@
+"""Drone-to-drone messaging: an inbox per drone, every message recorded as ground truth."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from emulator.truth import TruthRecorder
+
+__all__ = ["MAX_INBOX", "MAX_TEXT_CHARS", "Message", "Radio", "RadioError"]
+
+MAX_TEXT_CHARS = 500
+MAX_INBOX = 200  # oldest messages are dropped beyond this, and the drop is recorded
+
+
+class RadioError(ValueError):
+    """Raised when a message cannot be sent (unknown drone, empty or oversized text)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Message:
+    sender: str
+    recipient: str
+    text: str
+    t_s: float
+    broadcast: bool = False
+
+
+class Radio:
+    """Delivers text messages between the drones of one swarm."""
+
+    def __init__(self, drone_ids: Sequence[str], recorder: TruthRecorder,
+                 clock: Callable[[], float]) -> None:
+        self._inboxes: dict[str, deque[Message]] = {d: deque() for d in drone_ids}
+        self._recorder = recorder
+        self._clock = clock
+
+    def _check(self, drone_id: str, role: str) -> None:
+        if drone_id not in self._inboxes:
+            known = ", ".join(self._inboxes)
+            raise RadioError(f"unknown {role} drone {drone_id!r} (known: {known})")
+
+    def _check_text(self, text: str) -> None:
+        if not isinstance(text, str) or not text.strip():
+            raise RadioError("message text is empty")
+        if len(text) > MAX_TEXT_CHARS:
+            raise RadioError(f"message text is {len(text)} characters, limit {MAX_TEXT_CHARS}")
+
+    def _deliver(self, message: Message) -> None:
+        inbox = self._inboxes[message.recipient]
+        if len(inbox) >= MAX_INBOX:
+            dropped = inbox.popleft()
+            self._recorder.record_event(message.t_s, message.recipient, "message_dropped",
+                                        sender=dropped.sender)
+        inbox.append(message)
+
+    def send(self, sender: str, recipient: str, text: str) -> Message:
+        self._check(sender, "sending")
+        self._check(recipient, "receiving")
+        if sender == recipient:
+            raise RadioError(f"drone {sender} cannot message itself")
+        self._check_text(text)
+        message = Message(sender, recipient, text, self._clock())
+        self._recorder.record_event(message.t_s, sender, "message_sent", to=recipient, text=text)
+        self._deliver(message)
+        return message
+
+    def broadcast(self, sender: str, text: str) -> int:
+        self._check(sender, "sending")
+        self._check_text(text)
+        t_s = self._clock()
+        recipients = [d for d in self._inboxes if d != sender]
+        self._recorder.record_event(t_s, sender, "message_broadcast", text=text,
+                                    recipients=recipients)
+        for recipient in recipients:
+            self._deliver(Message(sender, recipient, text, t_s, broadcast=True))
+        return len(recipients)
+
+    def read(self, drone_id: str) -> list[Message]:
+        """Everything in the drone's inbox, oldest first; the inbox is emptied."""
+        self._check(drone_id, "reading")
+        inbox = self._inboxes[drone_id]
+        messages = list(inbox)
+        inbox.clear()
+        if messages:
+            self._recorder.record_event(self._clock(), drone_id, "messages_read",
+                                        count=len(messages))
+        return messages
+
+    def clear(self) -> None:
+        for inbox in self._inboxes.values():
+            inbox.clear()

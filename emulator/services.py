@@ -1,0 +1,82 @@
+"""What a swarm offers its gateway besides MAVLink: the clock, each drone's sensor feed, the
+drone-to-drone radio, and operator controls.
+
+Flight goes through MAVLink only. These services carry what MAVLink has no message for
+(what a drone's sensor perceives, text between drones) and the operator's resets between
+benchmark tasks, which are marked `operator_*` and recorded as such in the ground truth.
+"""
+
+from __future__ import annotations
+
+from emulator.flight.operator import place_on_ground, set_battery
+from emulator.perception import Perception
+from emulator.radio import Message, Radio
+from emulator.swarm import Swarm
+
+__all__ = ["SwarmServices"]
+
+
+class SwarmServices:
+    """In-process services of one running swarm."""
+
+    def __init__(self, swarm: Swarm) -> None:
+        self._swarm = swarm
+        self._fleet = swarm.fleet
+        ids = [ap.vehicle_id for ap in self._fleet.autopilots]
+        self.radio = Radio(ids, self._fleet.recorder, self.clock_s)
+
+    @property
+    def drone_ids(self) -> tuple[str, ...]:
+        return tuple(ap.vehicle_id for ap in self._fleet.autopilots)
+
+    def clock_s(self) -> float:
+        """Simulated time now."""
+        return self._fleet.now_s
+
+    def _autopilot(self, drone_id: str):
+        index = self._fleet.index_by_id.get(drone_id)
+        if index is None:
+            raise KeyError(f"unknown drone {drone_id!r}")
+        return self._fleet.autopilots[index]
+
+    def sense(self, drone_id: str) -> Perception:
+        """What drone_id's sensor perceives now (its SIM_SENS_RAD disc)."""
+        ap = self._autopilot(drone_id)
+        others = {o.vehicle_id: o.position_m for o in self._fleet.autopilots if o is not ap}
+        return self._fleet.sensor.sense(ap.position_m, ap.params["SIM_SENS_RAD"],
+                                        vehicles=others, exclude_vehicle=drone_id)
+
+    # ------------------------------------------------------------------ radio
+    def send_message(self, sender: str, recipient: str, text: str) -> Message:
+        return self.radio.send(sender, recipient, text)
+
+    def broadcast(self, sender: str, text: str) -> int:
+        return self.radio.broadcast(sender, text)
+
+    def read_messages(self, drone_id: str) -> list[Message]:
+        return self.radio.read(drone_id)
+
+    # --------------------------------------------------------------- operator
+    def operator_land_all(self) -> None:
+        """Operator reset: every drone disarmed on the ground below where it is."""
+        for ap in self._fleet.autopilots:
+            x, y, _ = ap.position_m
+            place_on_ground(ap, x, y)
+
+    def operator_reset_batteries(self, pct: float = 100.0) -> None:
+        """Operator reset: every battery set to pct."""
+        for ap in self._fleet.autopilots:
+            set_battery(ap, pct)
+
+    def operator_reset_to_start(self) -> None:
+        """Operator reset: every drone back at its scenario start, on the ground, full."""
+        for ap in self._fleet.autopilots:
+            x, y, _ = ap.spec.position_m
+            place_on_ground(ap, x, y, ap.spec.heading_deg)
+            ap.home_m = ap.spec.home_m
+            set_battery(ap, ap.spec.battery_pct)
+        self.radio.clear()
+
+    async def advance(self, seconds: float) -> None:
+        """Let simulated time pass (stepped mode: run the clock; real time: wait)."""
+        await self._swarm.advance(seconds)

@@ -1,0 +1,84 @@
+"""The gateway's MAVLink side: one MAVSDK instance for the whole swarm, a DroneLink each."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import time
+from collections.abc import Sequence
+
+from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
+
+from emulator.geo import GeoOrigin
+from mavlink_gateway.drone_link import DroneLink, DroneProfile
+
+__all__ = ["FleetConnection", "FleetError"]
+
+DISCOVERY_TIMEOUT_S = 15.0
+
+
+class FleetError(RuntimeError):
+    """Raised when the swarm cannot be reached or some drones never appear."""
+
+
+class FleetConnection:
+    """Connects to a swarm and keeps a DroneLink per expected drone.
+
+    Use `async with await FleetConnection.connect(url, profiles, origin) as fleet:`.
+    """
+
+    def __init__(self, mavsdk: Mavsdk, drones: dict[str, DroneLink]) -> None:
+        self._mavsdk = mavsdk
+        self.drones = drones
+
+    @classmethod
+    async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoOrigin, *,
+                      timeout_s: float = DISCOVERY_TIMEOUT_S) -> FleetConnection:
+        """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles."""
+        loop = asyncio.get_running_loop()
+        # MAVSDK runs each blocking call on the default executor: size it for the fleet.
+        loop.set_default_executor(
+            concurrent.futures.ThreadPoolExecutor(max(32, 2 * len(profiles) + 8))
+        )
+        mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
+        try:
+            await mavsdk.add_any_connection(url)
+            by_system = {p.system_id: p for p in profiles}
+            found: dict[int, object] = {}
+            deadline = time.monotonic() + timeout_s
+            while len(found) < len(by_system):
+                for system in await mavsdk.get_systems():
+                    sid = await system.get_system_id()
+                    if sid in by_system and sid not in found and await system.is_connected() \
+                            and await system.has_autopilot():
+                        found[sid] = system
+                if len(found) == len(by_system):
+                    break
+                if time.monotonic() > deadline:
+                    missing = sorted(set(by_system) - set(found))
+                    raise FleetError(f"no autopilot answered on {url} for systems {missing}")
+                await asyncio.sleep(0.05)
+            drones = {p.drone_id: DroneLink(p, found[p.system_id], origin) for p in profiles}
+            for link in drones.values():
+                link.start()
+            deadline = time.monotonic() + timeout_s
+            while not all(link.ready for link in drones.values()):
+                if time.monotonic() > deadline:
+                    silent = [d for d, link in drones.items() if not link.ready]
+                    raise FleetError(f"no telemetry from drones {silent}")
+                await asyncio.sleep(0.05)
+        except BaseException:
+            mavsdk.destroy()
+            raise
+        return cls(mavsdk, drones)
+
+    async def close(self) -> None:
+        for link in self.drones.values():
+            await link.close()
+        self._mavsdk.destroy()
+
+    async def __aenter__(self) -> FleetConnection:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()

@@ -1,0 +1,40 @@
+"""The gateway: every agent-side primitive of a swarm, over MAVLink (see flight, payload)."""
+
+from __future__ import annotations
+
+from emulator.scenario import Scenario
+from mavlink_gateway.core import Refusal
+from mavlink_gateway.drone_link import DroneProfile
+from mavlink_gateway.flight import FlightPrimitives
+from mavlink_gateway.outcomes import DroneState, Outcome, Status
+from mavlink_gateway.payload import PayloadPrimitives
+
+__all__ = ["Gateway", "profiles_from_scenario"]
+
+
+class Gateway(FlightPrimitives, PayloadPrimitives):
+    """All primitives for the drones of one swarm.
+
+    Each primitive takes a drone id and returns an Outcome. Primitives for different drones
+    run concurrently; a second primitive for a drone that is still busy is refused.
+    """
+
+    def list_drones(self) -> list[DroneState]:
+        return [link.state() for link in self.drones.values()]
+
+    def drone_state(self, drone: str) -> Outcome:
+        try:
+            link = self._link(drone)
+        except Refusal as refusal:
+            return Outcome(Status.REJECTED, str(refusal))
+        state = link.state()
+        return Outcome(Status.OK, state.describe(), state)
+
+
+def profiles_from_scenario(scenario: Scenario) -> list[DroneProfile]:
+    """The fleet owner's view of a scenario's drones: ids, system ids and limits."""
+    return [
+        DroneProfile(spec.id, spec.name, k + 1, spec.max_altitude_m, spec.max_speed_m_s,
+                     spec.perceived_radius_m, spec.task_radius_m)
+        for k, spec in enumerate(scenario.vehicles)
+    ]

@@ -1,0 +1,67 @@
+"""What every primitive returns: a status, one readable line, and the drone's state after."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from enum import StrEnum
+from typing import Any
+
+__all__ = ["DroneState", "Outcome", "Status"]
+
+
+class Status(StrEnum):
+    OK = "ok"  # done as asked
+    PARTIAL = "partial"  # part of it done (e.g. some waypoints of a path)
+    BLOCKED = "blocked"  # stopped by the world: an obstacle, a battery failsafe
+    REJECTED = "rejected"  # refused before anything was sent: nothing changed
+    TIMEOUT = "timeout"  # the simulated-time budget ran out
+
+
+@dataclass(frozen=True, slots=True)
+class DroneState:
+    """A drone as its own telemetry reports it (local ENU metres, compass heading)."""
+
+    drone: str
+    x_m: float
+    y_m: float
+    altitude_m: float
+    heading_deg: float
+    battery_pct: float
+    flight_state: str  # on_ground, taking_off, hovering, flying, landing
+    armed: bool
+    mode: str
+
+    @property
+    def position_m(self) -> tuple[float, float, float]:
+        return self.x_m, self.y_m, self.altitude_m
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        for key in ("x_m", "y_m", "altitude_m", "heading_deg", "battery_pct"):
+            d[key] = round(d[key], 2)
+        return d
+
+    def describe(self) -> str:
+        return (f"{self.drone} {self.flight_state} at ({self.x_m:.1f}, {self.y_m:.1f}, "
+                f"{self.altitude_m:.1f}) heading {self.heading_deg:.0f} deg, "
+                f"battery {self.battery_pct:.0f}%")
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    status: Status
+    message: str
+    state: DroneState | None = None
+    data: dict[str, Any] | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status is Status.OK
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"status": self.status.value, "message": self.message}
+        if self.state is not None:
+            d["state"] = self.state.to_dict()
+        if self.data:
+            d.update(self.data)
+        return d

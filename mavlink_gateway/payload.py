@@ -1,0 +1,142 @@
+"""Camera, charging, messages, perception and the operator's resets."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from emulator.perception import Perception, SensedEntity
+from emulator.radio import RadioError
+from mavlink_gateway.core import GatewayCore, Refusal
+from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.outcomes import Outcome, Status
+
+__all__ = ["PayloadPrimitives", "perception_dict"]
+
+CAMERA_ID = 100
+CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targets
+FULL_PCT = 99.5
+
+
+def _entity(e: SensedEntity) -> dict[str, Any]:
+    return {"id": e.id, "kind": e.kind, "distance_m": round(e.distance_m, 1),
+            "position": [round(v, 1) for v in e.position_m]}
+
+
+def perception_dict(p: Perception) -> dict[str, Any]:
+    """What one drone senses, as plain data (never more than its sensor reports)."""
+    return {"targets": [_entity(e) for e in p.targets],
+            "obstacles": [_entity(e) for e in p.obstacles],
+            "drones": [_entity(e) for e in p.vehicles]}
+
+
+class PayloadPrimitives(GatewayCore):
+    """Primitives that use the camera, the charger, the radio and the sensor feed."""
+
+    async def take_photo(self, drone: str) -> Outcome:
+        async def body(link: DroneLink) -> Outcome:
+            self._require_air(link)
+            before = len(link.captures)
+            await self._mavsdk(link, "the photo", link.camera.take_photo(CAMERA_ID))
+
+            def done() -> Outcome | None:
+                if len(link.captures) > before:
+                    info = link.captures[-1]
+                    x, y, _ = link.origin.to_local(info.position.latitude_deg,
+                                                   info.position.longitude_deg, 0.0)
+                    return Outcome(Status.OK, f"{link.drone_id} took photo {info.index} at "
+                                   f"({x:.1f}, {y:.1f})", link.state(), {"photo": info.index})
+                return None
+
+            return await self._wait(link, 10.0, "take_photo", done, watch_obstacles=False)
+
+        return await self._run("take_photo", drone, body)
+
+    async def charge(self, drone: str) -> Outcome:
+        """Land on a charging station this drone senses and charge to full."""
+        async def body(link: DroneLink) -> Outcome:
+            stations = [t for t in self.services.sense(link.drone_id).targets
+                        if t.kind == CHARGING_KIND]
+            if not stations:
+                raise Refusal(f"no charging station within {link.profile.perceived_radius_m:g} m"
+                              f" of {link.drone_id}")
+            station = stations[0]
+            if link.flight_state == "on_ground":
+                if station.distance_m > 0.0:
+                    raise Refusal(f"{link.drone_id} is on the ground {station.distance_m:.0f} m "
+                                  f"from station {station.id}: take off and charge again")
+            else:
+                sx, sy, _ = station.position_m
+                moved = await self._goto(link, (sx, sy, link.state().altitude_m), "charge")
+                if not moved.ok:
+                    return moved
+                await self._mavsdk(link, "landing", link.action.land())
+            start_pct = link.battery_pct
+
+            def done() -> Outcome | None:
+                if link.flight_state == "on_ground" and not link.armed and \
+                        link.battery_pct >= FULL_PCT:
+                    return Outcome(Status.OK, f"{link.drone_id} charged at {station.id} from "
+                                   f"{start_pct:.0f}% to {link.battery_pct:.0f}%", link.state())
+                return None
+
+            return await self._wait(link, 4000.0, "charge", done)
+
+        return await self._run("charge", drone, body)
+
+    # ------------------------------------------------------------- radio
+    def _radio(self, action: str, drone: object, call) -> Outcome:
+        try:
+            link = self._link(drone)
+            return call(link)
+        except (Refusal, RadioError) as error:
+            return Outcome(Status.REJECTED, f"{action} refused: {error}")
+
+    def send_message(self, drone: str, to: str, text: str) -> Outcome:
+        def call(link: DroneLink) -> Outcome:
+            self.services.send_message(link.drone_id, to, text)
+            return Outcome(Status.OK, f"{link.drone_id} sent a message to {to}", link.state())
+
+        return self._radio("send_message", drone, call)
+
+    def broadcast(self, drone: str, text: str) -> Outcome:
+        def call(link: DroneLink) -> Outcome:
+            count = self.services.broadcast(link.drone_id, text)
+            return Outcome(Status.OK, f"{link.drone_id} broadcast to {count} drones",
+                           link.state(), {"recipients": count})
+
+        return self._radio("broadcast", drone, call)
+
+    def read_messages(self, drone: str) -> Outcome:
+        def call(link: DroneLink) -> Outcome:
+            messages = self.services.read_messages(link.drone_id)
+            data = {"messages": [{"from": m.sender, "text": m.text, "t_s": round(m.t_s, 1)}
+                                 for m in messages]}
+            return Outcome(Status.OK, f"{link.drone_id} has {len(messages)} new messages",
+                           link.state(), data)
+
+        return self._radio("read_messages", drone, call)
+
+    # --------------------------------------------------------- perception
+    def nearby(self, drone: str) -> Outcome:
+        """Targets, obstacles and drones within this drone's perceived radius."""
+        try:
+            link = self._link(drone)
+        except Refusal as refusal:
+            return Outcome(Status.REJECTED, str(refusal))
+        seen = perception_dict(self.services.sense(link.drone_id))
+        counts = ", ".join(f"{len(v)} {k}" for k, v in seen.items())
+        return Outcome(Status.OK, f"{link.drone_id} senses {counts} within "
+                       f"{link.profile.perceived_radius_m:g} m", link.state(), seen)
+
+    # ----------------------------------------------------------- operator
+    def operator_land_all(self) -> None:
+        """Operator reset (not flight): every drone disarmed on the ground where it is."""
+        self.services.operator_land_all()
+
+    def operator_reset_batteries(self) -> None:
+        """Operator reset (not flight): every battery full."""
+        self.services.operator_reset_batteries()
+
+    def operator_reset_to_start(self) -> None:
+        """Operator reset (not flight): the session's start state."""
+        self.services.operator_reset_to_start()
