@@ -37,9 +37,13 @@ class Radio:
         self._clock = clock
 
     def _check(self, drone_id: str, role: str) -> None:
-        if drone_id not in self._inboxes:
+        if not isinstance(drone_id, str) or drone_id not in self._inboxes:
             known = ", ".join(self._inboxes)
-            raise RadioError(f"unknown {role} drone {drone_id!r} (known: {known})")
+            try:  # the id may be anything a caller passed, even an unhashable or huge value
+                shown = repr(drone_id)[:60]
+            except ValueError:
+                shown = f"<{type(drone_id).__name__}>"
+            raise RadioError(f"unknown {role} drone {shown} (known: {known})")
 
     def _check_text(self, text: str) -> None:
         if not isinstance(text, str) or not text.strip():

@@ -74,6 +74,7 @@ class SwarmServices:
             x, y, _ = ap.spec.position_m
             place_on_ground(ap, x, y, ap.spec.heading_deg)
             ap.home_m = ap.spec.home_m
+            ap.listener.on_home_changed()  # HOME_POSITION now, not at its next 0.5 Hz slot
             set_battery(ap, ap.spec.battery_pct)
         self.radio.clear()
 

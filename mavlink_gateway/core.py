@@ -3,7 +3,6 @@ precondition checks, and waiting for an outcome within a simulated-time budget."
 
 from __future__ import annotations
 
-import asyncio
 import inspect
 import math
 import time
@@ -16,9 +15,12 @@ from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["GatewayCore", "Refusal", "Services"]
 
-POLL_S = 0.01
+POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry arrives
+STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
 WALL_MARGIN_S = 60.0
+LANDED_Z_M = 0.3  # the ground is z = 0 of the local frame everywhere
 OBSTACLE_TEXT = "Obstacle"
+FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.5 Hz)
 FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost")
 
 
@@ -40,9 +42,25 @@ class Refusal(Exception):
 
 
 def _number(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise Refusal(f"{name} must be a finite number, got {value!r}")
-    return float(value)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise Refusal(f"{name} must be a finite number, got {_short(value)}")
+    try:
+        number = float(value)  # an int beyond float range raises OverflowError
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise Refusal(f"{name} must be a finite number, got {_short(value)}")
+    return number
+
+
+def _short(value: object, limit: int = 60) -> str:
+    """repr() of a caller's argument for a message: shortened, and never raising (repr of an
+    int of more than 4300 digits raises ValueError)."""
+    try:
+        text = repr(value)
+    except Exception:
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 class GatewayCore:
@@ -59,7 +77,7 @@ class GatewayCore:
         if link is None:
             ids = list(self.drones)
             known = f"{ids[0]} to {ids[-1]}" if len(ids) > 3 else ", ".join(ids)
-            raise Refusal(f"unknown drone {drone!r} (known: {known})")
+            raise Refusal(f"unknown drone {_short(drone)} (known: {known})")
         return link
 
     async def _run(self, name: str, drone: object,
@@ -111,7 +129,13 @@ class GatewayCore:
         try:
             await call
         except Exception as error:  # MAVSDK raises one error class per plugin
-            await asyncio.sleep(0.05)  # the autopilot's STATUSTEXT follows its ACK
+            # The autopilot's STATUSTEXT follows its ACK: wait for it, not for a fixed time.
+            deadline = time.monotonic() + STATUSTEXT_WAIT_S
+            while len(link.status_texts) == texts:
+                left = deadline - time.monotonic()
+                if left <= 0.0:
+                    break
+                await link.wait_update(link.updates, left)
             reason = next(iter(link.status_texts[texts:]), None)
             detail = reason or str(error)
             raise Refusal(f"the autopilot refused {what}: {detail}") from None
@@ -119,14 +143,21 @@ class GatewayCore:
     # ----------------------------------------------------------------- waits
     async def _wait(self, link: DroneLink, budget_s: float, what: str,
                     done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
-                    watch_obstacles: bool = True,
+                    watch_obstacles: bool = True, texts_from: int | None = None,
                     ) -> Outcome:
-        """Poll telemetry until `done` gives an outcome, an obstacle or failsafe stops the
-        drone, or `budget_s` of simulated time has passed."""
-        texts = len(link.status_texts)
+        """Look at telemetry until `done` gives an outcome, an obstacle or failsafe stops the
+        drone, or `budget_s` of simulated time has passed. Looks again as soon as a new
+        telemetry message has been applied (at the latest after POLL_S).
+
+        `texts_from`: the number of STATUSTEXTs before the command was sent. A goal blocked
+        at once is reported within a physics step, and its STATUSTEXT may come before the
+        command's ACK, so before this wait begins."""
+        texts = len(link.status_texts) if texts_from is None else texts_from
         start_sim = self.services.clock_s()
         wall_deadline = time.monotonic() + budget_s + WALL_MARGIN_S
+        obstacle_mark: dict[str, int] | None = None  # telemetry seen when the obstacle text came
         while True:
+            seen = link.updates
             outcome = done()
             if inspect.isawaitable(outcome):
                 outcome = await outcome
@@ -136,17 +167,59 @@ class GatewayCore:
             for text in new_texts:
                 if text.startswith(FAILSAFE_TEXTS):
                     return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())
-            if watch_obstacles and any(t.startswith(OBSTACLE_TEXT) for t in new_texts) \
-                    and link.speed_m_s < 0.3 and link.mode == "HOLD":
+            if watch_obstacles and obstacle_mark is None and \
+                    any(t.startswith(OBSTACLE_TEXT) for t in new_texts):
+                obstacle_mark = dict(link.seen)
+            # The text comes the moment the vehicle stops; speed, mode and position come at
+            # their own rates and may still describe the start of the move (in stepped mode a
+            # whole flight can fit between two positions): judge on telemetry sent after it.
+            if obstacle_mark is not None and \
+                    link.refreshed_since(obstacle_mark, ("position", "velocity"), 2) and \
+                    link.speed_m_s < 0.3 and link.mode == "HOLD":
                 x, y, z = link.position_m or (math.nan,) * 3
                 obstacle = next(t for t in new_texts if t.startswith(OBSTACLE_TEXT))
                 return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
                                f"{obstacle.lower()}", link.state())
             elapsed = self.services.clock_s() - start_sim
             if elapsed > budget_s or time.monotonic() > wall_deadline:
+                # The primitive ends here, so its goal must end too: left flying, the vehicle
+                # would go on after the outcome (and a stepped clock would run while the
+                # caller thinks). Best effort: the outcome is a timeout either way.
+                held = await self._hold(link)
+                # Telemetry lags the simulation (in stepped mode, while other drones keep the
+                # clock running, seconds of wall time are minutes of simulated time): the goal
+                # may have been reached long ago. Judge again on telemetry sent from now on.
+                mark, fresh_deadline = dict(link.seen), time.monotonic() + FRESH_WAIT_S
+                while not link.refreshed_since(mark) and time.monotonic() < fresh_deadline:
+                    await link.wait_update(link.updates, POLL_S)
+                outcome = done()
+                if inspect.isawaitable(outcome):
+                    outcome = await outcome
+                if outcome is not None:
+                    return outcome
                 return Outcome(Status.TIMEOUT, f"{what} did not finish within {budget_s:.0f} s "
-                               "of simulated time", link.state())
-            await asyncio.sleep(POLL_S)
+                               f"of simulated time{'; holding' if held else ''}", link.state())
+            await link.wait_update(seen, POLL_S)
+
+    @staticmethod
+    async def _hold(link: DroneLink) -> bool:
+        """Switch an airborne drone to HOLD (it brakes and stays); True if it was sent."""
+        if link.flight_state == "on_ground":
+            return False
+        try:
+            await link.action.hold()
+        except Exception:  # MAVSDK raises one error class per plugin
+            return False
+        return True
+
+    @staticmethod
+    def _landed(link: DroneLink) -> bool:
+        """On the ground by the landed state and by the position. The landed state and the
+        position come in different messages: in stepped mode a whole descent fits between two
+        positions, and an outcome built on the landed state alone could report a landed drone
+        still at its flight altitude."""
+        pos = link.position_m
+        return link.flight_state == "on_ground" and pos is not None and pos[2] < LANDED_Z_M
 
     @staticmethod
     def _arrived(link: DroneLink, target: tuple[float, float, float], tolerance_m: float

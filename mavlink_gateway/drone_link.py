@@ -26,6 +26,19 @@ from mavlink_gateway.outcomes import DroneState
 __all__ = ["DroneLink", "DroneProfile"]
 
 HOVER_SPEED_M_S = 0.5
+# EXTENDED_SYS_STATE (landed state, in air) is 1 Hz by default (PX4 and the emulator): a
+# take-off or landing would be seen up to a second after it ended. Asked for once per drone
+# with SET_MESSAGE_INTERVAL; a vehicle that refuses keeps its default rate.
+LANDED_STATE_HZ = 10.0
+# The streams that arrive periodically (the others come on events): their message counts in
+# `DroneLink.seen` tell a wait whether every cached value was refreshed since some moment.
+PERIODIC = ("position", "velocity", "heading", "battery", "in_air", "landed_state", "armed",
+            "flight_mode")
+
+
+def _release(waiter: asyncio.Future[None]) -> None:
+    if not waiter.done():
+        waiter.set_result(None)
 
 
 @dataclass(frozen=True, slots=True)
@@ -66,7 +79,9 @@ class DroneLink:
         self.status_texts: list[str] = []
         self.captures: list[Any] = []
         self.updates = 0  # telemetry messages seen; lets waits know fresh data arrived
+        self.seen: dict[str, int] = {}  # telemetry messages seen per stream
         self._tasks: list[asyncio.Task[None]] = []
+        self._update_waiters: list[asyncio.Future[None]] = []
 
     @property
     def drone_id(self) -> str:
@@ -76,29 +91,75 @@ class DroneLink:
     def start(self) -> None:
         t = self.telemetry
         follow = self._follow
-        follow(t.subscribe_position(), self._on_position)
-        follow(t.subscribe_velocity_ned(), self._on_velocity)
-        follow(t.subscribe_heading(), lambda h: setattr(self, "heading_deg",
-                                                        wrap_heading_deg(h.heading_deg)))
-        follow(t.subscribe_battery(), lambda b: setattr(self, "battery_pct",
-                                                        float(b.remaining_percent)))
-        follow(t.subscribe_in_air(), lambda v: setattr(self, "in_air", bool(v)))
-        follow(t.subscribe_landed_state(), lambda v: setattr(self, "landed_state", v.name))
-        follow(t.subscribe_armed(), lambda v: setattr(self, "armed", bool(v)))
-        follow(t.subscribe_flight_mode(), lambda v: setattr(self, "mode", v.name))
-        follow(t.subscribe_home(), self._on_home)
-        follow(t.subscribe_status_text(), lambda s: self.status_texts.append(s.text))
-        follow(self.mission.subscribe_mission_progress(),
+        follow("position", t.subscribe_position(), self._on_position)
+        follow("velocity", t.subscribe_velocity_ned(), self._on_velocity)
+        follow("heading", t.subscribe_heading(),
+               lambda h: setattr(self, "heading_deg", wrap_heading_deg(h.heading_deg)))
+        follow("battery", t.subscribe_battery(),
+               lambda b: setattr(self, "battery_pct", float(b.remaining_percent)))
+        follow("in_air", t.subscribe_in_air(), lambda v: setattr(self, "in_air", bool(v)))
+        follow("landed_state", t.subscribe_landed_state(), self._on_landed_state)
+        follow("armed", t.subscribe_armed(), lambda v: setattr(self, "armed", bool(v)))
+        follow("flight_mode", t.subscribe_flight_mode(), lambda v: setattr(self, "mode", v.name))
+        follow("home", t.subscribe_home(), self._on_home)
+        follow("status_text", t.subscribe_status_text(),
+               lambda s: self.status_texts.append(s.text))
+        follow("mission_progress", self.mission.subscribe_mission_progress(),
                lambda p: setattr(self, "mission_progress", (p.current, p.total)))
-        follow(self.camera.subscribe_capture_info(), self.captures.append)
+        follow("capture", self.camera.subscribe_capture_info(), self.captures.append)
+        self._tasks.append(asyncio.create_task(self._request_rates(),
+                                               name=f"telemetry-rates-{self.drone_id}"))
 
-    def _follow(self, stream: AsyncIterator[Any], apply: Callable[[Any], None]) -> None:
+    async def _request_rates(self) -> None:
+        with contextlib.suppress(Exception):  # best effort: the default rate still works
+            await self.telemetry.set_rate_landed_state(LANDED_STATE_HZ)
+
+    def _follow(self, name: str, stream: AsyncIterator[Any], apply: Callable[[Any], None]
+                ) -> None:
         async def run() -> None:
             async for value in stream:
                 apply(value)
                 self.updates += 1
+                self.seen[name] = self.seen.get(name, 0) + 1
+                if self._update_waiters:
+                    self._wake_waiters()
 
         self._tasks.append(asyncio.create_task(run(), name=f"telemetry-{self.drone_id}"))
+
+    def refreshed_since(self, mark: dict[str, int], streams: tuple[str, ...] = PERIODIC,
+                        count: int = 1) -> bool:
+        """True once each of `streams` brought `count` messages after `mark` (a copy of
+        `seen` taken earlier)."""
+        return all(self.seen.get(k, 0) >= mark.get(k, 0) + count for k in streams)
+
+    def _wake_waiters(self) -> None:
+        waiters, self._update_waiters = self._update_waiters, []
+        for waiter in waiters:
+            _release(waiter)
+
+    async def wait_update(self, seen: int, timeout_s: float) -> None:
+        """Return once a telemetry message newer than `seen` (a value of `updates`) has been
+        applied, or after timeout_s, whichever comes first."""
+        if self.updates != seen:
+            return
+        loop = asyncio.get_running_loop()
+        waiter: asyncio.Future[None] = loop.create_future()
+        self._update_waiters.append(waiter)
+        timer = loop.call_later(timeout_s, _release, waiter)
+        try:
+            await waiter
+        finally:
+            timer.cancel()
+            if waiter in self._update_waiters:
+                self._update_waiters.remove(waiter)
+
+    def _on_landed_state(self, v: Any) -> None:
+        # A vehicle that leaves the ground is armed. `armed` otherwise comes with the 1 Hz
+        # HEARTBEAT, which would hold a take-off's outcome back by up to a second; the next
+        # heartbeat still rules.
+        if self.landed_state == "ON_GROUND" and v.name in ("TAKING_OFF", "IN_AIR"):
+            self.armed = True
+        self.landed_state = v.name
 
     def _on_position(self, p: Any) -> None:
         x, y, z = self.origin.to_local(p.latitude_deg, p.longitude_deg, p.absolute_altitude_m)

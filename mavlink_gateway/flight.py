@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from mavsdk.asyncio.plugins.mission_raw import MissionItem
 
 from emulator.geo import wrap_heading_deg
-from mavlink_gateway.core import GatewayCore, Refusal, _number
+from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.outcomes import Outcome, Status
 
@@ -47,6 +47,7 @@ class FlightPrimitives(GatewayCore):
             if link.battery_pct < 10.0:
                 raise Refusal(f"battery {link.battery_pct:.0f}% is too low to take off")
             x, y, _ = link.position_m or (0.0, 0.0, 0.0)
+            texts = len(link.status_texts)
             await self._mavsdk(link, "the takeoff altitude",
                                link.action.set_takeoff_altitude(altitude))
             await self._mavsdk(link, "arming", link.action.arm())
@@ -55,12 +56,16 @@ class FlightPrimitives(GatewayCore):
             target = (x, y, home_z + altitude)
 
             def done() -> Outcome | None:
-                if link.flight_state == "hovering" and self._arrived(link, target, ARRIVAL_M):
+                # Armed comes with the 1 Hz heartbeat, position at 10 Hz: without waiting for
+                # it the state reported could be "hovering" and "disarmed" at once.
+                if link.flight_state == "hovering" and link.armed and \
+                        self._arrived(link, target, ARRIVAL_M):
                     return Outcome(Status.OK, f"{link.drone_id} took off to {altitude:.1f} m",
                                    link.state())
                 return None
 
-            return await self._wait(link, altitude / 1.0 + 30.0, "take_off", done)
+            return await self._wait(link, altitude / 1.0 + 30.0, "take_off", done,
+                                    texts_from=texts)
 
         return await self._run("take_off", drone, body)
 
@@ -68,16 +73,17 @@ class FlightPrimitives(GatewayCore):
         async def body(link: DroneLink) -> Outcome:
             self._require_air(link)
             height = link.state().altitude_m
+            texts = len(link.status_texts)
             await self._mavsdk(link, "landing", link.action.land())
 
             def done() -> Outcome | None:
-                if link.flight_state == "on_ground":
+                if self._landed(link):
                     x, y, _ = link.position_m or (math.nan,) * 3
                     return Outcome(Status.OK, f"{link.drone_id} landed at ({x:.1f}, {y:.1f})",
                                    link.state())
                 return None
 
-            return await self._wait(link, height / 0.5 + 30.0, "land", done)
+            return await self._wait(link, height / 0.5 + 30.0, "land", done, texts_from=texts)
 
         return await self._run("land", drone, body)
 
@@ -92,6 +98,7 @@ class FlightPrimitives(GatewayCore):
             raise Refusal(f"({x:.0f}, {y:.0f}) is more than 10 km from home")
         start = link.position_m or target
         lat, lon, alt = link.geodetic(x, y, home[2] + z)
+        texts = len(link.status_texts)
         await self._mavsdk(link, what, link.action.goto_location(lat, lon, alt, yaw_deg))
         goal = (x, y, home[2] + z)
 
@@ -103,7 +110,7 @@ class FlightPrimitives(GatewayCore):
             return Outcome(Status.OK, f"{link.drone_id} reached {_fmt(target)}", link.state())
 
         budget = math.dist(start, goal) / CRUISE_M_S * 2.0 + 30.0
-        return await self._wait(link, budget, what, done)
+        return await self._wait(link, budget, what, done, texts_from=texts)
 
     async def move_to(self, drone: str, x: float, y: float, z: float) -> Outcome:
         async def body(link: DroneLink) -> Outcome:
@@ -155,16 +162,17 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             start = link.position_m or (0.0, 0.0, 0.0)
             home = link.home_m or (0.0, 0.0, 0.0)
+            texts = len(link.status_texts)
             await self._mavsdk(link, "return to launch", link.action.return_to_launch())
 
             def done() -> Outcome | None:
-                if link.flight_state == "on_ground":
+                if self._landed(link):
                     return Outcome(Status.OK, f"{link.drone_id} returned home and landed at "
                                    f"({home[0]:.1f}, {home[1]:.1f})", link.state())
                 return None
 
             budget = math.dist(start, home) / CRUISE_M_S * 2.0 + 120.0
-            return await self._wait(link, budget, "return_home", done)
+            return await self._wait(link, budget, "return_home", done, texts_from=texts)
 
         return await self._run("return_home", drone, body)
 
@@ -187,6 +195,7 @@ class FlightPrimitives(GatewayCore):
     # ----------------------------------------------------------- missions
     async def _fly_mission(self, link: DroneLink, items: list[MissionItem], what: str,
                            budget_s: float, goal: tuple[float, float, float]) -> Outcome:
+        texts = len(link.status_texts)
         await self._mavsdk(link, f"the {what} mission", link.mission.upload_mission(items))
         link.mission_progress = (0, len(items))
         await self._mavsdk(link, f"the {what} mission start", link.mission.start_mission())
@@ -200,7 +209,7 @@ class FlightPrimitives(GatewayCore):
                 return Outcome(Status.OK, "", link.state())
             return None
 
-        return await self._wait(link, budget_s, what, done)
+        return await self._wait(link, budget_s, what, done, texts_from=texts)
 
     async def move_along_path(self, drone: str, waypoints: Sequence[Sequence[float]]
                               ) -> Outcome:
@@ -212,7 +221,7 @@ class FlightPrimitives(GatewayCore):
             points: list[tuple[float, float, float]] = []
             for i, wp in enumerate(waypoints):
                 if not isinstance(wp, Sequence) or len(wp) not in (2, 3):
-                    raise Refusal(f"waypoint {i + 1} must be [x, y] or [x, y, z], got {wp!r}")
+                    raise Refusal(f"waypoint {i + 1} must be [x, y] or [x, y, z], got {_short(wp)}")
                 z = self._altitude(link, wp[2], f"waypoint {i + 1} z") if len(wp) == 3 \
                     else start_alt
                 points.append((self._coordinate(f"waypoint {i + 1} x", wp[0]),

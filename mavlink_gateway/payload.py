@@ -60,6 +60,7 @@ class PayloadPrimitives(GatewayCore):
                 raise Refusal(f"no charging station within {link.profile.perceived_radius_m:g} m"
                               f" of {link.drone_id}")
             station = stations[0]
+            texts = len(link.status_texts)
             if link.flight_state == "on_ground":
                 if station.distance_m > 0.0:
                     raise Refusal(f"{link.drone_id} is on the ground {station.distance_m:.0f} m "
@@ -69,17 +70,18 @@ class PayloadPrimitives(GatewayCore):
                 moved = await self._goto(link, (sx, sy, link.state().altitude_m), "charge")
                 if not moved.ok:
                     return moved
+                texts = len(link.status_texts)
                 await self._mavsdk(link, "landing", link.action.land())
             start_pct = link.battery_pct
 
             def done() -> Outcome | None:
-                if link.flight_state == "on_ground" and not link.armed and \
+                if self._landed(link) and not link.armed and \
                         link.battery_pct >= FULL_PCT:
                     return Outcome(Status.OK, f"{link.drone_id} charged at {station.id} from "
                                    f"{start_pct:.0f}% to {link.battery_pct:.0f}%", link.state())
                 return None
 
-            return await self._wait(link, 4000.0, "charge", done)
+            return await self._wait(link, 4000.0, "charge", done, texts_from=texts)
 
         return await self._run("charge", drone, body)
 
@@ -87,9 +89,12 @@ class PayloadPrimitives(GatewayCore):
     def _radio(self, action: str, drone: object, call) -> Outcome:
         try:
             link = self._link(drone)
-            return call(link)
-        except (Refusal, RadioError) as error:
+        except Refusal as error:
             return Outcome(Status.REJECTED, f"{action} refused: {error}")
+        try:
+            return call(link)
+        except RadioError as error:  # a known drone: its state, as every other refusal gives
+            return Outcome(Status.REJECTED, f"{action} refused: {error}", link.state())
 
     def send_message(self, drone: str, to: str, text: str) -> Outcome:
         def call(link: DroneLink) -> Outcome:

@@ -26,6 +26,7 @@ __all__ = ["steady_steps"]
 
 ACCEL_STEADY_M_S2 = 1e-6
 AT_GOAL_M = 1e-6
+ALIGNED_COS_TOL = 1e-9  # 1 - cos of the largest angle between velocity and goal direction
 
 
 def steady_steps(fleet: Fleet, limit: int) -> int:
@@ -50,6 +51,11 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
     if _any(moving):
         idx = _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
+        # Steady flight heads straight for the goal. A velocity that does not (a wind the
+        # airframe cannot fly against bends or reverses it) is no cruise: step normally.
+        along = np.einsum("ij,ij->i", dyn.velocity_m_s[idx], e)
+        if _any(along < s * d * (1.0 - ALIGNED_COS_TOL)):
+            return 0
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
         w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
         a_eff = np.minimum(dyn.accel_xy_m_s2[idx] / np.maximum(h, 1e-9),

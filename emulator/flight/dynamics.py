@@ -37,6 +37,11 @@ TRACK_PASS = 1  # report once inside the acceptance radius
 TRACK_SETTLE = 2  # report once inside the acceptance radius and settled
 
 SETTLED_SPEED_M_S = 0.3
+# A settled arrival is also this close to the goal. Flown in, the braking profile is well
+# inside it by the time the speed drops below SETTLED_SPEED_M_S; the bound matters for a
+# vehicle at rest when a goal is set within the acceptance radius (a 1 m take-off, a 1.5 m
+# move), which would otherwise count as arrived before it moved.
+SETTLED_GOAL_M = 0.1
 BRAKING_SHARE = 0.8
 YAW_REACHED_DEG = 1.0
 _EMPTY = np.empty(0, dtype=np.intp)
@@ -202,10 +207,10 @@ class FleetDynamics:
         if not _any(tracking):
             return _EMPTY
         err = self.goal_m - self.position_m
-        inside = np.einsum("ij,ij->i", err, err) <= self.acceptance_m**2
-        settled = np.einsum("ij,ij->i", self.velocity_m_s, self.velocity_m_s) <= (
-            SETTLED_SPEED_M_S**2
-        )
+        dist2 = np.einsum("ij,ij->i", err, err)
+        inside = dist2 <= self.acceptance_m**2
+        settled = (np.einsum("ij,ij->i", self.velocity_m_s, self.velocity_m_s)
+                   <= SETTLED_SPEED_M_S**2) & (dist2 <= SETTLED_GOAL_M**2)
         done = inside & ((tracking == TRACK_PASS) | ((tracking == TRACK_SETTLE) & settled))
         idx = _indices(done)
         if idx.size:
