@@ -42,6 +42,7 @@ class AutopilotListener(Protocol):
     def on_mission_current(self) -> None: ...
     def on_home_changed(self) -> None: ...
     def on_image_captured(self, capture: ImageCapture) -> None: ...
+    def on_state_changed(self) -> None: ...
 
 
 class _SilentListener:
@@ -58,6 +59,9 @@ class _SilentListener:
         pass
 
     def on_image_captured(self, capture: ImageCapture) -> None:
+        pass
+
+    def on_state_changed(self) -> None:
         pass
 
 
@@ -156,6 +160,7 @@ class Autopilot:
         if mode is not self.mode:
             self._event("mode", previous=self.mode.label, mode=mode.label)
             self.mode = mode
+            self.listener.on_state_changed()
 
     def _refresh_busy(self) -> None:
         k, f = self.k, self.fleet
@@ -295,6 +300,7 @@ class Autopilot:
         self._on_arrive = None
         x, y, _ = self.position_m
         self._event("landed", position_m=[x, y, 0.0])
+        self.listener.on_state_changed()
         self._say(Severity.INFO, "Landing detected")
         self.mission.on_landed()
         delay = self.params["COM_DISARM_LAND"]
@@ -337,6 +343,7 @@ class Autopilot:
             raise CommandRefused(f"Arming denied: battery {self.battery_pct:.0f}% too low")
         self.fleet.armed[self.k] = True
         self._event("arm")
+        self.listener.on_state_changed()
         self._update_charging()
         delay = self.params["COM_DISARM_PRFLT"]
         if delay > 0.0:
@@ -358,6 +365,7 @@ class Autopilot:
         self.fleet.armed[self.k] = False
         self.fleet.dyn.control[self.k] = dy.CONTROL_NONE
         self._event("disarm")
+        self.listener.on_state_changed()
         self._say(Severity.INFO, "Disarmed")
         self._update_charging()
         self._refresh_busy()
@@ -400,6 +408,7 @@ class Autopilot:
     def _takeoff_complete(self) -> None:
         self.landed_state = LandedState.IN_AIR
         self._event("takeoff_complete", position_m=list(self.position_m))
+        self.listener.on_state_changed()
         self._set_mode(FlightMode.HOLD)
 
     def land(self, at_m: tuple[float, float] | None = None) -> None:

@@ -143,6 +143,11 @@ class VehicleLink:
     def on_image_captured(self, capture: ImageCapture) -> None:
         self.camera.image_captured(capture)
 
+    def on_state_changed(self) -> None:
+        """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
+        self.send(msgs.heartbeat(self.ap))
+        self.send(msgs.extended_sys_state(self.ap))
+
     # --------------------------------------------------------------- receiving
     def handle(self, m: mavlink.MAVLink_message, wall_now_s: float) -> None:
         """Handle one message addressed to this vehicle (or broadcast)."""
