@@ -8,6 +8,9 @@ benchmark tasks, which are marked `operator_*` and recorded as such in the groun
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 from emulator.flight.operator import place_on_ground, set_battery
 from emulator.perception import Perception
 from emulator.radio import Message, Radio
@@ -77,6 +80,15 @@ class SwarmServices:
             ap.listener.on_home_changed()  # HOME_POSITION now, not at its next 0.5 Hz slot
             set_battery(ap, ap.spec.battery_pct)
         self.radio.clear()
+
+    @contextlib.contextmanager
+    def clock_limit(self, t_s: float) -> Iterator[None]:
+        """While inside, a stepped clock does not run past simulated time t_s."""
+        token = self._swarm.hold_clock_at(t_s)
+        try:
+            yield
+        finally:
+            self._swarm.release_clock(token)
 
     async def advance(self, seconds: float) -> None:
         """Let simulated time pass (stepped mode: run the clock; real time: wait)."""

@@ -119,6 +119,7 @@ class Swarm:
         self._wall_start_s = wall
         self._sim_start_s = 0.0
         self._telemetry_errors = 0
+        self._clock_holds: dict[object, float] = {}
 
     # -------------------------------------------------------------- lifecycle
     async def __aenter__(self) -> Swarm:
@@ -241,18 +242,41 @@ class Swarm:
         self._wake.set()
         await fut
 
+    def hold_clock_at(self, t_s: float) -> object:
+        """Stepped mode: never step past t_s until `release_clock(token)`. A caller waiting
+        for an outcome with a simulated-time budget uses it, so a time-out happens at exactly
+        its budget whatever the wall-clock delays. Real-time mode ignores it."""
+        token = object()
+        self._clock_holds[token] = t_s
+        return token
+
+    def release_clock(self, token: object) -> None:
+        if self._clock_holds.pop(token, None) is not None:
+            self._wake.set()
+
+    def _held_at(self) -> float:
+        return min(self._clock_holds.values()) if self._clock_holds else math.inf
+
     def _steps_allowed(self) -> int:
-        """Steps the stepped clock may run now: up to the next advance target when idle."""
+        """Steps the stepped clock may run now: up to the next advance target when idle, and
+        never past a clock hold."""
+        now, dt = self.fleet.now_s, self.fleet.dt_s
         limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
         targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
-        ahead = [t for t in targets if t > self.fleet.now_s + 1e-9]
+        ahead = [t for t in targets if t > now + 1e-9]
         if ahead:
-            to_target = math.ceil((min(ahead) - self.fleet.now_s) / self.fleet.dt_s - 1e-9)
+            to_target = math.ceil((min(ahead) - now) / dt - 1e-9)
             limit = to_target if limit == 0 else min(limit, to_target)
+        held = self._held_at()
+        if math.isfinite(held):
+            limit = min(limit, math.ceil((held - now) / dt - 1e-9))
         return max(1, limit)
 
     def _should_step(self) -> bool:
-        return self.fleet.any_busy or self.fleet.now_s + 1e-9 < self._advance_to_s
+        now = self.fleet.now_s
+        if now + 1e-9 >= self._held_at():
+            return False
+        return self.fleet.any_busy or now + 1e-9 < self._advance_to_s
 
     async def _run(self) -> None:
         fleet = self.fleet
@@ -286,8 +310,11 @@ class Swarm:
             self._wake.clear()
             timeout = min(LOOP_TICK_S, max(0.0, self.streams.next_wakeup_s() - time.monotonic()))
             if self.clock.stepped:
+                # Not asyncio.wait_for: before Python 3.12 it swallows a cancellation that
+                # arrives as the event is set, and close() would then wait forever.
                 with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self._wake.wait(), timeout=max(timeout, 0.0005))
+                    async with asyncio.timeout(max(timeout, 0.0005)):
+                        await self._wake.wait()
             else:
                 await asyncio.sleep(max(timeout, 0.0005))
 

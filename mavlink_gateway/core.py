@@ -3,6 +3,7 @@ precondition checks, and waiting for an outcome within a simulated-time budget."
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import math
 import time
@@ -28,6 +29,7 @@ class Services(Protocol):
     """What the gateway needs from the swarm besides MAVLink (see emulator.services)."""
 
     def clock_s(self) -> float: ...
+    def clock_limit(self, t_s: float) -> contextlib.AbstractContextManager[None]: ...
     def sense(self, drone_id: str) -> Perception: ...
     def send_message(self, sender: str, recipient: str, text: str) -> Any: ...
     def broadcast(self, sender: str, text: str) -> int: ...
@@ -145,6 +147,18 @@ class GatewayCore:
                     done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
                     watch_obstacles: bool = True, texts_from: int | None = None,
                     ) -> Outcome:
+        """Wait for an outcome (see `_wait_for_outcome`); a stepped clock is held at the
+        budget's end, so a time-out happens at exactly `budget_s` of simulated time."""
+        with self.services.clock_limit(self.services.clock_s() + budget_s):
+            return await self._wait_for_outcome(link, budget_s, what, done,
+                                                watch_obstacles=watch_obstacles,
+                                                texts_from=texts_from)
+
+    async def _wait_for_outcome(
+        self, link: DroneLink, budget_s: float, what: str,
+        done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
+        watch_obstacles: bool = True, texts_from: int | None = None,
+    ) -> Outcome:
         """Look at telemetry until `done` gives an outcome, an obstacle or failsafe stops the
         drone, or `budget_s` of simulated time has passed. Looks again as soon as a new
         telemetry message has been applied (at the latest after POLL_S).
@@ -181,7 +195,7 @@ class GatewayCore:
                 return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
                                f"{obstacle.lower()}", link.state())
             elapsed = self.services.clock_s() - start_sim
-            if elapsed > budget_s or time.monotonic() > wall_deadline:
+            if elapsed >= budget_s - 1e-9 or time.monotonic() > wall_deadline:
                 # The primitive ends here, so its goal must end too: left flying, the vehicle
                 # would go on after the outcome (and a stepped clock would run while the
                 # caller thinks). Best effort: the outcome is a timeout either way.

@@ -101,9 +101,19 @@ async def test_take_off_refusals_change_nothing():
             (10**400, "altitude must be a finite number, got 1000"),
         ]:
             await expect_refusal(s, gw.take_off("d1", altitude), f"take_off refused: {reason}")
-        await expect_refusal(s, gw.take_off("d9", 10), "unknown drone 'd9' (known: d1)")
         await expect_refusal(s, gw.take_off(None, 10), "unknown drone None")
         await expect_refusal(s, gw.take_off(["d1"], 10), "unknown drone ['d1']")
+        for name, args in [("take_off", (10,)), ("land", ()), ("move_to", (1, 1, 10)),
+                           ("move_towards", (0, 10)), ("change_altitude", (10,)),
+                           ("rotate", (0,)), ("hover", (1,)), ("return_home", ()),
+                           ("set_home", ()), ("move_along_path", ([[1, 1]],)),
+                           ("take_photo", ()), ("charge", ())]:
+            await expect_refusal(s, getattr(gw, name)("d9", *args),
+                                 "unknown drone 'd9' (known: d1)")
+        for name, args in [("drone_state", ()), ("nearby", ()), ("read_messages", ()),
+                           ("broadcast", ("hi",)), ("send_message", ("d1", "hi"))]:
+            await expect_refusal(s, lambda n=name, a=args: getattr(gw, n)("d9", *a),
+                                 "unknown drone 'd9' (known: d1)")
 
         s.services.operator_reset_batteries(9.0)
         await s.settle()
@@ -422,7 +432,7 @@ async def test_a_primitive_that_runs_out_of_time_ends_and_holds():
         assert out.status is Status.TIMEOUT
         assert out.message == ("move_to did not finish within 70 s of simulated time; "
                                "holding")
-        assert 70.0 < s.now_s - t0 < 100.0
+        assert 70.0 - 1e-6 <= s.now_s - t0 < 100.0
         assert out.state is not None and out.state.drone == "d1"
         # The primitive ended and so did its goal: the drone holds short of the goal and
         # the stepped clock stops (nothing runs on while the caller thinks).
@@ -505,3 +515,22 @@ async def test_short_moves_within_the_acceptance_radius_still_fly():
         assert kinds.index("takeoff_complete") > kinds.index("takeoff")
         complete = s.swarm.recorder.events("d1", kinds=["takeoff_complete"])[0]
         assert complete.data["position_m"][2] == pytest.approx(1.5, abs=0.1)
+
+
+async def test_landing_is_reported_from_the_ground_even_with_slow_positions():
+    # Landed state at 10 Hz, positions at 1 Hz: the landed state reaches the gateway first
+    # (a stepped-mode descent takes a few wall milliseconds). The outcome must still give the
+    # drone on the ground, not at the altitude of the last position before the descent.
+    async with gateway_session(make_scenario([spec(1)])) as s:
+        gw, link = s.gw, s.link("d1")
+        assert (await gw.take_off("d1", 15)).ok
+        await link.telemetry.set_rate_position(1.0)
+        out = await gw.land("d1")
+        assert out.status is Status.OK, out
+        assert_consistent(s, out, "d1")
+        assert out.state.altitude_m == pytest.approx(0.0, abs=0.3)
+        assert (await gw.take_off("d1", 15)).ok
+        assert (await gw.move_to("d1", 30, 0, 15)).ok
+        out = await gw.return_home("d1")
+        assert out.status is Status.OK and out.state.altitude_m == pytest.approx(0.0, abs=0.3)
+        assert_consistent(s, out, "d1")
