@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterator
 
+from emulator.flight.battery import MESSAGE_COST_PCT
 from emulator.flight.operator import place_on_ground, set_battery
 from emulator.perception import Perception
 from emulator.radio import Message, Radio
@@ -51,10 +52,14 @@ class SwarmServices:
 
     # ------------------------------------------------------------------ radio
     def send_message(self, sender: str, recipient: str, text: str) -> Message:
-        return self.radio.send(sender, recipient, text)
+        message = self.radio.send(sender, recipient, text)
+        self._fleet.bat.spend(self._fleet.index_by_id[sender], MESSAGE_COST_PCT)
+        return message
 
     def broadcast(self, sender: str, text: str) -> int:
-        return self.radio.broadcast(sender, text)
+        count = self.radio.broadcast(sender, text)
+        self._fleet.bat.spend(self._fleet.index_by_id[sender], MESSAGE_COST_PCT)
+        return count
 
     def read_messages(self, drone_id: str) -> list[Message]:
         return self.radio.read(drone_id)

@@ -114,7 +114,8 @@ FAST_TELEMETRY_HZ = {"HEARTBEAT": 5.0, "EXTENDED_SYS_STATE": 10.0, "SYS_STATUS":
 async def gateway_session(scenario: Scenario, *,
                           telemetry_hz: Mapping[str, float] | None = FAST_TELEMETRY_HZ,
                           ) -> AsyncIterator[GatewaySession]:
-    """A stepped swarm for `scenario` on 127.0.0.1 and a Gateway connected to it over UDP."""
+    """A stepped swarm for `scenario` on 127.0.0.1 and a Gateway connected to it over UDP.
+    `telemetry_hz`: the swarm's stream rates (None: the emulator's defaults)."""
     port = unused_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
     async with Swarm(scenario, clock=ClockConfig(stepped=True), ports=ports,
@@ -123,11 +124,6 @@ async def gateway_session(scenario: Scenario, *,
         async with await FleetConnection.connect(
             f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin
         ) as fleet:
-            if telemetry_hz is not None:
-                # MAVSDK asks for the landed state at 1 Hz itself (SET_MESSAGE_INTERVAL).
-                for link in fleet.drones.values():
-                    await link.telemetry.set_rate_landed_state(10.0)
-                    await link.telemetry.set_rate_in_air(10.0)
             yield GatewaySession(scenario, swarm, services, fleet, Gateway(fleet.drones, services))
 
 

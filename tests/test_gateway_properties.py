@@ -180,7 +180,7 @@ async def _step(s: GatewaySession, c: Call) -> None:
         return
     out = result
     assert isinstance(out, Outcome), (c, out)
-    event(f"{c.name}: {out.status}")  # pytest --hypothesis-show-statistics
+    event(f"{c.name}: {out.status}")  # counted in Hypothesis' statistics
     assert isinstance(out.status, Status) and isinstance(out.message, str), (c, out)
     assert out.message.strip(), (c, out)
     assert out.status is not Status.TIMEOUT, (c, out)  # calm air, short moves: all end in time
@@ -217,6 +217,9 @@ async def _example(s: GatewaySession, calls: list[Call]) -> None:
 
 
 def test_random_primitive_sequences_keep_every_drone_consistent():
+    """One swarm and one gateway for every example (an operator reset puts the fleet back at
+    its start in between), on an event loop of its own that runs each example to its end.
+    Derandomized, so every run checks the same sequences; no shrinking (each step flies)."""
     loop = asyncio.new_event_loop()
     session = gateway_session(SCENARIO)
     try:

@@ -20,6 +20,7 @@ __all__ = [
     "BATTERY_OK",
     "CLIMB_POWER_PER_M_S",
     "GROUND_IDLE_POWER",
+    "MESSAGE_COST_PCT",
     "PHOTO_COST_PCT",
     "SPEED_POWER_PER_M2_S2",
     "FleetBattery",
@@ -31,6 +32,7 @@ SPEED_POWER_PER_M2_S2 = 0.004  # +0.4 % power per (m/s)^2 of airspeed: +40 % at 
 CLIMB_POWER_PER_M_S = 0.08  # +8 % power per m/s of climb
 GROUND_IDLE_POWER = 0.1  # armed on the ground: motors idle at 10 % of hover power
 PHOTO_COST_PCT = 0.05
+MESSAGE_COST_PCT = 0.01  # per message sent (a broadcast counts once)
 
 BATTERY_OK, BATTERY_LOW, BATTERY_CRITICAL, BATTERY_EMERGENCY = 0, 1, 2, 3
 
