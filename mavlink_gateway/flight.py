@@ -28,7 +28,6 @@ NAV_WAYPOINT, NAV_LOITER_TIME = 16, 19
 CRUISE_M_S = 5.0  # a conservative speed for time budgets
 MAX_WAYPOINTS = 100
 MAX_HOVER_S = 3600.0
-CAMERA_ID = 100
 
 
 def _fmt(p: Sequence[float]) -> str:

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 from emulator.flight import dynamics as dy
 from emulator.flight.autopilot_mission import MissionRunner
 from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY_LOW
 from emulator.flight.camera import ImageCapture, capture_image
+from emulator.flight.listener import AutopilotListener, SilentListener
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
 from emulator.flight.params import ParamStore
@@ -34,37 +35,6 @@ Vec3 = tuple[float, float, float]
 GROUND_GOAL_Z_M = -1.0  # landing descends towards a goal below ground until touchdown
 
 
-class AutopilotListener(Protocol):
-    """What the autopilot tells the outside world (the MAVLink link implements it)."""
-
-    def on_statustext(self, severity: int, text: str) -> None: ...
-    def on_mission_item_reached(self, seq: int) -> None: ...
-    def on_mission_current(self) -> None: ...
-    def on_home_changed(self) -> None: ...
-    def on_image_captured(self, capture: ImageCapture) -> None: ...
-    def on_state_changed(self) -> None: ...
-
-
-class _SilentListener:
-    def on_statustext(self, severity: int, text: str) -> None:
-        pass
-
-    def on_mission_item_reached(self, seq: int) -> None:
-        pass
-
-    def on_mission_current(self) -> None:
-        pass
-
-    def on_home_changed(self) -> None:
-        pass
-
-    def on_image_captured(self, capture: ImageCapture) -> None:
-        pass
-
-    def on_state_changed(self) -> None:
-        pass
-
-
 class Autopilot:
     """Flight logic of vehicle `k` of a fleet."""
 
@@ -73,7 +43,7 @@ class Autopilot:
         self.vehicle_id = spec.id
         self.spec = spec
         self.fleet = fleet
-        self.listener: AutopilotListener = _SilentListener()
+        self.listener: AutopilotListener = SilentListener()
         self.params = ParamStore({
             "MPC_XY_VEL_MAX": spec.max_speed_m_s,
             "MPC_XY_CRUISE": min(8.0, spec.max_speed_m_s),

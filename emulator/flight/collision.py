@@ -19,7 +19,6 @@ from emulator.world import World
 
 __all__ = ["ClearanceGuard"]
 
-RECHECK_MIN_S = 0.0
 
 
 class ClearanceGuard:
@@ -69,6 +68,6 @@ class ClearanceGuard:
             else:
                 # Travel time to the nearest volume, less one step of slack.
                 self.check_at_s[k] = now_s + max(
-                    RECHECK_MIN_S, clearance / max(max_speed_m_s(int(k)), 0.1) - dt_s
+                    0.0, clearance / max(max_speed_m_s(int(k)), 0.1) - dt_s
                 )
         return np.asarray(hits, dtype=np.intp)

@@ -8,7 +8,7 @@ import numpy as np
 
 from emulator.flight.arrays import any_true as _any
 from emulator.flight.arrays import indices as _indices
-from emulator.flight.autopilot import Autopilot, AutopilotListener
+from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
 from emulator.flight.cruise import steady_steps
@@ -68,9 +68,6 @@ class Fleet:
     @property
     def any_busy(self) -> bool:
         return _any(self.busy)
-
-    def attach(self, k: int, listener: AutopilotListener) -> None:
-        self.autopilots[k].listener = listener
 
     def step(self) -> None:
         """Advance simulated time by one physics step."""
