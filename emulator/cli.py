@@ -18,14 +18,19 @@ from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
-__all__ = ["main"]
+__all__ = ["add_up_parser", "main", "run_up"]
 
 MAX_VEHICLES_PER_NETWORK = 250
 
 
 def _build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="mavswarm", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
+    add_up_parser(parser.add_subparsers(dest="command", required=True))
+    return parser
+
+
+def add_up_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """The `up` command's options, on a subparsers object."""
     up = sub.add_parser("up", help="run a swarm of emulated PX4 quadrotors until Ctrl-C")
     up.add_argument("--drones", type=int, help="number of vehicles (default 5, or the session's)")
     up.add_argument("--session", type=Path, help="MultiUAV-Plat or mavswarm session JSON file")
@@ -43,7 +48,15 @@ def _build_parser() -> argparse.ArgumentParser:
     up.add_argument("--truth-out", type=Path,
                     help="ground-truth record written on exit (default: runs/<time>.truth.npz)")
     up.add_argument("--no-truth", action="store_true", help="do not write the ground truth")
-    return parser
+
+
+def run_up(args: argparse.Namespace) -> int:
+    """Run the `up` command; errors in the arguments or the session are printed, exit 2."""
+    try:
+        return _up(args)
+    except (ScenarioError, ValueError, OSError) as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
@@ -149,13 +162,7 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = _build_parser().parse_args(argv)
-    try:
-        if args.command == "up":
-            return _up(args)
-    except (ScenarioError, ValueError, OSError) as error:
-        print(f"mavswarm: {error}", file=sys.stderr)
-        return 2
-    return 1
+    return run_up(args)
 
 
 if __name__ == "__main__":

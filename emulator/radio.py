@@ -5,8 +5,10 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from emulator.truth import TruthRecorder
+if TYPE_CHECKING:
+    from emulator.truth import TruthRecorder
 
 __all__ = ["MAX_INBOX", "MAX_TEXT_CHARS", "Message", "Radio", "RadioError"]
 

@@ -86,6 +86,29 @@ class SwarmServices:
             set_battery(ap, ap.spec.battery_pct)
         self.radio.clear()
 
+    def operator_clear_messages(self) -> None:
+        """Operator reset: every drone's inbox emptied."""
+        self.radio.clear()
+
+    def operator_snapshot(self) -> dict[str, dict[str, list[float] | float]]:
+        """Where every drone stands (ground truth): position, heading and home, for a later
+        `operator_restore` of the same layout."""
+        return {
+            ap.vehicle_id: {"position_m": [float(v) for v in ap.position_m],
+                            "heading_deg": float(self._fleet.dyn.yaw_deg[ap.k]),
+                            "home_m": [float(v) for v in ap.home_m]}
+            for ap in self._fleet.autopilots
+        }
+
+    def operator_restore(self, snapshot: dict[str, dict[str, list[float] | float]]) -> None:
+        """Operator reset: drones put on the ground where a snapshot had them, with its homes."""
+        for drone_id, spot in snapshot.items():
+            ap = self._autopilot(drone_id)
+            x, y, _ = spot["position_m"]  # type: ignore[misc]
+            place_on_ground(ap, float(x), float(y), float(spot["heading_deg"]))  # type: ignore[arg-type]
+            ap.home_m = tuple(float(v) for v in spot["home_m"])  # type: ignore[union-attr]
+            ap.listener.on_home_changed()
+
     @contextlib.contextmanager
     def clock_limit(self, t_s: float) -> Iterator[None]:
         """While inside, a stepped clock does not run past simulated time t_s."""

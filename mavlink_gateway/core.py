@@ -25,6 +25,10 @@ FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.
 FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost")
 
 
+# The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
+# cm/s per axis, which can read a little higher. A stepped clock stops right then.
+ARRIVED_SPEED_M_S = 0.5
+
 class Services(Protocol):
     """What the gateway needs from the swarm besides MAVLink (see emulator.services)."""
 
@@ -189,7 +193,7 @@ class GatewayCore:
             # whole flight can fit between two positions): judge on telemetry sent after it.
             if obstacle_mark is not None and \
                     link.refreshed_since(obstacle_mark, ("position", "velocity"), 2) and \
-                    link.speed_m_s < 0.3 and link.mode == "HOLD":
+                    link.speed_m_s < ARRIVED_SPEED_M_S and link.mode == "HOLD":
                 x, y, z = link.position_m or (math.nan,) * 3
                 obstacle = next(t for t in new_texts if t.startswith(OBSTACLE_TEXT))
                 return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
@@ -240,4 +244,4 @@ class GatewayCore:
                  ) -> bool:
         pos = link.position_m
         return (pos is not None and math.dist(pos, target) <= tolerance_m
-                and link.speed_m_s < 0.3 and link.mode in ("HOLD", "MISSION"))
+                and link.speed_m_s < ARRIVED_SPEED_M_S and link.mode in ("HOLD", "MISSION"))

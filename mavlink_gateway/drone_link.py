@@ -201,11 +201,12 @@ class DroneLink:
 
     def state(self) -> DroneState:
         x, y, z = self.position_m or (math.nan, math.nan, math.nan)
-        home_z = self.home_m[2] if self.home_m else 0.0
+        hx, hy, home_z = self.home_m or (math.nan, math.nan, 0.0)
         return DroneState(
             drone=self.drone_id, x_m=x, y_m=y, altitude_m=z - home_z,
             heading_deg=self.heading_deg, battery_pct=self.battery_pct,
             flight_state=self.flight_state, armed=self.armed, mode=self.mode.lower(),
+            home_x_m=hx, home_y_m=hy,
         )
 
     def geodetic(self, x_m: float, y_m: float, z_m: float) -> tuple[float, float, float]:

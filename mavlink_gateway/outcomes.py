@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from enum import StrEnum
 from typing import Any
@@ -30,6 +31,8 @@ class DroneState:
     flight_state: str  # on_ground, taking_off, hovering, flying, landing
     armed: bool
     mode: str
+    home_x_m: float = math.nan
+    home_y_m: float = math.nan
 
     @property
     def position_m(self) -> tuple[float, float, float]:
@@ -37,7 +40,8 @@ class DroneState:
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
-        for key in ("x_m", "y_m", "altitude_m", "heading_deg", "battery_pct"):
+        for key in ("x_m", "y_m", "altitude_m", "heading_deg", "battery_pct", "home_x_m",
+                    "home_y_m"):
             d[key] = round(d[key], 2)
         return d
 

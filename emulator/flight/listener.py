@@ -18,6 +18,7 @@ class AutopilotListener(Protocol):
     def on_home_changed(self) -> None: ...
     def on_image_captured(self, capture: ImageCapture) -> None: ...
     def on_state_changed(self) -> None: ...
+    def on_operator_reset(self) -> None: ...
 
 
 class SilentListener:
@@ -39,4 +40,7 @@ class SilentListener:
         pass
 
     def on_state_changed(self) -> None:
+        pass
+
+    def on_operator_reset(self) -> None:
         pass

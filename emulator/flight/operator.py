@@ -42,6 +42,7 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
     ap.mode = FlightMode.HOLD
     ap._event("operator_place", position_m=[x_m, y_m, 0.0])
     ap._update_charging()
+    ap.listener.on_operator_reset()
 
 
 def set_battery(ap: Autopilot, pct: float) -> None:
@@ -55,3 +56,4 @@ def set_battery(ap: Autopilot, pct: float) -> None:
              ap.fleet.dyn.airspeed_m_s(), ap.fleet.dyn.velocity_m_s[:, 2])
     ap._event("operator_battery", battery_pct=pct)
     ap._update_charging()
+    ap.listener.on_operator_reset()

@@ -39,6 +39,10 @@ def _bytewise_float(value: int) -> float:
     return struct.unpack("<f", struct.pack("<i", value))[0]
 
 
+# SYS_STATUS, BATTERY_STATUS, GLOBAL_POSITION_INT, LOCAL_POSITION_NED, HOME_POSITION
+_OPERATOR_RESET_STREAMS = (1, 147, 33, 32, 242)
+
+
 class VehicleLink:
     """MAVLink side of vehicle `ap` (system id k + 1)."""
 
@@ -147,6 +151,12 @@ class VehicleLink:
         """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
         self.send(msgs.heartbeat(self.ap))
         self.send(msgs.extended_sys_state(self.ap))
+
+    def on_operator_reset(self) -> None:
+        """An operator moved the vehicle or refilled its battery: report the new state now."""
+        self.on_state_changed()
+        for msg_id in _OPERATOR_RESET_STREAMS:
+            self.send_once(msg_id)
 
     # --------------------------------------------------------------- receiving
     def handle(self, m: mavlink.MAVLink_message, wall_now_s: float) -> None:

@@ -1,0 +1,17 @@
+"""An agent that does nothing: the floor every other agent should beat."""
+
+from __future__ import annotations
+
+from benchmark.agents.protocol import AgentTask
+from benchmark.agents.tools import AgentTools
+
+__all__ = ["NoopAgent"]
+
+
+class NoopAgent:
+    """Finishes at once without touching a drone."""
+
+    name = "noop"
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        tools.finish("nothing done")

@@ -1,0 +1,139 @@
+"""mavswarm's command line: `mavswarm up` (a swarm) and `mavswarm bench` (the benchmark).
+
+  mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
+  mavswarm bench run --agent oracle|noop [--suite smoke|full | --sessions FILE ...]
+                     [--workers N] [--trials K] [--out DIR]
+  mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
+  mavswarm bench import FILE [FILE ...] --out DIR
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from benchmark.suite import SUITES, suite_paths
+from emulator.cli import add_up_parser, run_up
+
+__all__ = ["main"]
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mavswarm", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_up_parser(sub)
+    bench = sub.add_parser("bench", help="generate, run and report the benchmark")
+    bsub = bench.add_subparsers(dest="bench_command", required=True)
+
+    gen = bsub.add_parser("generate", help="generate the 75 seeded sessions with their tasks")
+    gen.add_argument("--out", type=Path, default=Path("runs/suite"), help="output folder")
+    gen.add_argument("--only", nargs="+", metavar="ID",
+                     help="session ids to generate (e.g. area_search-easy-1)")
+    gen.add_argument("--no-verify", action="store_true",
+                     help="skip proving each task with the oracle (faster; not for release)")
+    gen.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+
+    run = bsub.add_parser("run", help="run an agent over the benchmark")
+    run.add_argument("--agent", choices=("oracle", "noop"), default="oracle")
+    group = run.add_mutually_exclusive_group()
+    group.add_argument("--suite", choices=SUITES, default="smoke",
+                       help="smoke: 3 easy sessions, 6 tasks each; full: 75 sessions, 1500 tasks")
+    group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
+                       help="session files to run instead of a suite")
+    run.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    run.add_argument("--trials", type=int, default=1, help="repeats of every task (pass^k)")
+    run.add_argument("--out", type=Path, default=None,
+                     help="results folder (default runs/bench-<agent>-<suite>); re-running "
+                          "with the same folder resumes")
+
+    report = bsub.add_parser("report", help="metrics report of results files")
+    report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
+    report.add_argument("--out", type=Path, default=None,
+                        help="folder for report.md and report.json (default: beside the first)")
+
+    imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
+    imp.add_argument("files", type=Path, nargs="+")
+    imp.add_argument("--out", type=Path, required=True)
+    return parser
+
+
+def _generate(args: argparse.Namespace) -> int:
+    from benchmark.suite import generate_suite
+    written = generate_suite(args.out, only=args.only, verify=not args.no_verify,
+                             workers=args.workers)
+    print(f"wrote {len(written)} session files to {args.out}")
+    return 0
+
+
+def _run(args: argparse.Namespace) -> int:
+    from benchmark.metrics import summarize
+    from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.report import metrics_table, write_report
+    from benchmark.results import read_records
+    if args.sessions:
+        paths, limit, label = tuple(args.sessions), None, "custom"
+    else:
+        paths, limit = suite_paths(args.suite)
+        label = args.suite
+    out = args.out or Path(f"runs/bench-{args.agent}-{label}")
+    plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
+                   out_dir=out, task_limit=limit)
+    print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
+          f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
+          f"{args.workers} worker(s); results in {plan.results_path}")
+    outcome = run_benchmark(plan)
+    records = read_records(plan.results_path)
+    md, js = write_report(records, out)
+    print()
+    print(metrics_table(summarize(records)))
+    print(f"\n{outcome.records_written} new task records in {outcome.wall_s:.1f} s; "
+          f"{len(records)} in {plan.results_path}; report: {md}, {js}")
+    for error in outcome.errors:
+        print(f"error: {error}", file=sys.stderr)
+    return 1 if outcome.errors else 0
+
+
+def _report(args: argparse.Namespace) -> int:
+    from benchmark.metrics import summarize
+    from benchmark.report import metrics_table, write_report
+    from benchmark.results import read_all_records
+    records = read_all_records(args.results)
+    out = args.out or args.results[0].parent
+    md, js = write_report(records, out)
+    print(metrics_table(summarize(records)))
+    print(f"\nreport: {md}, {js}")
+    return 0
+
+
+def _import(args: argparse.Namespace) -> int:
+    from benchmark.importer import import_session_file
+    for path in args.files:
+        written, notes = import_session_file(path, args.out)
+        print(f"{path} -> {written}")
+        for note in notes:
+            print(f"  note: {note}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _build_parser().parse_args(argv)
+    if args.command == "up":
+        return run_up(args)
+    from benchmark.results import ResultsError
+    from benchmark.session_file import SessionFileError
+    handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import}
+    try:
+        return handlers[args.bench_command](args)
+    except (SessionFileError, ResultsError, ValueError, OSError) as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\nmavswarm: interrupted; re-run the same command to resume", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,214 @@
+"""One session of the benchmark: a stepped swarm, a gateway over MAVLink, and an agent given
+the session's tasks in order.
+
+Before each task, as the reference harness does: every drone is put down where it is, batteries
+are refilled, inboxes emptied; positions and homes carry over. The agent gets the task text and
+its tools and acts until it finishes or spends its budget; the hidden checks are then evaluated
+on the ground truth of the task's window, with the clock held so nothing moves meanwhile. Each
+task's record carries where the drones stood at its end, so a resumed run restores that layout
+and continues exactly as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import socket
+import time
+import traceback
+from collections.abc import AsyncIterator, Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from benchmark.agents import Agent, AgentTask, AgentTools, BudgetExhausted
+from benchmark.session_file import Session, TaskSpec
+from benchmark.validators import CheckContext, evaluate, leaf_count
+from emulator.clock import ClockConfig
+from emulator.services import SwarmServices
+from emulator.swarm import PortPlan, Swarm
+from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
+
+__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "record_key", "run_session", "swarm_gateway"]
+
+# Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
+# goal reached, and a reset when telemetry shows it, so wall time per task follows these rates.
+BENCH_TELEMETRY_HZ = {"HEARTBEAT": 5.0, "EXTENDED_SYS_STATE": 10.0, "SYS_STATUS": 5.0,
+                      "BATTERY_STATUS": 5.0, "HOME_POSITION": 2.0,
+                      "GLOBAL_POSITION_INT": 30.0, "LOCAL_POSITION_NED": 2.0,
+                      "ATTITUDE": 10.0, "GPS_RAW_INT": 0.5, "VFR_HUD": 1.0}
+RESET_SYNC_TIMEOUT_S = 20.0
+PLAY_OUT_WALL_S = 120.0
+
+
+@dataclass(frozen=True)
+class EpisodeOptions:
+    trial: int = 0
+    physics_hz: float = 50.0
+    agent_wall_timeout_s: float = 900.0  # a hung agent ends as an agent error
+
+
+def record_key(session_id: str, task_id: str, agent: str, trial: int) -> str:
+    return f"{session_id}/{task_id}/{agent}/{trial}"
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@contextlib.asynccontextmanager
+async def swarm_gateway(session: Session, physics_hz: float = 50.0
+                        ) -> AsyncIterator[tuple[Swarm, SwarmServices, Gateway]]:
+    """A stepped swarm for the session on 127.0.0.1 and a gateway connected over MAVLink."""
+    scenario = session.scenario
+    port = _free_udp_port()
+    ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
+    clock = ClockConfig(physics_hz=physics_hz, stepped=True)
+    async with Swarm(scenario, clock=clock, ports=ports, telemetry_hz=BENCH_TELEMETRY_HZ) as swarm:
+        services = SwarmServices(swarm)
+        async with await FleetConnection.connect(
+            f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin
+        ) as fleet:
+            yield swarm, services, Gateway(fleet.drones, services)
+
+
+async def _reset(swarm: Swarm, services: SwarmServices, gateway: Gateway) -> None:
+    """Land all, refill batteries, empty inboxes; wait until telemetry shows it."""
+    services.operator_land_all()
+    services.operator_reset_batteries(100.0)
+    services.operator_clear_messages()
+    await _sync_telemetry(swarm, gateway)
+
+
+async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
+    fleet = swarm.fleet
+    deadline = time.monotonic() + RESET_SYNC_TIMEOUT_S
+    while True:
+        lagging = []
+        for ap in fleet.autopilots:
+            link = gateway.drones[ap.vehicle_id]
+            p = link.position_m
+            if (p is None or math.dist(p, ap.position_m) > 0.1 or link.armed
+                    or link.flight_state != "on_ground" or link.battery_pct < 99.0
+                    or link.home_m is None or math.dist(link.home_m, ap.home_m) > 0.1):
+                lagging.append(ap.vehicle_id)
+        if not lagging:
+            return
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"telemetry of {lagging} did not show the reset")
+        await asyncio.sleep(0.005)
+
+
+async def _play_out(swarm: Swarm, deadline_s: float) -> float:
+    """Let goals still under way finish (a take-off settling, a move the agent did not wait
+    for), up to the task's simulated-time budget; the window ends then. This end does not
+    depend on when, in wall time, the agent said it had finished."""
+    hold = swarm.hold_clock_at(deadline_s)
+    try:
+        wall_deadline = time.monotonic() + PLAY_OUT_WALL_S
+        while swarm.fleet.any_busy and swarm.fleet.now_s < deadline_s - 1e-9:
+            if time.monotonic() > wall_deadline:
+                break
+            await asyncio.sleep(0.002)
+        return swarm.fleet.now_s
+    finally:
+        swarm.release_clock(hold)
+
+
+def _base_record(session: Session, task: TaskSpec, agent: str, trial: int) -> dict[str, Any]:
+    return {"key": record_key(session.id, task.id, agent, trial), "session": session.id,
+            "family": session.family, "level": session.level, "task": task.id,
+            "template": task.template, "category": task.category, "agent": agent,
+            "trial": trial}
+
+
+def task_error_record(session: Session, task: TaskSpec, agent: str, trial: int,
+                      error: str) -> dict[str, Any]:
+    return {**_base_record(session, task, agent, trial), "passed": False, "checks": [],
+            "checks_total": 0, "checks_passed": 0, "finish": "task_error", "error": error,
+            "tool_calls": 0, "sim_time_s": 0.0, "wall_time_s": 0.0, "tokens": None,
+            "overhead_s": {"reset": 0.0, "evaluate": 0.0}}
+
+
+async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
+                     options: EpisodeOptions) -> tuple[str, str | None]:
+    try:
+        await asyncio.wait_for(agent.run(task, tools), options.agent_wall_timeout_s)
+    except BudgetExhausted as spent:
+        return spent.reason, str(spent)
+    except TimeoutError:
+        return "agent_error", f"the agent did not finish within {options.agent_wall_timeout_s:g} s"
+    except Exception as error:  # a crashing agent ends its task, never the run
+        where = traceback.extract_tb(error.__traceback__)[-1]
+        return "agent_error", (f"{type(error).__name__}: {error} "
+                               f"({where.filename.rsplit('/', 1)[-1]}:{where.lineno})")
+    if tools.spent is not None:
+        return tools.spent.reason, str(tools.spent)
+    return "finished", None
+
+
+async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[str, Any]], None],
+                      done: Mapping[str, Mapping[str, Any] | None] | None = None,
+                      options: EpisodeOptions = EpisodeOptions()) -> None:
+    """Run every task of `session` not already in `done` (key -> its end state, or None),
+    calling `emit(record)` as each task ends."""
+    done = done or {}
+    keys = [record_key(session.id, t.id, agent.name, options.trial) for t in session.tasks]
+    if all(k in done for k in keys):
+        return
+    async with swarm_gateway(session, options.physics_hz) as (swarm, services, gateway):
+        restore: Mapping[str, Any] | None = None
+        for task, key in zip(session.tasks, keys, strict=True):
+            if key in done:
+                restore = done[key] or restore
+                continue
+            if restore is not None:
+                services.operator_restore(restore)
+                restore = None
+            if task.error is not None or task.checks is None or task.budget is None:
+                emit(task_error_record(session, task, agent.name, options.trial,
+                                       f"{session.source}: {task.error}"))
+                continue
+            emit(await _run_task(session, task, agent, swarm, services, gateway, options))
+
+
+async def _run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
+                    services: SwarmServices, gateway: Gateway,
+                    options: EpisodeOptions) -> dict[str, Any]:
+    assert task.checks is not None and task.budget is not None
+    wall0 = time.perf_counter()
+    await _reset(swarm, services, gateway)
+    reset_s = time.perf_counter() - wall0
+    agent_task = AgentTask(session.id, task.id, task.text, task.budget)
+    tools = AgentTools(gateway, agent_task)
+    t0_s = services.clock_s()
+    wall_agent = time.perf_counter()
+    finish, error = await _run_agent(agent, agent_task, tools, options)
+    agent_wall_s = time.perf_counter() - wall_agent
+    await tools.close()
+    t1_s = await _play_out(swarm, t0_s + task.budget.sim_time_s)
+    hold = swarm.hold_clock_at(t1_s)  # nothing moves between the end and the reset
+    try:
+        wall_eval = time.perf_counter()
+        result = evaluate(task.checks, CheckContext(swarm.recorder, session.scenario, t0_s,
+                                                    t1_s))
+        eval_s = time.perf_counter() - wall_eval
+        end_state = services.operator_snapshot()
+        services.operator_land_all()  # before the clock may run again
+    finally:
+        swarm.release_clock(hold)
+    leaves = [leaf.to_json() for leaf in result.leaves]
+    tokens = None
+    if tools.prompt_tokens or tools.completion_tokens:
+        tokens = {"prompt": tools.prompt_tokens, "completion": tools.completion_tokens}
+    return {**_base_record(session, task, agent.name, options.trial),
+            "passed": result.passed, "checks": leaves,
+            "checks_total": leaf_count(task.checks),
+            "checks_passed": sum(1 for leaf in result.leaves if leaf.passed),
+            "finish": finish, "error": error, "tool_calls": tools.tool_calls,
+            "sim_time_s": round(t1_s - t0_s, 3), "wall_time_s": round(agent_wall_s, 3),
+            "tokens": tokens,
+            "overhead_s": {"reset": round(reset_s, 4), "evaluate": round(eval_s, 4)},
+            "end_state": end_state}

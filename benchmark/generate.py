@@ -1,0 +1,176 @@
+"""Benchmark generation: seeded worlds, 20 tasks per session drawn from the templates, and
+every task proved by the oracle flying it through the emulator.
+
+For each task slot the generator draws a template (weighted by family, at most twice per
+session) and its parameters from a generator seeded by (session seed, slot, attempt). With
+verification on, the session's swarm runs the tasks in order as a benchmark run would; a task
+the oracle fails is taken back (the drones are put back where the task started) and redrawn
+with the next attempt. The result depends on the seed alone.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import random
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from benchmark.episode import EpisodeOptions, _run_task, swarm_gateway
+from benchmark.oracle import OracleAgent
+from benchmark.scenarios import generate_world
+from benchmark.session_file import dump_session, session_from_dict, task_from_dict
+from benchmark.templates import CATALOGUE, SessionView, Template, TemplateUnfit
+from benchmark.validators import leaf_count, parse_tree
+
+__all__ = [
+    "TASKS_PER_SESSION",
+    "GenerationError",
+    "build_task",
+    "generate_session",
+    "write_session",
+]
+
+TASKS_PER_SESSION = 20
+MAX_ATTEMPTS = 8
+MAX_SAME_TEMPLATE = 2
+CRUISE_ESTIMATE_M_S = 8.0
+CATEGORY_WEIGHTS = {
+    "area_search": {"search": 4.0},
+    "area_assignment_and_patrol": {"search": 3.0, "navigation": 2.0},
+    "target_assignment": {"multi_drone_coordination": 3.0, "search": 2.0},
+}
+
+
+class GenerationError(RuntimeError):
+    """Raised when a session cannot be filled with oracle-passable tasks."""
+
+
+def _budget(draft_flight_m: float, hover_s: float, steps: int) -> dict[str, Any]:
+    sim_s = 300.0 + 3.0 * draft_flight_m / CRUISE_ESTIMATE_M_S + 2.0 * hover_s
+    return {"tool_calls": 30 + 4 * steps, "sim_time_s": float(60 * math.ceil(sim_s / 60.0))}
+
+
+def build_task(template: Template, view: SessionView, rng: random.Random, task_id: str
+               ) -> dict[str, Any]:
+    """One task object from a template (raises TemplateUnfit)."""
+    draft = template.build(view, rng)
+    parse_tree(draft.checks, view.scenario)  # a template bug surfaces here, not in a run
+    return {"id": task_id, "template": template.key, "category": template.category,
+            "difficulty": template.difficulty, "text": draft.phrasings[0],
+            "aliases": draft.phrasings[1:],
+            "budget": _budget(draft.flight_m, draft.hover_s, draft.steps),
+            "checks": draft.checks, "oracle": draft.oracle}
+
+
+class _Drawer:
+    """Template choice for each slot, and parameter draws for each attempt."""
+
+    def __init__(self, family: str, seed: int, view: SessionView) -> None:
+        self.view = view
+        self.seed = seed
+        self.fitting = [t for t in CATALOGUE if t.fits(view)]
+        if not self.fitting:
+            raise GenerationError("no template fits this session")
+        weights = CATEGORY_WEIGHTS.get(family, {})
+        self.weights = [weights.get(t.category, 1.0) for t in self.fitting]
+        self.used: dict[str, int] = {}
+
+    def template_for(self, slot: int, attempt: int) -> Template:
+        rng = random.Random(f"{self.seed}/template/{slot}/{attempt}")
+        pool = [(t, w) for t, w in zip(self.fitting, self.weights, strict=True)
+                if self.used.get(t.key, 0) < MAX_SAME_TEMPLATE] or list(
+                    zip(self.fitting, self.weights, strict=True))
+        return rng.choices([t for t, _ in pool], [w for _, w in pool])[0]
+
+    def draw(self, slot: int, attempt: int) -> dict[str, Any]:
+        """Attempts 0-2 redraw one template's parameters; later ones change template."""
+        template = self.template_for(slot, attempt // 3)
+        rng = random.Random(f"{self.seed}/task/{slot}/{attempt}")
+        task = build_task(template, self.view, rng, f"t{slot + 1:02d}")
+        return task
+
+    def accept(self, task: dict[str, Any]) -> None:
+        self.used[task["template"]] = self.used.get(task["template"], 0) + 1
+
+
+def _view(world: dict[str, Any]) -> SessionView:
+    session = session_from_dict({**world, "tasks": []}, source=world["id"])
+    w, h = world["map_size_m"]
+    return SessionView(world["family"], session.scenario, float(w), float(h))
+
+
+async def _verified_tasks(world: dict[str, Any], drawer: _Drawer, count: int,
+                          progress: Callable[[str], None]) -> list[dict[str, Any]]:
+    session = session_from_dict({**world, "tasks": []}, source=world["id"])
+    agent = OracleAgent(session.scenario, {})
+    tasks: list[dict[str, Any]] = []
+    async with swarm_gateway(session) as (swarm, services, gateway):
+        for slot in range(count):
+            start = services.operator_snapshot()
+            for attempt in range(MAX_ATTEMPTS):
+                try:
+                    raw = drawer.draw(slot, attempt)
+                except TemplateUnfit:
+                    continue
+                spec = task_from_dict(slot, raw, session.scenario)
+                if spec.error is not None:
+                    raise GenerationError(f"{world['id']}: {spec.error}")
+                agent.set_plan(spec.id, spec.oracle)
+                record = await _run_task(session, spec, agent, swarm, services, gateway,
+                                         EpisodeOptions())
+                if record["passed"]:
+                    drawer.accept(raw)
+                    tasks.append(raw)
+                    break
+                failed = [c["endpoint"] for c in record["checks"] if not c["passed"]]
+                progress(f"{world['id']} {raw['id']} {raw['template']}: oracle failed "
+                         f"{failed} ({record['finish']}); redrawing")
+                services.operator_restore(start)
+            else:
+                raise GenerationError(f"{world['id']}: slot {slot + 1}: no passable task in "
+                                      f"{MAX_ATTEMPTS} attempts")
+    return tasks
+
+
+def _unverified_tasks(drawer: _Drawer, count: int) -> list[dict[str, Any]]:
+    tasks = []
+    for slot in range(count):
+        for attempt in range(MAX_ATTEMPTS):
+            try:
+                raw = drawer.draw(slot, attempt)
+            except TemplateUnfit:
+                continue
+            drawer.accept(raw)
+            tasks.append(raw)
+            break
+        else:
+            raise GenerationError(f"slot {slot + 1}: no template could be built")
+    return tasks
+
+
+def generate_session(family: str, level: str, index: int, *, verify: bool = True,
+                     tasks: int = TASKS_PER_SESSION,
+                     progress: Callable[[str], None] = print) -> dict[str, Any]:
+    """The full session object for (family, level, index)."""
+    world = generate_world(family, level, index)
+    view = _view(world)
+    drawer = _Drawer(family, int(world["seed"]), view)
+    if verify:
+        drawn = asyncio.run(_verified_tasks(world, drawer, tasks, progress))
+    else:
+        drawn = _unverified_tasks(drawer, tasks)
+    session = {**world, "tasks": drawn}
+    checks = sum(leaf_count(parse_tree(t["checks"], view.scenario)) for t in drawn)
+    session["description"] = f"{world['description']} {len(drawn)} tasks, {checks} checks."
+    return session
+
+
+def write_session(session: dict[str, Any], out_dir: Path) -> Path:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / f"{session['id']}.json"
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(dump_session(session), encoding="utf-8")
+    tmp.replace(path)
+    return path

@@ -1,0 +1,236 @@
+"""The oracle agent: executes a task's hidden plan (see benchmark.templates.base for the
+operations) through `AgentTools`, planning obstacle-free paths over the world it knows."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from benchmark.agents import AgentTask, AgentTools
+from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
+from benchmark.oracle.planner import NoPath, PathPlanner
+from emulator.scenario import Scenario
+from mavlink_gateway import Outcome, Status
+
+__all__ = ["OracleAgent", "OracleError"]
+
+log = logging.getLogger(__name__)
+
+SWEEP_SPACING_SHARE = 1.6  # lane spacing as a multiple of the task radius
+CHARGE_ALTITUDE_M = 15.0
+MAX_PATH_POINTS = 100
+TEAM_OPS = ("sweep", "visit_targets")
+
+
+class OracleError(RuntimeError):
+    """Raised when the oracle cannot carry out its plan (a refused or failed primitive)."""
+
+
+Op = Mapping[str, Any]
+
+
+class OracleAgent:
+    """Flies the hidden plan of each task of one session."""
+
+    name = "oracle"
+
+    def __init__(self, scenario: Scenario, plans: Mapping[str, Sequence[Sequence[Op]]]) -> None:
+        self._scenario = scenario
+        self._world = scenario.world
+        self._plans = dict(plans)
+        self._planner = PathPlanner(scenario.world)
+        self._specs = {v.id: v for v in scenario.vehicles}
+        self.failures: list[str] = []
+
+    def set_plan(self, task_id: str, plan: Sequence[Sequence[Op]] | None) -> None:
+        """Give (or replace) the hidden plan of one task."""
+        if plan is None:
+            self._plans.pop(task_id, None)
+        else:
+            self._plans[task_id] = plan
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        plan = self._plans.get(task.task_id)
+        if plan is None:
+            tools.finish("no reference plan for this task")
+            return
+        listing = tools.list_drones()
+        self._state = {d["drone"]: d for d in (listing.data or {}).get("drones", [])}
+        for phase in plan:
+            queues: dict[str, list[Op]] = {}
+            for op in phase:
+                for drone, drone_op in self._expand(op):
+                    queues.setdefault(drone, []).append(drone_op)
+            results = await asyncio.gather(
+                *(self._run_queue(tools, drone, ops) for drone, ops in queues.items()),
+                return_exceptions=True)
+            for result in results:
+                if isinstance(result, OracleError):
+                    self.failures.append(str(result))
+                    log.warning("oracle: %s: %s", task.task_id, result)
+                elif isinstance(result, BaseException):
+                    raise result
+        tools.finish("plan executed")
+
+    # ------------------------------------------------------------- expansion
+    def _expand(self, op: Op) -> list[tuple[str, Op]]:
+        kind = op["op"]
+        if kind == "sweep":
+            return self._expand_sweep(op)
+        if kind == "visit_targets":
+            return self._expand_visits(op)
+        return [(op["drone"], op)]
+
+    def _xy(self, drone: str) -> tuple[float, float]:
+        s = self._state[drone]
+        return float(s["x_m"]), float(s["y_m"])
+
+    def _expand_sweep(self, op: Op) -> list[tuple[str, Op]]:
+        drones = list(op["drones"])
+        target = self._world.target(op["target"])
+        radius = min(self._specs[d].task_radius_m for d in drones)
+        points = lawnmower(target.geometry, float(op["altitude_m"]),
+                           SWEEP_SPACING_SHARE * radius, start_xy=self._xy(drones[0]))
+        pieces = split_lanes(points, len(drones))
+        return [(d, {"op": "path", "drone": d, "points": [list(p) for p in piece]})
+                for d, piece in zip(drones, pieces, strict=True) if piece]
+
+    def _expand_visits(self, op: Op) -> list[tuple[str, Op]]:
+        drones = list(op["drones"])
+        alt = float(op["altitude_m"])
+        goals = {t: self._target_point(t) for t in op["targets"]}
+        ends = {d: self._xy(d) for d in drones}
+        loads = dict.fromkeys(drones, 0.0)
+        assigned: dict[str, list[str]] = {d: [] for d in drones}
+        remaining = list(goals)
+        while remaining:  # greedy: the cheapest (drone, target) extension each round
+            best = min((loads[d] + math.dist(ends[d], goals[t]), d, t)
+                        for d in drones for t in remaining)
+            cost, d, t = best
+            loads[d], ends[d] = cost, goals[t]
+            assigned[d].append(t)
+            remaining.remove(t)
+        out: list[tuple[str, Op]] = []
+        for d, targets in assigned.items():
+            if not targets:
+                continue
+            order = order_visits(self._xy(d), [goals[t] for t in targets])
+            points = [[*goals[targets[i]], alt] for i in order]
+            out.append((d, {"op": "path", "drone": d, "points": points}))
+        return out
+
+    def _target_point(self, target_id: str) -> tuple[float, float]:
+        target = self._world.target(target_id)
+        if target.kind == "polygon":
+            p = target.geometry.representative_point() if not target.geometry.contains(
+                target.geometry.centroid) else target.geometry.centroid
+            return float(p.x), float(p.y)
+        return float(target.position_m[0]), float(target.position_m[1])
+
+    # ------------------------------------------------------------- execution
+    async def _run_queue(self, tools: AgentTools, drone: str, ops: list[Op]) -> None:
+        for op in ops:
+            await self._run_op(tools, drone, op)
+
+    def _check(self, drone: str, what: str, outcome: Outcome) -> Outcome:
+        if outcome.state is not None:
+            self._state[drone] = outcome.state.to_dict()
+        if outcome.status is not Status.OK:
+            raise OracleError(f"{drone} {what}: {outcome.status.value}: {outcome.message}")
+        return outcome
+
+    def _airborne(self, drone: str) -> bool:
+        return self._state[drone]["flight_state"] != "on_ground"
+
+    async def _run_op(self, tools: AgentTools, d: str, op: Op) -> None:
+        kind = op["op"]
+        if kind == "takeoff":
+            alt = float(op["altitude_m"])
+            if self._airborne(d):
+                self._check(d, kind, await tools.change_altitude(d, alt))
+            else:
+                self._check(d, kind, await tools.take_off(d, alt))
+        elif kind == "goto":
+            await self._goto(tools, d, (float(op["x"]), float(op["y"]), float(op["z"])))
+        elif kind == "path":
+            await self._path(tools, d, [tuple(map(float, p)) for p in op["points"]])
+        elif kind == "land":
+            self._check(d, kind, await tools.land(d))
+        elif kind == "hover":
+            self._check(d, kind, await tools.hover(d, float(op["duration_s"])))
+        elif kind == "rotate":
+            self._check(d, kind, await tools.rotate(d, float(op["heading_deg"])))
+        elif kind == "altitude":
+            self._check(d, kind, await tools.change_altitude(d, float(op["altitude_m"])))
+        elif kind == "towards":
+            self._check(d, kind, await tools.move_towards(d, float(op["heading_deg"]),
+                                                         float(op["distance_m"])))
+        elif kind == "photo":
+            self._check(d, kind, await tools.take_photo(d))
+        elif kind == "set_home":
+            self._check(d, kind, await tools.set_home(d))
+        elif kind == "home":
+            s = self._state[d]
+            alt = float(op.get("altitude_m", 20.0))
+            await self._goto(tools, d, (float(s["home_x_m"]), float(s["home_y_m"]), alt))
+            self._check(d, "land at home", await tools.land(d))
+        elif kind == "charge":
+            x, y = self._target_point(op["station"])
+            await self._goto(tools, d, (x, y, CHARGE_ALTITUDE_M))
+            self._check(d, "land on the station", await tools.land(d))
+            self._check(d, kind, await tools.charge(d))
+        elif kind == "message":
+            self._check(d, kind, tools.send_message(d, op["to"], op["text"]))
+        elif kind == "broadcast":
+            self._check(d, kind, tools.broadcast(d, op["text"]))
+        elif kind == "reach":
+            x, y = self._target_point(op["target"])
+            await self._goto(tools, d, (x, y, float(op["altitude_m"])))
+        else:
+            raise OracleError(f"unknown plan operation {kind!r}")
+
+    def _position(self, d: str) -> tuple[float, float, float]:
+        s = self._state[d]
+        return float(s["x_m"]), float(s["y_m"]), float(s["altitude_m"])
+
+    async def _ensure_airborne(self, tools: AgentTools, d: str, altitude_m: float) -> None:
+        if not self._airborne(d):
+            self._check(d, "take-off", await tools.take_off(d, max(altitude_m, 5.0)))
+
+    def _legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
+              ) -> list[tuple[float, float, float]]:
+        try:
+            return self._planner.plan(start, goal)
+        except NoPath as error:
+            raise OracleError(f"no path from {start} to {goal}: {error}") from None
+
+    async def _goto(self, tools: AgentTools, d: str, goal: tuple[float, float, float]) -> None:
+        await self._ensure_airborne(tools, d, goal[2])
+        waypoints = self._legs(self._position(d), goal)
+        if len(waypoints) == 1:
+            self._check(d, "move", await tools.move_to(d, *goal))
+        else:
+            await self._fly_waypoints(tools, d, waypoints)
+
+    async def _path(self, tools: AgentTools, d: str,
+                    points: list[tuple[float, ...]]) -> None:
+        if not points:
+            return
+        first = points[0]
+        await self._ensure_airborne(tools, d, first[2])
+        waypoints: list[tuple[float, float, float]] = []
+        here = self._position(d)
+        for p in points:
+            goal = (p[0], p[1], p[2])
+            waypoints.extend(self._legs(here, goal))
+            here = goal
+        await self._fly_waypoints(tools, d, waypoints)
+
+    async def _fly_waypoints(self, tools: AgentTools, d: str,
+                             waypoints: list[tuple[float, float, float]]) -> None:
+        for k in range(0, len(waypoints), MAX_PATH_POINTS):
+            chunk = [list(w) for w in waypoints[k:k + MAX_PATH_POINTS]]
+            self._check(d, "path", await tools.move_along_path(d, chunk))

@@ -1,0 +1,177 @@
+"""Runs an agent over benchmark sessions, in parallel worker processes, into a resumable
+JSON Lines results file.
+
+Each (session, trial) is one unit of work, run by a worker process with its own swarm and
+ports. Workers send each task's record to the parent as the task ends; the parent alone
+appends to the results file, one whole line at a time. Re-running the same command skips
+every task already recorded and restores the layout the last one left.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import multiprocessing
+import queue as queue_module
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from benchmark.agents import Agent, NoopAgent
+from benchmark.episode import EpisodeOptions, run_session
+from benchmark.results import ResultsLog, read_records
+from benchmark.session_file import Session, SessionFileError, load_session
+
+__all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
+
+AGENTS = ("oracle", "noop")
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    sessions: tuple[Path, ...]
+    agent: str = "oracle"
+    trials: int = 1
+    workers: int = 1
+    out_dir: Path = Path("runs/bench")
+    task_limit: int | None = None  # only the first N tasks of each session (smoke runs)
+    physics_hz: float = 50.0
+
+    @property
+    def results_path(self) -> Path:
+        return self.out_dir / "results.jsonl"
+
+
+@dataclass
+class RunOutcome:
+    records_written: int = 0
+    skipped: int = 0
+    errors: list[str] = field(default_factory=list)
+    wall_s: float = 0.0
+
+
+def make_agent(name: str, session: Session) -> Agent:
+    """The named agent for one session."""
+    if name == "noop":
+        return NoopAgent()
+    if name == "oracle":
+        from benchmark.oracle import OracleAgent
+        plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
+        return OracleAgent(session.scenario, plans)
+    raise ValueError(f"unknown agent {name!r}; choose one of {', '.join(AGENTS)}")
+
+
+def _limited(session: Session, limit: int | None) -> Session:
+    return session if limit is None else replace(session, tasks=session.tasks[:limit])
+
+
+def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
+              send: Callable[[tuple[str, Any]], None]) -> None:
+    try:
+        session = _limited(load_session(path), plan.task_limit)
+    except SessionFileError as error:
+        send(("error", str(error)))
+        return
+    agent = make_agent(plan.agent, session)
+    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz)
+    try:
+        asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
+                                done=done, options=options))
+    except Exception as error:  # the swarm or gateway failed: report, keep the run going
+        send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+def _worker(units: Any, results: Any, plan: RunPlan) -> None:
+    while True:
+        unit = units.get()
+        if unit is None:
+            return
+        path, trial, done = unit
+        _run_unit(path, trial, plan, done, results.put)
+        results.put(("unit_done", (path, trial)))
+
+
+def _done_by_unit(records: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    return {r["key"]: r.get("end_state") for r in records if "key" in r}
+
+
+def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> RunOutcome:
+    """Run the plan; returns what was written. Results go to plan.results_path."""
+    if plan.agent not in AGENTS:
+        raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
+    if plan.workers < 1 or plan.trials < 1:
+        raise ValueError("workers and trials must be >= 1")
+    started = time.perf_counter()
+    outcome = RunOutcome()
+    log = ResultsLog(plan.results_path)
+    keys = log.open()
+    if log.repaired:
+        progress(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
+    done_states = _done_by_unit(read_records(plan.results_path)) if keys else {}
+    units = [(str(p), trial, done_states) for trial in range(plan.trials) for p in plan.sessions]
+
+    def handle(message: tuple[str, Any]) -> None:
+        kind, payload = message
+        if kind == "record":
+            if payload["key"] in log:
+                return
+            log.append(payload)
+            outcome.records_written += 1
+            progress(_progress_line(payload, outcome.records_written))
+        elif kind == "error":
+            outcome.errors.append(payload)
+            progress(f"error: {payload}")
+
+    try:
+        if plan.workers == 1:
+            for path, trial, done in units:
+                _run_unit(path, trial, plan, done, handle)
+        else:
+            _run_parallel(plan, units, handle)
+    finally:
+        log.close()
+    outcome.wall_s = time.perf_counter() - started
+    return outcome
+
+
+def _run_parallel(plan: RunPlan, units: list[tuple[str, int, Any]],
+                  handle: Callable[[tuple[str, Any]], None]) -> None:
+    ctx = multiprocessing.get_context("spawn")
+    unit_q, result_q = ctx.Queue(), ctx.Queue()
+    for unit in units:
+        unit_q.put(unit)
+    workers = [ctx.Process(target=_worker, args=(unit_q, result_q, plan), daemon=True,
+                           name=f"bench-worker-{k}") for k in range(min(plan.workers, len(units)))]
+    for w in workers:
+        unit_q.put(None)
+        w.start()
+    remaining = len(units)
+    try:
+        while remaining:
+            try:
+                message = result_q.get(timeout=1.0)
+            except queue_module.Empty:
+                if not any(w.is_alive() for w in workers):
+                    handle(("error", f"worker processes ended with {remaining} unit(s) "
+                                     "unfinished; re-run the same command to resume"))
+                    return
+                continue
+            if message[0] == "unit_done":
+                remaining -= 1
+            else:
+                handle(message)
+    finally:
+        for w in workers:
+            w.join(timeout=5.0)
+            if w.is_alive():
+                w.terminate()
+
+
+def _progress_line(record: Mapping[str, Any], n: int) -> str:
+    verdict = "PASS" if record["passed"] else "fail"
+    extra = f"  [{record['finish']}]" if record["finish"] != "finished" else ""
+    return (f"{n:5d} {record['session']:<38} {record['task']:<4} {record['template']:<28} "
+            f"{verdict} {record['checks_passed']:>2}/{record['checks_total']:<2} checks "
+            f"{record['tool_calls']:>3} calls {record['sim_time_s']:>7.0f} s sim "
+            f"{record['wall_time_s']:>6.2f} s{extra}")

@@ -1,0 +1,49 @@
+"""The three scenario families of the benchmark and what kind of targets each one has.
+
+The two area families (``area_search``, ``area_assignment_and_patrol``) have circle and polygon
+area targets; ``target_assignment`` has small ``fixed`` targets. Every family also has its
+level's charging stations (``waypoint`` targets).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from benchmark.scenarios.levels import level_spec
+
+__all__ = ["FAMILIES", "FAMILY_SPECS", "FamilySpec", "family_spec", "target_count"]
+
+FAMILIES: tuple[str, ...] = ("area_search", "area_assignment_and_patrol", "target_assignment")
+
+
+@dataclass(frozen=True, slots=True)
+class FamilySpec:
+    """How sessions of one family read: title, task type and target names."""
+
+    family: str
+    title: str
+    task_type: str
+    target_name: str
+    area_targets: bool
+
+
+FAMILY_SPECS: dict[str, FamilySpec] = {
+    "area_search": FamilySpec("area_search", "Area search", "area_search", "Search Area", True),
+    "area_assignment_and_patrol": FamilySpec(
+        "area_assignment_and_patrol", "Area assignment and patrol",
+        "area_assignment_and_patrol", "Patrol Zone", True),
+    "target_assignment": FamilySpec(
+        "target_assignment", "Target assignment", "target_assignment", "Target", False),
+}
+
+
+def family_spec(family: str) -> FamilySpec:
+    """The description of a family; raises ValueError naming an unknown family."""
+    if not isinstance(family, str) or family not in FAMILY_SPECS:
+        raise ValueError(f"family must be one of {', '.join(FAMILIES)}; got {family!r}")
+    return FAMILY_SPECS[family]
+
+
+def target_count(family: str, level: str) -> int:
+    """Targets of a session of this family and level, charging stations included."""
+    return level_spec(level).target_count(family_spec(family).area_targets)

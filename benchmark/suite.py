@@ -1,0 +1,69 @@
+"""The shipped benchmark suite (75 generated sessions under `benchmark/sessions/`) and its
+named subsets, and generation of the whole suite."""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections.abc import Sequence
+from pathlib import Path
+
+from benchmark.scenarios import all_session_keys, session_id
+
+__all__ = ["SESSIONS_DIR", "SMOKE_TASKS", "SUITES", "generate_suite", "suite_paths"]
+
+SESSIONS_DIR = Path(__file__).resolve().parent / "sessions"
+SUITES = ("smoke", "full")
+SMOKE_SESSIONS = ("area_search-easy-1", "area_assignment_and_patrol-easy-1",
+                  "target_assignment-easy-1")
+SMOKE_TASKS = 6
+
+
+def suite_paths(name: str) -> tuple[tuple[Path, ...], int | None]:
+    """The session files of a suite and its per-session task limit."""
+    if name == "smoke":
+        ids, limit = SMOKE_SESSIONS, SMOKE_TASKS
+    elif name == "full":
+        ids, limit = tuple(session_id(*key) for key in all_session_keys()), None
+    else:
+        raise ValueError(f"unknown suite {name!r}; choose one of {', '.join(SUITES)}")
+    paths = tuple(SESSIONS_DIR / f"{i}.json" for i in ids)
+    missing = [p.name for p in paths if not p.exists()]
+    if missing:
+        raise ValueError(f"suite {name!r}: missing session files in {SESSIONS_DIR}: "
+                         f"{', '.join(missing[:5])}; run `mavswarm bench generate --out "
+                         f"{SESSIONS_DIR}`")
+    return paths, limit
+
+
+def _generate_one(key: tuple[str, str, int], out_dir: Path, verify: bool) -> Path:
+    from benchmark.generate import generate_session, write_session
+    session = generate_session(*key, verify=verify)
+    return write_session(session, out_dir)
+
+
+def generate_suite(out_dir: Path, *, only: Sequence[str] | None = None, verify: bool = True,
+                   workers: int = 1) -> list[Path]:
+    """Generate the suite's session files (all 75, or the ids in `only`) into out_dir."""
+    keys = list(all_session_keys())
+    if only:
+        wanted = set(only)
+        unknown = wanted - {session_id(*k) for k in keys}
+        if unknown:
+            raise ValueError(f"unknown session ids: {', '.join(sorted(unknown))}")
+        keys = [k for k in keys if session_id(*k) in wanted]
+    if workers <= 1:
+        written = []
+        for key in keys:
+            path = _generate_one(key, out_dir, verify)
+            print(f"generated {path}", flush=True)
+            written.append(path)
+        return written
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(workers) as pool:
+        results = [pool.apply_async(_generate_one, (k, out_dir, verify)) for k in keys]
+        written = []
+        for result in results:
+            path = result.get()
+            print(f"generated {path}", flush=True)
+            written.append(path)
+    return written

@@ -1,0 +1,185 @@
+"""Delivery: land at a pickup point and a drop point, a round of drops, two parcels at once.
+
+A delivery is a landing: the drone must touch the ground at each listed point (a visit at
+z = 0), so the oracle flies there at cruise altitude and lands. The points of one task lie
+within a square of at most ``AREA_SIDE_M`` so that a single battery covers the round.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from typing import Any
+
+from benchmark.templates.base import (
+    SessionView,
+    TaskDraft,
+    Template,
+    TemplateUnfit,
+    all_of,
+    fmt_xy,
+    leaf,
+    pick,
+    tour_length,
+)
+
+__all__ = ["AREA_SIDE_M", "TEMPLATES"]
+
+AREA_SIDE_M = 700.0
+_TRIES = 60
+
+Point = tuple[float, float]
+Node = dict[str, Any]
+
+
+def _diagonal_m(view: SessionView) -> float:
+    return math.hypot(view.map_w_m, view.map_h_m)
+
+
+def _spots(view: SessionView, rng: random.Random, n: int, min_gap_m: float) -> list[Point]:
+    """n free points at least min_gap_m apart inside one random square of the map."""
+    sx = min(AREA_SIDE_M, view.map_w_m - 60.0)
+    sy = min(AREA_SIDE_M, view.map_h_m - 60.0)
+    for _ in range(_TRIES):
+        x0 = rng.uniform(30.0, view.map_w_m - 30.0 - sx)
+        y0 = rng.uniform(30.0, view.map_h_m - 30.0 - sy)
+        points: list[Point] = []
+        for _ in range(20 * n):
+            p = view.free_point(rng, region=(x0, y0, x0 + sx, y0 + sy))
+            if all(math.dist(p, q) >= min_gap_m for q in points):
+                points.append(p)
+                if len(points) == n:
+                    return points
+    raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart")
+
+
+def _nearest_first(start: Point, points: Sequence[Point]) -> list[Point]:
+    """points in nearest-neighbour order from start."""
+    left, order, here = list(points), [], start
+    while left:
+        here = min(left, key=lambda p: math.dist(here, p))
+        left.remove(here)
+        order.append(here)
+    return order
+
+
+def _home_xy(view: SessionView, drone_index: int) -> Point:
+    home = view.drones[drone_index].home_m
+    return float(home[0]), float(home[1])
+
+
+def _landed_at(drone_id: str, point: Point) -> Node:
+    return leaf("drone_has_visited_position", drone_id=drone_id, x=point[0], y=point[1], z=0.0,
+                tolerance=3.0)
+
+
+def _land_ops(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:
+    ops: list[Node] = []
+    for x, y in points:
+        ops.append({"op": "goto", "drone": drone_id, "x": x, "y": y, "z": alt})
+        ops.append({"op": "land", "drone": drone_id})
+    return ops
+
+
+def _ends(drone_id: str, point: Point, landings: int) -> list[Node]:
+    """Checks that the drone landed `landings` times and rests on the ground at point."""
+    return [leaf("drone_has_landed", drone_id=drone_id, min_count=landings),
+            leaf("drone_position", drone_id=drone_id, x=point[0], y=point[1], tolerance=3.0),
+            leaf("drone_on_ground", drone_id=drone_id, tolerance=0.5)]
+
+
+def _parcel_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
+    (d,) = pick(rng, view.drones, 1)
+    alt = rng.randint(15, 30)
+    pickup, drop = _spots(view, rng, 2, 150.0)
+    p, q = fmt_xy(*pickup), fmt_xy(*drop)
+    return TaskDraft(
+        phrasings=[
+            f"Deliver a parcel with {d.name}: fly at {alt} m to the pickup point {p} and land "
+            f"there to collect it, then take off again, fly to the drop-off point {q} and land "
+            f"there.",
+            f"{d.name} picks up a package at {p} (land on the spot) and brings it to {q}, "
+            f"where it lands again. Cruise at {alt} metres between the stops.",
+            f"Parcel run for {d.name}: touch down at {p} for the pickup, then carry the parcel "
+            f"at {alt} m altitude to {q} and finish on the ground there.",
+        ],
+        checks=all_of(
+            _landed_at(d.id, pickup),
+            _landed_at(d.id, drop),
+            *_ends(d.id, drop, 2),
+        ),
+        oracle=[_land_ops(d.id, [pickup, drop], alt)],
+        flight_m=math.dist(pickup, drop) + _diagonal_m(view),
+        steps=6,
+    )
+
+
+def _multi_drop(view: SessionView, rng: random.Random) -> TaskDraft:
+    (d,) = pick(rng, view.drones, 1)
+    alt = rng.randint(15, 30)
+    drops = _nearest_first(_home_xy(view, view.drones.index(d)), _spots(view, rng, 3, 100.0))
+    listed = ", ".join(fmt_xy(*p) for p in drops)
+    return TaskDraft(
+        phrasings=[
+            f"{d.name} has three parcels to drop off. Flying at {alt} m, land at each of these "
+            f"points in this order: {listed}. It stays on the ground at the last one.",
+            f"Make three delivery stops with {d.name} at cruise altitude {alt} metres: land at "
+            f"{listed}, one after another, and remain landed at the final stop.",
+            f"Drop-off round for {d.name}: touch down in turn at {listed} (travel at {alt} m "
+            f"between stops) and end the round on the ground at the third point.",
+        ],
+        checks=all_of(
+            *(_landed_at(d.id, p) for p in drops),
+            *_ends(d.id, drops[-1], 3),
+        ),
+        oracle=[_land_ops(d.id, drops, alt)],
+        flight_m=tour_length(drops) + _diagonal_m(view),
+        steps=9,
+    )
+
+
+def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
+    a, b = pick(rng, view.drones, 2)
+    alt = rng.randint(15, 30)
+    for _ in range(_TRIES):
+        pick_a, drop_a, pick_b, drop_b = _spots(view, rng, 4, 60.0)
+        if math.dist(drop_a, drop_b) >= 100.0:
+            break
+    else:
+        raise TemplateUnfit("no two drop points 100 m apart")
+    plans = ((a, pick_a, drop_a), (b, pick_b, drop_b))
+    checks: list[Node] = []
+    ops: list[Node] = []
+    for drone, pickup, drop in plans:
+        checks.extend([_landed_at(drone.id, pickup), _landed_at(drone.id, drop),
+                       *_ends(drone.id, drop, 2)])
+        ops.extend(_land_ops(drone.id, [pickup, drop], alt))
+    checks.append(leaf("two_drones_distance", drone_1_id=a.id, drone_2_id=b.id,
+                       min_distance=30.0))
+    pa, qa, pb, qb = (fmt_xy(*p) for p in (pick_a, drop_a, pick_b, drop_b))
+    return TaskDraft(
+        phrasings=[
+            f"Two deliveries at once, both flown at {alt} m. {a.name} lands at {pa} to pick up "
+            f"its parcel and then lands at {qa} to drop it; {b.name} lands at {pb} to pick up "
+            f"and then at {qb} to drop. Both end on the ground at their drop points, at least "
+            f"30 m from each other.",
+            f"Team delivery at {alt} metres: {a.name} goes {pa} -> {qa} and {b.name} goes "
+            f"{pb} -> {qb}, landing at every stop. They finish landed at their drop-off "
+            f"points, no closer than 30 m to each other.",
+            f"Have {a.name} collect a parcel by landing at {pa} and deliver it by landing at "
+            f"{qa}, while {b.name} does the same from {pb} to {qb}; cruise at {alt} m. Both "
+            f"stay on the ground at their drop points, 30 m or more apart.",
+        ],
+        checks=all_of(*checks),
+        oracle=[ops],
+        flight_m=max(math.dist(pick_a, drop_a), math.dist(pick_b, drop_b)) + _diagonal_m(view),
+        steps=12,
+    )
+
+
+TEMPLATES = (
+    Template("parcel_delivery", "delivery", "medium", _parcel_delivery),
+    Template("multi_drop", "delivery", "medium", _multi_drop),
+    Template("team_delivery", "delivery", "hard", _team_delivery, drones=2),
+)
