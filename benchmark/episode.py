@@ -39,6 +39,7 @@ BENCH_TELEMETRY_HZ = {"HEARTBEAT": 5.0, "EXTENDED_SYS_STATE": 10.0, "SYS_STATUS"
                       "ATTITUDE": 10.0, "GPS_RAW_INT": 0.5, "VFR_HUD": 1.0}
 RESET_SYNC_TIMEOUT_S = 20.0
 PLAY_OUT_WALL_S = 120.0
+SETTLE_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -112,9 +113,11 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
             if time.monotonic() > wall_deadline:
                 break
             await asyncio.sleep(0.002)
-        return swarm.fleet.now_s
     finally:
         swarm.release_clock(hold)
+    # A goal ends once reached, not at a standstill: let every drone come to rest.
+    await swarm.advance(SETTLE_S)
+    return swarm.fleet.now_s
 
 
 def _base_record(session: Session, task: TaskSpec, agent: str, trial: int) -> dict[str, Any]:

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from benchmark.session_file import SCHEMA, dump_session, session_from_dict
-from benchmark.validators import ENDPOINTS, IGNORED_PARAMETERS
+from benchmark.validators import ENDPOINTS
+from benchmark.validators.endpoint import IGNORED_PARAMETERS
 from emulator.scenario import ScenarioError, scenario_from_dict
 
 __all__ = ["SessionImportError", "import_session", "import_session_file"]

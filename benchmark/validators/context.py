@@ -23,7 +23,7 @@ __all__ = ["AIRBORNE_M", "RECENT_S", "CheckContext", "DroneState"]
 
 AIRBORNE_M = 1.0
 """A drone is airborne at altitude z >= AIRBORNE_M."""
-RECENT_S = 0.2
+RECENT_S = 0.05
 """Current-state checks judge hovering by the speed over the last RECENT_S seconds."""
 
 T = TypeVar("T")

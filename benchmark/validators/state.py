@@ -30,7 +30,7 @@ __all__ = [
 ]
 
 HOVER_SPEED_M_S = 0.5
-"""Below this speed (max over the last 0.2 s) an airborne drone hovers; a drone on the ground
+"""Below this speed (max over the last 0.05 s) an airborne drone hovers; a drone on the ground
 must also be slower than this (current speed)."""
 DRONE_STATUSES = ("idle", "ready", "taking_off", "flying", "moving", "hovering", "landing",
                   "emergency", "offline")
@@ -218,7 +218,7 @@ STATE_ENDPOINTS: tuple[Endpoint, ...] = (
     _state("drone_on_ground", f"z <= tolerance and speed < {HOVER_SPEED_M_S} m/s",
            _drone_on_ground, _DRONE, _tolerance(0.1)),
     _state("drone_hovering",
-           f"z > tolerance and max speed over the last 0.2 s < {HOVER_SPEED_M_S} m/s",
+           f"z > tolerance and max speed over the last 0.05 s < {HOVER_SPEED_M_S} m/s",
            _drone_hovering, _DRONE, _tolerance(0.1)),
     _state("all_drones_on_ground", "every drone is on the ground (false without drones)",
            _all_drones_on_ground, _tolerance(0.1)),
