@@ -31,7 +31,7 @@ def test_corrupt_partial_and_foreign_files_name_the_file(tmp_path: Path, good: d
     partial.write_text(json.dumps(good)[:500])
     with pytest.raises(SessionFileError, match=r"partial\.json: not valid JSON"):
         load_session(partial)
-    with pytest.raises(SessionFileError, match="MultiUAV-Plat session.*mavswarm bench import"):
+    with pytest.raises(SessionFileError, match=r"MultiUAV-Plat session.*mavswarm bench import"):
         load_session(SHARED / "Example_Session_Area_Search.json")
     missing = dict(good)
     del missing["drones"]

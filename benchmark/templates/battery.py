@@ -108,10 +108,11 @@ def _recharge_stop(view: SessionView, rng: random.Random) -> TaskDraft:
         phrasings=[
             f"Fly {d.name} to {station.name} at {where}, land on the charging pad and charge "
             f"the battery to full. Leave the drone resting on the station.",
-            f"{d.name} needs a recharge: take it to the charging station {station.name} "
-            f"{where}, set it down on the pad and stay there until the battery reads 100 %.",
-            f"Send {d.name} to land on {station.name} (located at {where}) and top its battery "
-            f"up completely; it should end the task on the station.",
+            f"{d.name} needs a recharge: take it to {station.name} at {where}, set it down on "
+            f"the pad and stay there until the battery reads 100 %.",
+            f"Send {d.name} to land on the charging station {station.name}, located at "
+            f"{where}, and top its battery up completely; it should end the task on the "
+            f"station.",
         ],
         checks=all_of(*_charged_on(d.id, station)),
         oracle=[[{"op": "charge", "drone": d.id, "station": station.id}]],
@@ -139,7 +140,8 @@ def _tour_then_recharge(view: SessionView, rng: random.Random) -> TaskDraft:
             f"{d.name}: visit {listed} one after another at {alt} metres; afterwards recharge "
             f"at {station.name} {where}, landing on it and waiting until the battery is full.",
             f"Route for {d.name} at an altitude of {alt} m: {listed}. Finish by landing on the "
-            f"charging station {station.name} ({where}) and filling the battery to 100 %.",
+            f"charging station {station.name}, located at {where}, and filling the battery to "
+            f"100 %.",
         ],
         checks=all_of(*_visited(d.id, points, alt), *_charged_on(d.id, station)),
         oracle=[[*_route_ops(d.id, points, alt),
