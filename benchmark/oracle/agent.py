@@ -22,6 +22,8 @@ log = logging.getLogger(__name__)
 SWEEP_SPACING_SHARE = 1.6  # lane spacing as a multiple of the task radius
 CHARGE_ALTITUDE_M = 15.0
 MAX_PATH_POINTS = 100
+# Paths keep this far from obstacles, so tracking errors never meet the 2 m stop margin.
+PLAN_CLEARANCE_M = 8.0
 TEAM_OPS = ("sweep", "visit_targets")
 
 
@@ -41,7 +43,7 @@ class OracleAgent:
         self._scenario = scenario
         self._world = scenario.world
         self._plans = dict(plans)
-        self._planner = PathPlanner(scenario.world)
+        self._planner = PathPlanner(scenario.world, clearance_m=PLAN_CLEARANCE_M)
         self._specs = {v.id: v for v in scenario.vehicles}
         self.failures: list[str] = []
 
