@@ -1,0 +1,56 @@
+"""The shipped suite: 75 sessions of 20 tasks that load cleanly, cover the check endpoints,
+and regenerate byte for byte from their seeds."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+from benchmark.generate import generate_session
+from benchmark.scenarios import all_session_keys, session_id
+from benchmark.session_file import dump_session, load_session
+from benchmark.suite import SESSIONS_DIR, suite_paths
+from benchmark.validators import endpoints_used, leaf_count
+
+
+def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
+    paths, limit = suite_paths("full")
+    assert limit is None and len(paths) == 75
+    assert [p.stem for p in paths] == [session_id(*k) for k in all_session_keys()]
+    endpoints: set[str] = set()
+    categories: Counter[str] = Counter()
+    checks = 0
+    for path in paths:
+        session = load_session(path)
+        assert len(session.tasks) == 20, path
+        for task in session.tasks:
+            assert task.error is None, task.error
+            assert task.oracle is not None and task.budget is not None
+            assert task.checks is not None
+            checks += leaf_count(task.checks)
+            endpoints |= endpoints_used(task.checks)
+            categories[task.category] += 1
+    assert len(endpoints) >= 21, sorted(endpoints)
+    assert set(categories) == {"basic_operations", "navigation", "search",
+                               "multi_drone_coordination", "delivery", "communication",
+                               "battery_management"}
+    assert checks >= 4 * 1500
+
+
+def test_unverified_generation_reproduces_a_shipped_session() -> None:
+    """With every first draw passing, the oracle changes nothing: drawing alone gives the
+    shipped file, on any machine."""
+    shipped = (SESSIONS_DIR / "area_assignment_and_patrol-easy-2.json").read_text()
+    again = dump_session(generate_session("area_assignment_and_patrol", "easy", 2,
+                                          verify=False))
+    assert again == shipped
+
+
+@pytest.mark.mavsdk
+@pytest.mark.slow
+def test_verified_generation_reproduces_a_shipped_session() -> None:
+    shipped = (SESSIONS_DIR / "area_search-easy-1.json").read_text()
+    lines: list[str] = []
+    again = dump_session(generate_session("area_search", "easy", 1, progress=lines.append))
+    assert again == shipped, lines
