@@ -15,7 +15,7 @@ from benchmark.scenarios import generate_world
 from benchmark.session_file import dump_session, session_from_dict
 from benchmark.templates import SessionView, template
 
-__all__ = ["small_session", "write_json"]
+__all__ = ["reference_session", "small_session", "write_json"]
 
 
 def small_session(keys: list[str], *, family: str = "area_search", index: int = 1,
@@ -33,3 +33,34 @@ def small_session(keys: list[str], *, family: str = "area_search", index: int = 
 def write_json(path: Path, data: Any) -> Path:
     path.write_text(dump_session(data) if isinstance(data, dict) else json.dumps(data))
     return path
+
+
+def reference_session() -> dict[str, Any]:
+    """A small session in the MultiUAV-Plat export layout (no mavswarm keys), with no tasks."""
+    drones = [{"id": f"a{k}b{k}c{k}d{k}", "name": f"Drone {k}", "model": "Model-A",
+               "status": "idle", "position": {"x": 40.0 + 12 * k, "y": 50.0, "z": 0.0},
+               "max_speed": 15, "max_altitude": 300, "battery_capacity": 80.0}
+              for k in range(1, 5)]
+    targets = [
+        {"id": "1a2b3c4d", "name": "Circle Target 1", "type": "circle",
+         "position": {"x": 300.0, "y": 260.0, "z": 0.0}, "radius": 40},
+        {"id": "5e6f7a8b", "name": "Fixed Target 1", "type": "fixed",
+         "position": {"x": 150.0, "y": 400.0, "z": 0.0}, "radius": 8},
+        {"id": "9c0d1e2f", "name": "Waypoint 1", "type": "waypoint",
+         "position": {"x": 90.0, "y": 160.0, "z": 0.0}, "radius": 10, "charge_amount": 30.0},
+    ]
+    obstacles = [
+        {"id": "0f1e2d3c", "name": "Circle Obstacle 1", "type": "circle",
+         "position": {"x": 220.0, "y": 120.0, "z": 0.0}, "radius": 20, "height": 0.0},
+        {"id": "4b5a6978", "name": "Polygon Obstacle 1", "type": "polygon",
+         "position": {"x": 430.0, "y": 420.0, "z": 0.0}, "height": 0.0,
+         "vertices": [{"x": 410.0, "y": 400.0}, {"x": 450.0, "y": 400.0},
+                      {"x": 450.0, "y": 440.0}, {"x": 410.0, "y": 440.0}]},
+    ]
+    return {"id": "feedc0de", "name": "Reference Area Search", "description": "",
+            "status": "inactive", "task_type": "area_search", "canvas_width": 1024,
+            "canvas_height": 768, "drones": drones, "targets": targets,
+            "obstacles": obstacles,
+            "environment": {"name": "Env", "weather": "clear", "wind_speed": 2.5,
+                            "wind_direction": "east"},
+            "tasks": [], "history": {}}

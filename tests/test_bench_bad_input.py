@@ -12,9 +12,7 @@ from benchmark.episode import run_session
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
 from benchmark.session_file import SessionFileError, load_session, session_from_dict
-from tests.bench_fixtures import small_session, write_json
-
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "sessions"
+from tests.bench_fixtures import reference_session, small_session, write_json
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +30,7 @@ def test_corrupt_partial_and_foreign_files_name_the_file(tmp_path: Path, good: d
     with pytest.raises(SessionFileError, match=r"partial\.json: not valid JSON"):
         load_session(partial)
     with pytest.raises(SessionFileError, match=r"MultiUAV-Plat session.*mavswarm bench import"):
-        load_session(SHARED / "Example_Session_Area_Search.json")
+        load_session(write_json(tmp_path / "reference.json", reference_session()))
     missing = dict(good)
     del missing["drones"]
     with pytest.raises(SessionFileError, match="drones"):

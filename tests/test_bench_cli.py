@@ -9,10 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.bench_fixtures import small_session, write_json
+from tests.bench_fixtures import reference_session, small_session, write_json
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "sessions"
 
 
 def _mavswarm(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
@@ -50,10 +49,10 @@ def test_bad_arguments_say_what_is_wrong(tmp_path: Path) -> None:
 
 
 def test_import_command(tmp_path: Path) -> None:
-    result = _mavswarm("bench", "import", str(SHARED / "Example_Session_Target_Assignment.json"),
-                       "--out", str(tmp_path))
+    source = write_json(tmp_path / "ref.json", reference_session())
+    result = _mavswarm("bench", "import", str(source), "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
-    written = list(tmp_path.glob("*.json"))
+    written = list((tmp_path / "out").glob("*.json"))
     assert len(written) == 1
     data = json.loads(written[0].read_text())
-    assert data["schema"] == "mavswarm.session/1" and len(data["drones"]) == 30
+    assert data["schema"] == "mavswarm.session/1" and len(data["drones"]) == 4

@@ -9,8 +9,7 @@ import pytest
 
 from benchmark.importer import SessionImportError, import_session, import_session_file
 from benchmark.session_file import load_session
-
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "sessions"
+from tests.bench_fixtures import reference_session
 
 
 def _reference_task(drone: str, target: str) -> dict:
@@ -33,7 +32,7 @@ def _reference_task(drone: str, target: str) -> dict:
 
 @pytest.fixture
 def reference() -> dict:
-    data = json.loads((SHARED / "Example_Session_Area_Search.json").read_text())
+    data = reference_session()
     drone, target = data["drones"][0]["id"], data["targets"][0]["id"]
     bad = _reference_task(drone, target)
     bad["id"] = "deadbeef"
@@ -47,7 +46,7 @@ def test_import_keeps_tasks_and_checks(reference: dict, tmp_path: Path) -> None:
     src.write_text(json.dumps(reference))
     path, notes = import_session_file(src, tmp_path / "out")
     session = load_session(path)
-    assert len(session.scenario.vehicles) == 10 and session.level == "imported"
+    assert len(session.scenario.vehicles) == 4 and session.level == "imported"
     good, bad = session.tasks
     assert good.error is None and good.text == "Inspect the target."
     assert good.aliases == ("Look at the target.",) and good.oracle is None
