@@ -1,7 +1,8 @@
 """mavswarm's command line: `mavswarm up` (a swarm) and `mavswarm bench` (the benchmark).
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
-  mavswarm bench run --agent oracle|noop [--suite smoke|full | --sessions FILE ...]
+  mavswarm bench run --agent oracle|noop|react [--model M --base-url URL]
+                     [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--out DIR]
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
   mavswarm bench import FILE [FILE ...] --out DIR
@@ -37,7 +38,11 @@ def _build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--workers", type=int, default=1, help="parallel worker processes")
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
-    run.add_argument("--agent", choices=("oracle", "noop"), default="oracle")
+    run.add_argument("--agent", choices=("oracle", "noop", "react"), default="oracle")
+    run.add_argument("--model", default="", help="LLM agents: model name (or OPENAI_MODEL)")
+    run.add_argument("--base-url", default="",
+                     help="LLM agents: OpenAI-compatible base URL (or OPENAI_BASE_URL; the "
+                          "key comes from OPENAI_API_KEY)")
     group = run.add_mutually_exclusive_group()
     group.add_argument("--suite", choices=SUITES, default="smoke",
                        help="smoke: 3 easy sessions, 6 tasks each; full: 75 sessions, 1500 tasks")
@@ -80,7 +85,7 @@ def _run(args: argparse.Namespace) -> int:
         label = args.suite
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
-                   out_dir=out, task_limit=limit)
+                   out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url)
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s); results in {plan.results_path}")

@@ -25,7 +25,7 @@ from benchmark.session_file import Session, SessionFileError, load_session
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
 
-AGENTS = ("oracle", "noop")
+AGENTS = ("oracle", "noop", "react")
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,8 @@ class RunPlan:
     out_dir: Path = Path("runs/bench")
     task_limit: int | None = None  # only the first N tasks of each session (smoke runs)
     physics_hz: float = 50.0
+    model: str = ""  # LLM agents: model name and OpenAI-compatible base URL (else from the
+    base_url: str = ""  # environment: OPENAI_MODEL, OPENAI_BASE_URL; key: OPENAI_API_KEY)
 
     @property
     def results_path(self) -> Path:
@@ -51,10 +53,14 @@ class RunOutcome:
     wall_s: float = 0.0
 
 
-def make_agent(name: str, session: Session) -> Agent:
+def make_agent(name: str, session: Session, plan: RunPlan | None = None) -> Agent:
     """The named agent for one session."""
     if name == "noop":
         return NoopAgent()
+    if name == "react":
+        from llm_tools.agents import ModelConfig, ReactAgent
+        plan = plan or RunPlan(sessions=())
+        return ReactAgent(ModelConfig(base_url=plan.base_url, model=plan.model))
     if name == "oracle":
         from benchmark.oracle import OracleAgent
         plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
@@ -73,7 +79,7 @@ def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
     except SessionFileError as error:
         send(("error", str(error)))
         return
-    agent = make_agent(plan.agent, session)
+    agent = make_agent(plan.agent, session, plan)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz)
     try:
         asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
@@ -100,6 +106,9 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
     """Run the plan; returns what was written. Results go to plan.results_path."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
+    if plan.agent == "react":
+        from llm_tools.agents import ModelConfig
+        ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:
         raise ValueError("workers and trials must be >= 1")
     started = time.perf_counter()

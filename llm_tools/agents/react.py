@@ -1,0 +1,82 @@
+"""The ReAct baseline: the model sees the task and the tools, and alternates reasoning with
+tool calls, reading each result, until it calls `finish` or runs out of steps or tokens."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from benchmark.agents import AgentTask, AgentTools
+from llm_tools.agents.chat import ChatClient, ModelConfig
+from llm_tools.openai_adapter import openai_tools, parse_tool_calls
+from llm_tools.registry import ToolRegistry, default_registry
+
+__all__ = ["SYSTEM_PROMPT", "ReactAgent"]
+
+SYSTEM_PROMPT = """You command a swarm of real quadrotor drones through tools.
+Coordinates are local metres: x east, y north; z is altitude above home. Headings are compass
+degrees (0 north, 90 east). A drone must take off before it can move. Moves fly straight and
+stop before obstacles ("blocked"): then go around with intermediate points. You only know what
+the tools return: use nearby() to see what a drone senses. Think briefly, then call tools;
+several drones can act in the same turn. When every part of the task is done, call finish."""
+
+MAX_NUDGES = 2
+
+
+class ReactAgent:
+    """ReAct over OpenAI-compatible chat completions."""
+
+    name = "react"
+
+    def __init__(self, config: ModelConfig, *, registry: ToolRegistry | None = None,
+                 max_steps: int = 40, max_tokens: int = 400_000) -> None:
+        self.config = config
+        self.registry = registry or default_registry()
+        self.max_steps = max_steps
+        self.max_tokens = max_tokens
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        client = ChatClient(self.config)
+        try:
+            await self._loop(client, task, tools)
+        finally:
+            await client.close()
+
+    async def _loop(self, client: ChatClient, task: AgentTask, tools: AgentTools) -> None:
+        schema = openai_tools(self.registry)
+        messages: list[dict[str, Any]] = [
+            {"role": "system", "content": SYSTEM_PROMPT},
+            {"role": "user", "content": f"Task: {task.text}\nYour drones: "
+                                        f"{', '.join(tools.drone_ids)}."},
+        ]
+        nudges = 0
+        for _ in range(self.max_steps):
+            message, usage = await client.complete(messages, schema)
+            tools.add_tokens(usage["prompt"], usage["completion"])
+            messages.append(_assistant(message))
+            calls = parse_tool_calls(message)
+            if not calls:
+                if nudges >= MAX_NUDGES:
+                    break
+                nudges += 1
+                messages.append({"role": "user", "content": "Act with the tools; call finish "
+                                 "when the whole task is done."})
+                continue
+            for call in calls:
+                result = await self.registry.call(tools, call.name, call.arguments)
+                messages.append({"role": "tool", "tool_call_id": call.id,
+                                 "content": json.dumps(result, separators=(",", ":"))})
+            if tools.finished:
+                return
+            if tools.prompt_tokens + tools.completion_tokens >= self.max_tokens:
+                break
+        if not tools.finished:
+            tools.finish("stopped: step or token budget reached")
+
+
+def _assistant(message: dict[str, Any]) -> dict[str, Any]:
+    """The assistant message as it goes back into the conversation."""
+    out: dict[str, Any] = {"role": "assistant", "content": message.get("content") or ""}
+    if message.get("tool_calls"):
+        out["tool_calls"] = message["tool_calls"]
+    return out

@@ -1,0 +1,143 @@
+"""JSON Schemas from Python signatures, and argument validation against them.
+
+A tool is a typed function; its parameters (after the bound context) become a strict object
+schema (`additionalProperties: false`, every parameter without a default required), and the
+docstring's ``Args:`` section gives each property its description. Validation returns a list
+of readable problems rather than raising, so a model gets something it can act on.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+import types
+import typing
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+__all__ = ["describe", "schema_for", "validate"]
+
+_ARGS_LINE = re.compile(r"^\s+(\w+)(?:\s*\([^)]*\))?:\s*(.*)$")
+
+
+def describe(fn: Callable[..., Any]) -> tuple[str, dict[str, str]]:
+    """(summary, {parameter: description}) from a Google-style docstring."""
+    summary: list[str] = []
+    params: dict[str, str] = {}
+    section, current, indent = "summary", None, None
+    for line in (inspect.getdoc(fn) or "").splitlines():
+        stripped = line.strip()
+        if stripped in ("Args:", "Returns:", "Raises:"):
+            section, current = stripped[:-1], None
+            continue
+        if section == "summary":
+            summary.append(stripped)
+            continue
+        if section != "Args" or not stripped:
+            continue
+        depth = len(line) - len(line.lstrip())
+        match = _ARGS_LINE.match(line)
+        if match and (indent is None or depth == indent):
+            indent, current = depth, match.group(1)
+            params[current] = match.group(2).strip()
+        elif current is not None:
+            params[current] = f"{params[current]} {stripped}"
+    return " ".join(s for s in summary if s), params
+
+
+def _type_schema(annotation: Any) -> dict[str, Any]:
+    origin = typing.get_origin(annotation)
+    args = typing.get_args(annotation)
+    if annotation is str:
+        return {"type": "string"}
+    if annotation is bool:
+        return {"type": "boolean"}
+    if annotation is int:
+        return {"type": "integer"}
+    if annotation is float:
+        return {"type": "number"}
+    if origin is typing.Literal:
+        return {"type": "string", "enum": list(args)}
+    if origin in (list, Sequence, tuple) and args:
+        return {"type": "array", "items": _type_schema(args[0])}
+    if origin in (typing.Union, types.UnionType):
+        real = [a for a in args if a is not type(None)]
+        if len(real) == 1:
+            return _type_schema(real[0])
+    raise TypeError(f"no JSON Schema for annotation {annotation!r}")
+
+
+def schema_for(fn: Callable[..., Any], *, skip: int = 1) -> dict[str, Any]:
+    """The strict object schema of fn's parameters after the first `skip` (bound) ones."""
+    hints = typing.get_type_hints(fn)
+    _, docs = describe(fn)
+    properties: dict[str, Any] = {}
+    required: list[str] = []
+    for param in list(inspect.signature(fn).parameters.values())[skip:]:
+        prop = _type_schema(hints[param.name])
+        if param.name in docs:
+            prop["description"] = docs[param.name]
+        if param.default is inspect.Parameter.empty:
+            required.append(param.name)
+        else:
+            prop["default"] = param.default
+        properties[param.name] = prop
+    return {"type": "object", "properties": properties, "required": required,
+            "additionalProperties": False}
+
+
+def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str]) -> Any:
+    kind = schema.get("type")
+    if kind == "string":
+        if not isinstance(value, str):
+            problems.append(f"{where} must be a string, got {_show(value)}")
+        elif "enum" in schema and value not in schema["enum"]:
+            problems.append(f"{where} must be one of {schema['enum']}, got {value!r}")
+        return value
+    if kind == "boolean":
+        if not isinstance(value, bool):
+            problems.append(f"{where} must be true or false, got {_show(value)}")
+        return value
+    if kind in ("number", "integer"):
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            problems.append(f"{where} must be a number, got {_show(value)}")
+            return value
+        if not math.isfinite(value):
+            problems.append(f"{where} must be finite, got {value}")
+        if kind == "integer":
+            if float(value) != int(value):
+                problems.append(f"{where} must be a whole number, got {value}")
+            return int(value)
+        return float(value)
+    if kind == "array":
+        if not isinstance(value, list):
+            problems.append(f"{where} must be a list, got {_show(value)}")
+            return value
+        return [_check(v, schema["items"], f"{where}[{i}]", problems)
+                for i, v in enumerate(value)]
+    return value
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def validate(arguments: Any, schema: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """(coerced arguments, problems) for an object schema from `schema_for`."""
+    if arguments is None:
+        arguments = {}
+    if not isinstance(arguments, Mapping):
+        return {}, [f"arguments must be a JSON object, got {_show(arguments)}"]
+    problems: list[str] = []
+    props = schema["properties"]
+    extra = sorted(k for k in arguments if k not in props)
+    if extra:
+        problems.append(f"unknown argument(s) {', '.join(map(repr, extra))}; expected "
+                        f"{', '.join(props) or 'none'}")
+    missing = [k for k in schema["required"] if k not in arguments]
+    if missing:
+        problems.append(f"missing required argument(s) {', '.join(map(repr, missing))}")
+    values = {k: _check(v, props[k], k, problems) for k, v in arguments.items() if k in props}
+    return values, problems

@@ -1,0 +1,79 @@
+"""A scripted OpenAI-compatible chat-completions server on real HTTP, for agent tests.
+
+Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
+calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
+
+__all__ = ["ScriptedLLM", "call", "scripted_llm"]
+
+
+def call(name: str, arguments: Any, call_id: str | None = None) -> dict[str, Any]:
+    """A tool call; arguments given as a dict are JSON-encoded, a str is sent as is."""
+    args = arguments if isinstance(arguments, str) else json.dumps(arguments)
+    return {"id": call_id or f"call_{name}", "type": "function",
+            "function": {"name": name, "arguments": args}}
+
+
+class ScriptedLLM:
+    def __init__(self, replies: list[Any]) -> None:
+        self.replies = list(replies)
+        self.requests: list[dict[str, Any]] = []
+        self.base_url = ""
+
+    def next_reply(self, request: dict[str, Any]) -> tuple[int, str]:
+        self.requests.append(request)
+        if not self.replies:
+            message: Any = {"role": "assistant", "content": "",
+                            "tool_calls": [call("finish", {"summary": "script ended"})]}
+        else:
+            message = self.replies.pop(0)
+        if isinstance(message, tuple):  # (status, raw body)
+            return message
+        if isinstance(message, list):  # a bare list of tool calls
+            message = {"role": "assistant", "content": "", "tool_calls": message}
+        body = {"id": f"cmpl-{len(self.requests)}", "object": "chat.completion",
+                "choices": [{"index": 0, "message": message, "finish_reason": "stop"}],
+                "usage": {"prompt_tokens": 100, "completion_tokens": 20, "total_tokens": 120}}
+        return 200, json.dumps(body)
+
+
+@contextmanager
+def scripted_llm(replies: list[Any]) -> Iterator[ScriptedLLM]:
+    llm = ScriptedLLM(replies)
+
+    class Handler(BaseHTTPRequestHandler):
+        def do_POST(self) -> None:
+            length = int(self.headers.get("Content-Length", "0"))
+            request = json.loads(self.rfile.read(length) or b"{}")
+            if self.path != "/v1/chat/completions":
+                status, body = 404, '{"error": "not found"}'
+            else:
+                status, body = llm.next_reply(request)
+            data = body.encode()
+            self.send_response(status)
+            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Length", str(len(data)))
+            self.end_headers()
+            self.wfile.write(data)
+
+        def log_message(self, *args: Any) -> None:
+            pass
+
+    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    llm.base_url = f"http://127.0.0.1:{server.server_address[1]}/v1"
+    try:
+        yield llm
+    finally:
+        server.shutdown()
+        server.server_close()

@@ -1,0 +1,92 @@
+"""The ReAct agent on a scripted OpenAI-compatible server, flying a real task on a real swarm,
+through malformed model output to a pass."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from benchmark.episode import run_session
+from benchmark.session_file import session_from_dict
+from llm_tools import default_registry, openai_tools
+from llm_tools.agents import ModelConfig, ReactAgent
+from tests.bench_fixtures import small_session
+from tests.scripted_llm import call, scripted_llm
+
+
+def test_tool_definitions_are_strict() -> None:
+    tools = openai_tools(default_registry())
+    names = [t["function"]["name"] for t in tools]
+    assert len(names) == len(set(names)) == 19 and "finish" in names
+    for t in tools:
+        params = t["function"]["parameters"]
+        assert params["additionalProperties"] is False
+        assert all("description" in p for p in params["properties"].values()), t
+    move = next(t for t in tools if t["function"]["name"] == "move_to")["function"]
+    assert move["parameters"]["required"] == ["drone_id", "x", "y", "z"]
+    assert move["parameters"]["properties"]["x"]["type"] == "number"
+
+
+@pytest.mark.mavsdk
+async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
+    data = small_session(["takeoff_hold"])
+    op = data["tasks"][0]["oracle"][0][0]
+    drone, altitude = op["drone"], op["altitude_m"]
+    session = session_from_dict(data, source="s.json")
+    script = [
+        {"role": "assistant", "content": "Let me think without acting."},
+        [call("take_off", "{drone_id: oops", "c1")],  # malformed JSON
+        [call("take_off", {"drone_id": drone, "altitude_m": "high"}, "c2"),  # wrong type
+         call("teleport", {"drone_id": drone}, "c3"),  # unknown tool
+         call("take_off", {"drone_id": drone}, "c4")],  # missing argument
+        (500, "upstream hiccup"),  # the client retries
+        [call("take_off", {"drone_id": drone, "altitude_m": altitude, "speed": 3}, "c5")],
+        [call("take_off", {"drone_id": drone, "altitude_m": altitude}, "c6")],
+        [call("finish", {"summary": "hovering"}, "c7")],
+    ]
+    records: list[dict] = []
+    with scripted_llm(script) as llm:
+        agent = ReactAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
+        await run_session(session, agent, emit=records.append)
+    (record,) = records
+    assert record["passed"], record["checks"]
+    assert record["finish"] == "finished"
+    assert record["tokens"] == {"prompt": 600, "completion": 120}  # 6 answers, not the 500
+    # Every bad call was answered with an error the model could read, and changed nothing.
+    tool_msgs = [m for m in llm.requests[-1]["messages"] if m["role"] == "tool"]
+    by_id = {m["tool_call_id"]: json.loads(m["content"]) for m in tool_msgs}
+    assert "not valid JSON" in by_id["c1"]["message"]
+    assert "altitude_m must be a number" in by_id["c2"]["message"]
+    assert "unknown tool 'teleport'" in by_id["c3"]["message"]
+    assert "missing required argument(s) 'altitude_m'" in by_id["c4"]["message"]
+    assert "unknown argument(s) 'speed'" in by_id["c5"]["message"]
+    assert all(by_id[c]["status"] == "error" for c in ("c1", "c2", "c3", "c4", "c5"))
+    assert by_id["c6"]["status"] == "ok"
+    assert llm.requests[0]["tools"][0]["type"] == "function"
+    assert "Task: " in llm.requests[0]["messages"][1]["content"]
+
+
+@pytest.mark.mavsdk
+def test_bench_run_with_the_react_agent(tmp_path) -> None:
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from tests.bench_fixtures import write_json
+    data = small_session(["takeoff_hold"])
+    op = data["tasks"][0]["oracle"][0][0]
+    session = write_json(tmp_path / "s.json", data)
+    script = [[call("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]})],
+              [call("finish", {})]]
+    root = Path(__file__).resolve().parents[1]
+    with scripted_llm(script) as llm:
+        run = subprocess.run(
+            [sys.executable, "-m", "benchmark.cli", "bench", "run", "--agent", "react",
+             "--model", "scripted", "--base-url", llm.base_url, "--sessions", str(session),
+             "--out", str(tmp_path / "out")],
+            cwd=root, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    record = json.loads((tmp_path / "out" / "results.jsonl").read_text())
+    assert record["agent"] == "react" and record["passed"]
+    assert record["tokens"] == {"prompt": 200, "completion": 40}
