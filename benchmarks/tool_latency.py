@@ -16,11 +16,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmark.agents import AgentTask, AgentTools, TaskBudget  # noqa: E402
-from benchmark.episode import swarm_gateway  # noqa: E402
-from benchmark.session_file import session_from_dict  # noqa: E402
-from llm_tools import default_registry  # noqa: E402
-from tests.bench_fixtures import small_session  # noqa: E402
+from benchmark.agents import AgentTask, AgentTools, TaskBudget
+from benchmark.episode import swarm_gateway
+from benchmark.session_file import session_from_dict
+from llm_tools import default_registry
+from tests.bench_fixtures import small_session
 
 
 def _ms(samples: list[float]) -> str:
