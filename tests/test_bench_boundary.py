@@ -1,4 +1,10 @@
-"""Agent-side code never reaches validators, hidden task data or ground truth."""
+"""Agent-side code never reaches validators, hidden task data or ground truth.
+
+Agent side: the agent protocol and tools, the gateway, and llm_tools (registry, adapters,
+agents, MCP server). The REST server in `llm_tools.rest` is the platform itself, serving every
+role (admins read checks through it); its agent routes are tested for leaks instead
+(tests/test_llm_rest.py).
+"""
 
 from __future__ import annotations
 
@@ -20,10 +26,14 @@ def _is_hidden(module: str) -> bool:
     return any(module == h or module.startswith(h + ".") for h in HIDDEN)
 
 
+PLATFORM = ROOT / "llm_tools" / "rest"
+
+
 def _agent_side_files() -> list[Path]:
     files: list[Path] = []
     for package in AGENT_SIDE:
-        files.extend(sorted((ROOT / package.replace(".", "/")).rglob("*.py")))
+        files.extend(sorted(p for p in (ROOT / package.replace(".", "/")).rglob("*.py")
+                            if PLATFORM not in p.parents))
     return files
 
 
@@ -50,7 +60,8 @@ def test_importing_the_agent_side_loads_nothing_hidden() -> None:
     code = (
         "import json, sys\n"
         f"for m in {list(AGENT_SIDE)!r}: __import__(m)\n"
-        "import benchmark.agents.tools, benchmark.agents.noop\n"
+        "import benchmark.agents.tools, benchmark.agents.noop, llm_tools.agents\n"
+        "import llm_tools.mcp_server\n"
         "print(json.dumps(sorted(sys.modules)))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,

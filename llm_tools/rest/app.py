@@ -1,0 +1,144 @@
+"""The FastAPI application: session, drone, task, tool and perception routes under
+`/sessions/{id}`, admin-only check routes under `/check`, and MultiUAV-Plat compatible
+`/drones` routes. OpenAPI docs are served at /docs."""
+
+import json
+from typing import Annotated, Any
+
+from fastapi import Depends, FastAPI, HTTPException, Request
+from fastapi.responses import JSONResponse
+
+from benchmark.agents import BudgetExhausted
+from benchmark.validators import CheckContext, evaluate
+from llm_tools.registry import ToolRegistry, default_registry
+from llm_tools.rest.auth import live_session, require
+from llm_tools.rest.compat import add_compat_routes
+from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
+from llm_tools.rest.views import session_view, task_view
+
+__all__ = ["create_app", "drone_or_404"]
+
+ANY = (Role.AGENT, Role.OPERATOR, Role.ADMIN)
+ACTORS = (Role.AGENT, Role.ADMIN)
+
+
+def drone_or_404(live: LiveSession, drone: str) -> str:
+    """The drone id if the session has it, else HTTP 404 naming the session's drones."""
+    if drone not in live.gateway.drones:
+        raise HTTPException(404, f"unknown drone {drone!r} in session {live.id!r}; drones: "
+                            f"{', '.join(live.gateway.drones)}")
+    return drone
+
+
+def _drones(live: LiveSession, caller: Caller) -> dict[str, Any]:
+    if caller.role is Role.AGENT:  # the agent's reads are tool calls, counted in its budget
+        return live.tools.list_drones().to_dict()
+    states = live.gateway.list_drones()
+    return {"status": "ok", "message": f"{len(states)} drones",
+            "drones": [s.to_dict() for s in states]}
+
+
+async def _json_body(request: Request) -> Any:
+    """The request body as JSON, or its text when it is not valid JSON (the registry answers
+    that with an error a model can read); an empty body is no arguments."""
+    raw = await request.body()
+    if not raw.strip():
+        return None
+    text = raw.decode("utf-8", errors="replace")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
+    anyone, actor = require(hub, *ANY), require(hub, *ACTORS)
+    staff = require(hub, Role.OPERATOR, Role.ADMIN)
+
+    @app.get("/sessions", tags=["sessions"], summary="List live sessions (operator, admin)")
+    def list_sessions(caller: Annotated[Caller, Depends(staff)]) -> list[dict[str, Any]]:
+        return [session_view(live, caller.role) for live in hub.sessions.values()]
+
+    @app.get("/sessions/{session_id}", tags=["sessions"], summary="One session, per role")
+    def get_session(session_id: str, caller: Annotated[Caller, Depends(anyone)]) -> dict[str, Any]:
+        return session_view(live_session(hub, caller, session_id), caller.role)
+
+    @app.get("/sessions/{session_id}/drones", tags=["drones"], summary="The session's drones")
+    def get_drones(session_id: str, caller: Annotated[Caller, Depends(anyone)]) -> dict[str, Any]:
+        return _drones(live_session(hub, caller, session_id), caller)
+
+    @app.get("/sessions/{session_id}/drones/{drone_id}", tags=["drones"],
+             summary="One drone's state")
+    def get_drone(session_id: str, drone_id: str,
+                  caller: Annotated[Caller, Depends(anyone)]) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        drone = drone_or_404(live, drone_id)
+        if caller.role is Role.AGENT:
+            return live.tools.drone_state(drone).to_dict()
+        return live.gateway.drone_state(drone).to_dict()
+
+    @app.get("/sessions/{session_id}/nearby/{drone_id}", tags=["drones"],
+             summary="What a drone's sensor perceives now")
+    def get_nearby(session_id: str, drone_id: str,
+                   caller: Annotated[Caller, Depends(anyone)]) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        drone = drone_or_404(live, drone_id)
+        if caller.role is Role.AGENT:
+            return live.tools.nearby(drone).to_dict()
+        return live.gateway.nearby(drone).to_dict()
+
+    @app.get("/sessions/{session_id}/task", tags=["tasks"], summary="The current task")
+    def get_task(session_id: str, caller: Annotated[Caller, Depends(anyone)]) -> dict[str, Any]:
+        return task_view(live_session(hub, caller, session_id), caller.role)
+
+    @app.get("/sessions/{session_id}/tools", tags=["tools"],
+             summary="The agent tools with their argument schemas")
+    def list_tools(session_id: str, caller: Annotated[Caller, Depends(anyone)]
+                   ) -> list[dict[str, Any]]:
+        live_session(hub, caller, session_id)
+        return [{"name": s.name, "description": s.description, "input_schema": s.input_schema}
+                for s in registry.specs()]
+
+    @app.post("/sessions/{session_id}/tools/{name}", tags=["tools"],
+              summary="Call an agent tool (agent, admin); the body is its arguments object")
+    async def call_tool(session_id: str, name: str, request: Request,
+                        caller: Annotated[Caller, Depends(actor)]) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        if registry.get(name) is None:
+            raise HTTPException(404, f"unknown tool {name!r}; available tools: "
+                                f"{', '.join(s.name for s in registry.specs())}")
+        return await registry.call(live.tools, name, await _json_body(request))
+
+
+def _add_check_routes(app: FastAPI, hub: Hub) -> None:
+    admin = require(hub, Role.ADMIN)
+
+    @app.get("/check/sessions/{session_id}/task", tags=["checks"],
+             summary="Evaluate the current task's hidden checks now (admin)")
+    def check_task(session_id: str, caller: Annotated[Caller, Depends(admin)]) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        if live.task.checks is None:
+            raise HTTPException(409, f"task {live.task.id!r} has no valid checks: "
+                                f"{live.task.error}")
+        t1_s = live.services.clock_s()
+        result = evaluate(live.task.checks, CheckContext(
+            live.swarm.recorder, live.session.scenario, live.task_start_s, t1_s))
+        return {"task": live.task.id, "window_s": [live.task_start_s, t1_s],
+                **result.to_json()}
+
+
+def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
+    """The REST API over `hub`'s live sessions (keys in the X-API-Key header)."""
+    registry = registry or default_registry()
+    app = FastAPI(title="mavswarm agent API",
+                  description="Live benchmark sessions; roles agent, operator and admin by "
+                              "API key (X-API-Key header).")
+
+    @app.exception_handler(BudgetExhausted)
+    async def budget_spent(_: Request, error: BudgetExhausted) -> JSONResponse:
+        return JSONResponse({"detail": str(error), "reason": error.reason}, status_code=409)
+
+    _add_session_routes(app, hub, registry)
+    _add_check_routes(app, hub)
+    add_compat_routes(app, hub)
+    return app

@@ -1,0 +1,172 @@
+"""MultiUAV-Plat compatible agent routes: `GET /drones`, `GET /drones/{id}` and the direct
+commands `POST /drones/{id}/command/{name}` (scalar parameters as query parameters,
+`move_along_path` waypoints as a JSON body), answered in the reference command-response
+shape. An agent key acts on its own session; other roles name one with `?session=`."""
+
+import json
+import math
+import secrets
+import time
+from collections.abc import Awaitable, Callable, Mapping
+from typing import Annotated, Any
+
+from fastapi import Depends, FastAPI, HTTPException, Query, Request
+
+from benchmark.agents import AgentTools
+from llm_tools.rest.auth import live_session, require
+from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
+from mavlink_gateway import DroneState, Outcome, Status
+
+__all__ = ["COMMANDS", "add_compat_routes", "compat_drone"]
+
+_STATUS = {Status.OK: "success", Status.PARTIAL: "partial_success"}
+_FLIGHT = {"on_ground": "idle"}
+_REQUIRED = object()
+
+
+def compat_drone(state: DroneState) -> dict[str, Any]:
+    """A drone in the reference entity shape."""
+    return {"id": state.drone, "status": _FLIGHT.get(state.flight_state, state.flight_state),
+            "position": {"x": round(state.x_m, 2), "y": round(state.y_m, 2),
+                         "z": round(state.altitude_m, 2)},
+            "heading": round(state.heading_deg, 1), "battery_level": round(state.battery_pct, 2),
+            "home_position": {"x": round(state.home_x_m, 2), "y": round(state.home_y_m, 2)}}
+
+
+def _num(params: Mapping[str, Any], key: str, default: Any = _REQUIRED) -> float:
+    if key not in params or params[key] in (None, ""):
+        if default is _REQUIRED:
+            raise HTTPException(422, f"parameter {key!r} is required")
+        return float(default)
+    value = params[key]
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise HTTPException(422, f"parameter {key!r} must be a number, got {value!r}") from None
+    if isinstance(value, bool) or not math.isfinite(number):
+        raise HTTPException(422, f"parameter {key!r} must be a finite number, got {value!r}")
+    return number
+
+
+def _text(params: Mapping[str, Any], key: str) -> str:
+    value = params.get(key)
+    if not isinstance(value, str) or not value:
+        raise HTTPException(422, f"parameter {key!r} is required (a non-empty string)")
+    return value
+
+
+def _heading(p: Mapping[str, Any]) -> float:
+    if p.get("heading") not in (None, ""):
+        return _num(p, "heading")
+    if p.get("dx") not in (None, "") and p.get("dy") not in (None, ""):
+        dx, dy = _num(p, "dx"), _num(p, "dy")
+        if dx == 0.0 and dy == 0.0:
+            raise HTTPException(400, "dx and dy are both 0: no direction to move in")
+        return math.degrees(math.atan2(dx, dy)) % 360.0
+    if p.get("azimuth") not in (None, ""):
+        return _num(p, "azimuth")
+    raise HTTPException(400, "Direction must be specified using 'heading', 'dx/dy', or "
+                        "'azimuth'")
+
+
+def _waypoints(body: Any, state: DroneState) -> list[list[float]]:
+    raw = body.get("waypoints") if isinstance(body, Mapping) else body
+    if not isinstance(raw, list) or not raw:
+        raise HTTPException(422, "waypoints: expected a non-empty list of {x, y[, z]}")
+    points = []
+    for k, point in enumerate(raw):
+        if isinstance(point, Mapping) and isinstance(point.get("coordinates"), Mapping):
+            point = point["coordinates"]
+        if not isinstance(point, Mapping):
+            raise HTTPException(422, f"waypoints[{k}]: expected an object {{x, y[, z]}}, "
+                                f"got {point!r}")
+        points.append([_num(point, "x"), _num(point, "y"),
+                       _num(point, "z", state.altitude_m)])
+    return points
+
+
+Command = Callable[[AgentTools, str, Mapping[str, Any], Any, DroneState], Awaitable[Outcome]]
+
+
+async def _sync(outcome: Outcome) -> Outcome:
+    return outcome
+
+
+COMMANDS: dict[str, Command] = {
+    "take_off": lambda t, d, p, b, s: t.take_off(d, _num(p, "altitude", 10.0)),
+    "land": lambda t, d, p, b, s: t.land(d),
+    "move_to": lambda t, d, p, b, s: t.move_to(d, _num(p, "x", s.x_m), _num(p, "y", s.y_m),
+                                               _num(p, "z", s.altitude_m)),
+    "move_towards": lambda t, d, p, b, s: t.move_towards(d, _heading(p), _num(p, "distance"),
+                                                         _num(p, "dz", 0.0)),
+    "move_along_path": lambda t, d, p, b, s: t.move_along_path(d, _waypoints(b, s)),
+    "change_altitude": lambda t, d, p, b, s: t.change_altitude(d, _num(p, "altitude")),
+    "hover": lambda t, d, p, b, s: t.hover(d, _num(p, "duration", 1.0)),
+    "rotate": lambda t, d, p, b, s: t.rotate(d, _num(p, "heading")),
+    "return_home": lambda t, d, p, b, s: t.return_home(d),
+    "set_home": lambda t, d, p, b, s: t.set_home(d),
+    "take_photo": lambda t, d, p, b, s: t.take_photo(d),
+    "charge": lambda t, d, p, b, s: t.charge(d),
+    "send_message": lambda t, d, p, b, s: _sync(
+        t.send_message(d, _text(p, "target_drone_id"), _text(p, "message"))),
+    "broadcast": lambda t, d, p, b, s: _sync(t.broadcast(d, _text(p, "message"))),
+}
+
+
+def _resolve(hub: Hub, caller: Caller, session: str | None) -> LiveSession:
+    if caller.role is Role.AGENT:
+        assert caller.session_id is not None
+        return live_session(hub, caller, session or caller.session_id)
+    if session is None:
+        if len(hub.sessions) != 1:
+            raise HTTPException(400, "several sessions are live: name one with ?session=<id> "
+                                f"({', '.join(hub.sessions)})")
+        session = next(iter(hub.sessions))
+    return live_session(hub, caller, session)
+
+
+def _state(live: LiveSession, drone: str) -> DroneState:
+    outcome = live.gateway.drone_state(drone)
+    if outcome.state is None:
+        raise HTTPException(404, f"unknown drone {drone!r} in session {live.id!r}; drones: "
+                            f"{', '.join(live.gateway.drones)}")
+    return outcome.state
+
+
+def add_compat_routes(app: FastAPI, hub: Hub) -> None:
+    """Add the MultiUAV-Plat compatible /drones routes to `app`."""
+    anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
+    actor = require(hub, Role.AGENT, Role.ADMIN)
+    pick = Query(None, description="session id (operator and admin keys)")
+
+    @app.get("/drones", tags=["multiuav-plat"], summary="The session's drones")
+    def drones(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
+               ) -> list[dict[str, Any]]:
+        live = _resolve(hub, caller, session)
+        return [compat_drone(s) for s in live.gateway.list_drones()]
+
+    @app.get("/drones/{drone_id}", tags=["multiuav-plat"], summary="One drone")
+    def drone(drone_id: str, caller: Annotated[Caller, Depends(anyone)],
+              session: str | None = pick) -> dict[str, Any]:
+        return compat_drone(_state(_resolve(hub, caller, session), drone_id))
+
+    @app.post("/drones/{drone_id}/command/{name}", tags=["multiuav-plat"],
+              summary="A direct command; scalar parameters as query parameters")
+    async def command(drone_id: str, name: str, request: Request,
+                      caller: Annotated[Caller, Depends(actor)], session: str | None = pick
+                      ) -> dict[str, Any]:
+        live = _resolve(hub, caller, session)
+        run = COMMANDS.get(name)
+        if run is None:
+            raise HTTPException(404, f"unknown command {name!r}; commands: "
+                                f"{', '.join(COMMANDS)}")
+        state = _state(live, drone_id)
+        raw = (await request.body()).strip()
+        try:
+            body = json.loads(raw) if raw else None
+        except ValueError:
+            raise HTTPException(422, f"{name}: the body is not valid JSON") from None
+        outcome = await run(live.tools, drone_id, dict(request.query_params), body, state)
+        return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
+                "status": _STATUS.get(outcome.status, "error"), "message": outcome.message,
+                "timestamp": time.time()}

@@ -1,0 +1,86 @@
+"""What the REST API serves: live sessions, and the API keys that may reach them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+from benchmark.agents import AgentTools
+from benchmark.session_file import Session, TaskSpec
+from emulator.services import SwarmServices
+from emulator.swarm import Swarm
+from mavlink_gateway import Gateway
+
+__all__ = ["Caller", "Hub", "LiveSession", "Role"]
+
+
+class Role(StrEnum):
+    AGENT = "agent"  # its own session's drones, their perception, its task text
+    OPERATOR = "operator"  # every session's live views, no hidden checks
+    ADMIN = "admin"  # everything, including hidden checks
+
+
+@dataclass(frozen=True)
+class Caller:
+    """Who made a request: the role of the key, and for an agent the session it is bound to."""
+
+    role: Role
+    session_id: str | None = None
+
+
+@dataclass
+class LiveSession:
+    """One running session: its swarm and gateway, the current task and the agent's tools.
+
+    `task_start_s` is the simulated time the current task began (the start of the window the
+    hidden checks look at).
+    """
+
+    session: Session
+    task: TaskSpec
+    swarm: Swarm
+    services: SwarmServices
+    gateway: Gateway
+    tools: AgentTools
+    task_start_s: float
+
+    @property
+    def id(self) -> str:
+        return self.session.id
+
+
+class Hub:
+    """Live sessions by id and API keys by value."""
+
+    def __init__(self) -> None:
+        self.sessions: dict[str, LiveSession] = {}
+        self._keys: dict[str, Caller] = {}
+
+    def add_session(self, live: LiveSession) -> None:
+        if live.id in self.sessions:
+            raise ValueError(f"session id {live.id!r} is already in the hub")
+        self.sessions[live.id] = live
+
+    def add_key(self, key: str, role: Role | str, session_id: str | None = None) -> None:
+        """Register an API key. An agent key must name a session in the hub; other roles
+        must not name one."""
+        if not isinstance(key, str) or not key.strip():
+            raise ValueError(f"key: expected a non-empty string, got {key!r}")
+        try:
+            role = Role(role)
+        except ValueError:
+            raise ValueError(f"role: expected one of {[r.value for r in Role]}, "
+                             f"got {role!r}") from None
+        if role is Role.AGENT:
+            if session_id not in self.sessions:
+                raise ValueError(f"session_id: an agent key needs a session of the hub "
+                                 f"({', '.join(self.sessions) or 'none'}), got {session_id!r}")
+        elif session_id is not None:
+            raise ValueError(f"session_id: only agent keys are bound to a session, got "
+                             f"{session_id!r} for role {role.value!r}")
+        if key in self._keys:
+            raise ValueError("key: this API key is already registered")
+        self._keys[key] = Caller(role, session_id)
+
+    def caller(self, key: str) -> Caller | None:
+        return self._keys.get(key)
