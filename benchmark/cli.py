@@ -1,11 +1,13 @@
 """mavswarm's command line: `mavswarm up` (a swarm) and `mavswarm bench` (the benchmark).
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
-  mavswarm bench run --agent oracle|noop|react [--model M --base-url URL]
+  mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
                      [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--out DIR]
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
   mavswarm bench import FILE [FILE ...] --out DIR
+  mavswarm serve (--sessions FILE ... | --suite smoke|full) [--port P] [--key ROLE[:SESSION]=KEY]
+  mavswarm mcp FILE [--transport stdio|http] [--port P]
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from benchmark.orchestrator import AGENTS
 from benchmark.suite import SUITES, suite_paths
 from emulator.cli import add_up_parser, run_up
 
@@ -26,6 +29,9 @@ def _build_parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     add_up_parser(sub)
+    from llm_tools.serve import add_mcp_arguments, add_serve_arguments
+    add_serve_arguments(sub.add_parser("serve", help="serve live sessions over the REST API"))
+    add_mcp_arguments(sub.add_parser("mcp", help="serve one session's agent tools over MCP"))
     bench = sub.add_parser("bench", help="generate, run and report the benchmark")
     bsub = bench.add_subparsers(dest="bench_command", required=True)
 
@@ -38,7 +44,7 @@ def _build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--workers", type=int, default=1, help="parallel worker processes")
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
-    run.add_argument("--agent", choices=("oracle", "noop", "react"), default="oracle")
+    run.add_argument("--agent", choices=AGENTS, default="oracle")
     run.add_argument("--model", default="", help="LLM agents: model name (or OPENAI_MODEL)")
     run.add_argument("--base-url", default="",
                      help="LLM agents: OpenAI-compatible base URL (or OPENAI_BASE_URL; the "
@@ -129,6 +135,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return run_up(args)
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
+    if args.command in ("serve", "mcp"):
+        from llm_tools.serve import run_mcp, run_serve
+        try:
+            return (run_serve if args.command == "serve" else run_mcp)(args)
+        except (SessionFileError, ValueError, OSError) as error:
+            print(f"mavswarm: {error}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            return 130
     handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import}
     try:
         return handlers[args.bench_command](args)

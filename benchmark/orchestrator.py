@@ -25,7 +25,8 @@ from benchmark.session_file import Session, SessionFileError, load_session
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
 
-AGENTS = ("oracle", "noop", "react")
+AGENTS = ("oracle", "noop", "react", "workflow")
+LLM_AGENTS = ("react", "workflow")
 
 
 @dataclass(frozen=True)
@@ -57,10 +58,11 @@ def make_agent(name: str, session: Session, plan: RunPlan | None = None) -> Agen
     """The named agent for one session."""
     if name == "noop":
         return NoopAgent()
-    if name == "react":
-        from llm_tools.agents import ModelConfig, ReactAgent
+    if name in LLM_AGENTS:
+        from llm_tools.agents import ModelConfig, ReactAgent, WorkflowAgent
         plan = plan or RunPlan(sessions=())
-        return ReactAgent(ModelConfig(base_url=plan.base_url, model=plan.model))
+        config = ModelConfig(base_url=plan.base_url, model=plan.model)
+        return ReactAgent(config) if name == "react" else WorkflowAgent(config)
     if name == "oracle":
         from benchmark.oracle import OracleAgent
         plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
@@ -106,7 +108,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
     """Run the plan; returns what was written. Results go to plan.results_path."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
-    if plan.agent == "react":
+    if plan.agent in LLM_AGENTS:
         from llm_tools.agents import ModelConfig
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:

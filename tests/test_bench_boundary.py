@@ -1,9 +1,9 @@
 """Agent-side code never reaches validators, hidden task data or ground truth.
 
 Agent side: the agent protocol and tools, the gateway, and llm_tools (registry, adapters,
-agents, MCP server). The REST server in `llm_tools.rest` is the platform itself, serving every
-role (admins read checks through it); its agent routes are tested for leaks instead
-(tests/test_llm_rest.py).
+agents, MCP server). The REST server in `llm_tools.rest` and the launcher `llm_tools.serve`
+are the platform itself, serving every role (admins read checks through it) and starting
+swarms; their agent routes are tested for leaks instead (tests/test_llm_rest.py).
 """
 
 from __future__ import annotations
@@ -26,14 +26,14 @@ def _is_hidden(module: str) -> bool:
     return any(module == h or module.startswith(h + ".") for h in HIDDEN)
 
 
-PLATFORM = ROOT / "llm_tools" / "rest"
+PLATFORM = (ROOT / "llm_tools" / "rest", ROOT / "llm_tools" / "serve.py")
 
 
 def _agent_side_files() -> list[Path]:
     files: list[Path] = []
     for package in AGENT_SIDE:
         files.extend(sorted(p for p in (ROOT / package.replace(".", "/")).rglob("*.py")
-                            if PLATFORM not in p.parents))
+                            if p not in PLATFORM and not set(PLATFORM) & set(p.parents)))
     return files
 
 

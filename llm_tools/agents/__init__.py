@@ -2,5 +2,6 @@
 
 from llm_tools.agents.chat import ChatClient, ModelConfig, ModelError
 from llm_tools.agents.react import ReactAgent
+from llm_tools.agents.workflow import WorkflowAgent
 
-__all__ = ["ChatClient", "ModelConfig", "ModelError", "ReactAgent"]
+__all__ = ["ChatClient", "ModelConfig", "ModelError", "ReactAgent", "WorkflowAgent"]

@@ -55,8 +55,10 @@ class ChatClient:
     async def complete(self, messages: Sequence[Mapping[str, Any]],
                        tools: Sequence[Mapping[str, Any]]
                        ) -> tuple[dict[str, Any], dict[str, int]]:
-        body = {"model": self.config.model, "messages": list(messages), "tools": list(tools),
-                "temperature": self.config.temperature}
+        body: dict[str, Any] = {"model": self.config.model, "messages": list(messages),
+                                "temperature": self.config.temperature}
+        if tools:
+            body["tools"] = list(tools)
         problem = "no attempt"
         for attempt in range(self.config.retries + 1):
             if attempt:

@@ -1,0 +1,292 @@
+"""Serving live sessions to outside agents: the REST API (`serve_rest`) over one or more
+sessions, and one session's tools over MCP (`serve_mcp`, stdio or Streamable HTTP).
+
+Each session gets a stepped swarm and a gateway; its current task is its first task, and the
+agent acts through an `AgentTools` bound to that task's budget. Both servers run until their
+asyncio task is cancelled (or, under uvicorn, until SIGINT/SIGTERM).
+
+API keys are given as `role[:session]=key` (role agent, operator or admin; only an agent key
+names a session, and may leave it out when one session is served). With no keys given, one
+agent key per session plus an operator and an admin key are generated and printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import secrets
+import sys
+from collections.abc import AsyncIterator, Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal, TextIO
+
+import uvicorn
+
+from benchmark.agents import AgentTask, AgentTools
+from benchmark.episode import swarm_gateway
+from benchmark.session_file import Session, TaskSpec, load_session
+from llm_tools.mcp_server import serve_stdio, streamable_http_app
+from llm_tools.registry import default_registry
+from llm_tools.rest import Hub, LiveSession, Role, create_app
+from mavlink_gateway import Gateway
+
+__all__ = [
+    "ApiKey",
+    "add_mcp_arguments",
+    "add_serve_arguments",
+    "current_task_tools",
+    "generated_keys",
+    "live_hub",
+    "main_mcp",
+    "main_serve",
+    "parse_api_key",
+    "run_mcp",
+    "run_serve",
+    "serve_asgi",
+    "serve_mcp",
+    "serve_rest",
+]
+
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_REST_PORT = 8000
+DEFAULT_MCP_PORT = 8765
+MCP_PATH = "/mcp"
+Transport = Literal["stdio", "http"]
+TRANSPORTS: tuple[Transport, ...] = ("stdio", "http")
+
+
+@dataclass(frozen=True)
+class ApiKey:
+    """One API key: its role and, for an agent key, the session it is bound to (None: the
+    only session served)."""
+
+    role: Role
+    key: str
+    session_id: str | None = None
+
+    def spec(self) -> str:
+        """The key in the `role[:session]=key` form `parse_api_key` reads."""
+        where = f":{self.session_id}" if self.session_id else ""
+        return f"{self.role.value}{where}={self.key}"
+
+
+def parse_api_key(text: str) -> ApiKey:
+    """Read `role[:session]=key`, e.g. `agent:area_search-easy-1=s3cret` or `admin=root`."""
+    if not isinstance(text, str) or "=" not in text:
+        raise ValueError(f"api key: expected 'role[:session]=key', got {text!r}")
+    head, key = text.split("=", 1)
+    role_text, _, session_id = head.partition(":")
+    try:
+        role = Role(role_text.strip())
+    except ValueError:
+        raise ValueError(f"api key {text!r}: role must be one of "
+                         f"{[r.value for r in Role]}, got {role_text!r}") from None
+    if not key.strip():
+        raise ValueError(f"api key {text!r}: the key after '=' is empty")
+    if ":" in head and not session_id.strip():
+        raise ValueError(f"api key {text!r}: the session after ':' is empty")
+    if session_id and role is not Role.AGENT:
+        raise ValueError(f"api key {text!r}: only agent keys name a session, not role "
+                         f"{role.value!r}")
+    return ApiKey(role, key.strip(), session_id.strip() or None)
+
+
+def generated_keys(session_ids: Sequence[str]) -> list[ApiKey]:
+    """Fresh random keys: one agent key per session, one operator key, one admin key."""
+    keys = [ApiKey(Role.AGENT, secrets.token_urlsafe(18), sid) for sid in session_ids]
+    keys.append(ApiKey(Role.OPERATOR, secrets.token_urlsafe(18)))
+    keys.append(ApiKey(Role.ADMIN, secrets.token_urlsafe(18)))
+    return keys
+
+
+def _add_keys(hub: Hub, keys: Sequence[ApiKey]) -> None:
+    for key in keys:
+        session_id = key.session_id
+        if key.role is Role.AGENT and session_id is None:
+            if len(hub.sessions) != 1:
+                raise ValueError(f"api key {key.role.value}=...: an agent key must name its "
+                                 f"session when several are served "
+                                 f"({', '.join(hub.sessions)})")
+            session_id = next(iter(hub.sessions))
+        try:
+            hub.add_key(key.key, key.role, session_id)
+        except ValueError as error:
+            raise ValueError(f"api key for role {key.role.value!r}: {error}") from None
+
+
+def _first_task(session: Session) -> TaskSpec:
+    """The session's current task (its first), or ValueError when it has none usable."""
+    if not session.tasks:
+        raise ValueError(f"{session.source}: tasks: the session has no task to serve")
+    task = session.tasks[0]
+    if task.budget is None:
+        raise ValueError(f"{session.source}: task {task.id!r} is not usable: {task.error}")
+    return task
+
+
+def current_task_tools(session: Session, gateway: Gateway) -> AgentTools:
+    """The agent's tools for the session's current (first) task, under its budget."""
+    task = _first_task(session)
+    assert task.budget is not None
+    return AgentTools(gateway, AgentTask(session.id, task.id, task.text, task.budget))
+
+
+@contextlib.asynccontextmanager
+async def live_hub(session_paths: Sequence[str | Path],
+                   physics_hz: float = 50.0) -> AsyncIterator[Hub]:
+    """A Hub with one live session per file (a stepped swarm and gateway each), closed on
+    exit. Session ids must be distinct."""
+    if not session_paths:
+        raise ValueError("session_paths: expected at least one session file, got none")
+    sessions = [load_session(path) for path in session_paths]
+    seen: dict[str, str] = {}
+    for session in sessions:
+        if session.id in seen:
+            raise ValueError(f"session id {session.id!r} is in both {seen[session.id]} and "
+                             f"{session.source}")
+        seen[session.id] = session.source
+        _first_task(session)
+    hub = Hub()
+    async with contextlib.AsyncExitStack() as stack:
+        for session in sessions:
+            swarm, services, gateway = await stack.enter_async_context(
+                swarm_gateway(session, physics_hz))
+            tools = current_task_tools(session, gateway)
+            hub.add_session(LiveSession(session, session.tasks[0], swarm, services, gateway,
+                                        tools, services.clock_s()))
+        yield hub
+
+
+async def serve_asgi(app: Any, *, host: str, port: int,
+                     on_ready: Callable[[str], None] | None = None) -> None:
+    """Run `app` under uvicorn until this task is cancelled or the server is told to stop
+    by a signal; `on_ready(base_url)` is called once it listens (port 0 picks a free one)."""
+    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level="warning",
+                                           lifespan="on"))
+    task = asyncio.create_task(server.serve())
+    try:
+        while not server.started:
+            if task.done():
+                task.result()
+                raise RuntimeError(f"uvicorn did not start on {host}:{port}")
+            await asyncio.sleep(0.01)
+        bound = server.servers[0].sockets[0].getsockname()
+        if on_ready is not None:
+            on_ready(f"http://{host}:{bound[1]}")
+        await asyncio.shield(task)
+    except asyncio.CancelledError:
+        server.should_exit = True
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+        raise
+
+
+async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT_HOST,
+                     port: int = DEFAULT_REST_PORT, keys: Sequence[str | ApiKey] = (),
+                     on_ready: Callable[[str], None] | None = None,
+                     out: TextIO | None = None) -> None:
+    """Serve the REST API over live sessions from `session_paths` until cancelled. `keys` are
+    `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
+    `out` (stdout by default) with the URL."""
+    parsed = [k if isinstance(k, ApiKey) else parse_api_key(k) for k in keys]
+    out = out or sys.stdout
+    async with live_hub(session_paths) as hub:
+        if not parsed:
+            parsed = generated_keys(list(hub.sessions))
+            print("generated API keys (send one in the X-API-Key header):", file=out)
+            for key in parsed:
+                print(f"  {key.spec()}", file=out)
+        _add_keys(hub, parsed)
+        app = create_app(hub)
+
+        def ready(url: str) -> None:
+            print(f"mavswarm REST API on {url} (docs at {url}/docs); sessions: "
+                  f"{', '.join(hub.sessions)}", file=out, flush=True)
+            if on_ready is not None:
+                on_ready(url)
+
+        await serve_asgi(app, host=host, port=port, on_ready=ready)
+
+
+async def serve_mcp(session_path: str | Path, *, transport: Transport = "stdio",
+                    host: str = DEFAULT_HOST, port: int = DEFAULT_MCP_PORT,
+                    on_ready: Callable[[str], None] | None = None) -> None:
+    """Serve one live session's agent tools over MCP until cancelled (stdio: until the client
+    disconnects). Over HTTP the endpoint is `http://host:port/mcp`; nothing is printed to
+    stdout (stdio carries the protocol), the URL goes to stderr."""
+    if transport not in TRANSPORTS:
+        raise ValueError(f"transport: expected one of {TRANSPORTS}, got {transport!r}")
+    registry = default_registry()
+    async with live_hub([session_path]) as hub:
+        (live,) = hub.sessions.values()
+        tools = live.tools
+        if transport == "stdio":
+            await serve_stdio(registry, lambda: tools)
+            return
+        app = streamable_http_app(registry, lambda: tools, path=MCP_PATH, host=host)
+
+        def ready(url: str) -> None:
+            print(f"mavswarm MCP server for session {live.id!r} on {url}{MCP_PATH}",
+                  file=sys.stderr, flush=True)
+            if on_ready is not None:
+                on_ready(f"{url}{MCP_PATH}")
+
+        await serve_asgi(app, host=host, port=port, on_ready=ready)
+
+
+def _sessions(args: argparse.Namespace) -> list[Path]:
+    if args.sessions:
+        return list(args.sessions)
+    from benchmark.suite import suite_paths
+    paths, _ = suite_paths(args.suite)
+    return list(paths)
+
+
+def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of `mavswarm serve`."""
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
+                       help="session files to serve")
+    group.add_argument("--suite", choices=("smoke", "full"), help="serve a suite's sessions")
+    parser.add_argument("--host", default=DEFAULT_HOST, help="address to listen on")
+    parser.add_argument("--port", type=int, default=DEFAULT_REST_PORT, help="TCP port")
+    parser.add_argument("--key", dest="keys", action="append", default=[],
+                        metavar="ROLE[:SESSION]=KEY",
+                        help="an API key (repeatable); none: generate and print keys")
+
+
+def add_mcp_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of `mavswarm mcp`."""
+    parser.add_argument("session", type=Path, help="the session file to serve")
+    parser.add_argument("--transport", choices=TRANSPORTS, default="stdio")
+    parser.add_argument("--host", default=DEFAULT_HOST, help="http: address to listen on")
+    parser.add_argument("--port", type=int, default=DEFAULT_MCP_PORT, help="http: TCP port")
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    """Run `mavswarm serve` with parsed options until interrupted."""
+    asyncio.run(serve_rest(_sessions(args), host=args.host, port=args.port, keys=args.keys))
+    return 0
+
+
+def run_mcp(args: argparse.Namespace) -> int:
+    """Run `mavswarm mcp` with parsed options until interrupted or the client leaves."""
+    asyncio.run(serve_mcp(args.session, transport=args.transport, host=args.host,
+                          port=args.port))
+    return 0
+
+
+def main_serve(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="mavswarm serve",
+                                     description="Serve live sessions over the REST API.")
+    add_serve_arguments(parser)
+    return run_serve(parser.parse_args(argv))
+
+
+def main_mcp(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="mavswarm mcp",
+                                     description="Serve one session's tools over MCP.")
+    add_mcp_arguments(parser)
+    return run_mcp(parser.parse_args(argv))
