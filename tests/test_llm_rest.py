@@ -38,6 +38,10 @@ ROUTES: list[tuple[str, str, dict[str, int]]] = [
     ("GET", "/drones", ALL_OK),
     ("GET", "/drones/{d}", ALL_OK),
     ("POST", "/drones/{d}/command/rotate?heading=90", ACTORS),
+    ("GET", "/drones/{d}/nearby", ALL_OK),
+    ("GET", "/drones/{d}/nearby/targets", ALL_OK),
+    ("GET", "/drones/{d}/nearby/clouds", {"agent": 404, "operator": 404, "admin": 404}),
+    ("GET", "/sessions/current/tasks/next", ALL_OK),
     ("GET", "/sessions/nope", {"agent": 403, "operator": 404, "admin": 404}),
     ("GET", "/sessions/{s}/drones/nope", {"agent": 404, "operator": 404, "admin": 404}),
     ("POST", "/sessions/{s}/tools/teleport", {"agent": 404, "operator": 403, "admin": 404}),
@@ -180,9 +184,14 @@ async def test_no_agent_response_reveals_hidden_data() -> None:
                 path = template.format(s=sid, d=drone["id"])
                 r = await client.request(method, path, headers=_as("agent"))
                 texts.append(r.text)
-                if "/nearby/" in path and r.status_code == 200:
+                if "/nearby" in path and r.status_code == 200:
                     seen = r.json()
-                    perceived |= {e["id"] for k in ("targets", "obstacles") for e in seen[k]}
+                    if isinstance(seen, list):  # /drones/{d}/nearby/<kind>
+                        perceived |= {e["id"] for e in seen if e.get("kind") != "drone"}
+                        continue
+                    payload = seen.get("data", seen)
+                    perceived |= {e["id"] for k in ("targets", "obstacles")
+                                  for e in payload.get(k, [])}
         hidden = {e["id"] for k in ("targets", "obstacles") for e in data[k]} - perceived
         assert hidden, "the scenario should have entities outside every drone's perception"
         everything = "\n".join(texts)

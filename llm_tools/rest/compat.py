@@ -170,3 +170,31 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
         return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
                 "status": _STATUS.get(outcome.status, "error"), "message": outcome.message,
                 "timestamp": time.time()}
+
+    def _nearby(live: LiveSession, caller: Caller, drone_id: str) -> dict[str, Any]:
+        _state(live, drone_id)
+        source = live.tools if caller.role is Role.AGENT else live.gateway
+        outcome = source.nearby(drone_id)
+        data = outcome.data or {}
+        return {kind: data.get(kind, []) for kind in ("drones", "targets", "obstacles")}
+
+    @app.get("/drones/{drone_id}/nearby", tags=["multiuav-plat"],
+             summary="What the drone senses: {drones, targets, obstacles}")
+    def nearby(drone_id: str, caller: Annotated[Caller, Depends(anyone)],
+               session: str | None = pick) -> dict[str, Any]:
+        return _nearby(_resolve(hub, caller, session), caller, drone_id)
+
+    @app.get("/drones/{drone_id}/nearby/{kind}", tags=["multiuav-plat"],
+             summary="One kind of what the drone senses: drones, targets or obstacles")
+    def nearby_kind(drone_id: str, kind: str, caller: Annotated[Caller, Depends(anyone)],
+                    session: str | None = pick) -> list[dict[str, Any]]:
+        if kind not in ("drones", "targets", "obstacles"):
+            raise HTTPException(404, f"unknown kind {kind!r}; use drones, targets or obstacles")
+        return _nearby(_resolve(hub, caller, session), caller, drone_id)[kind]
+
+    @app.get("/sessions/current/tasks/next", tags=["multiuav-plat"],
+             summary="The task to do now (its text only)")
+    def next_task(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
+                  ) -> dict[str, Any]:
+        live = _resolve(hub, caller, session)
+        return {"id": live.task.id, "content": live.task.text}

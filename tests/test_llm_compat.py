@@ -1,0 +1,53 @@
+"""A client written against MultiUAV-Plat's agent routes flies a task on a real MAVLink swarm
+through the compatibility layer, and the hidden checks (admin only) pass."""
+
+from __future__ import annotations
+
+import httpx
+import pytest
+
+from tests.test_llm_rest import KEYS, served
+
+pytestmark = pytest.mark.mavsdk
+
+
+class PlatClient:
+    """What an agent written for MultiUAV-Plat does: read the task, its drones, command them."""
+
+    def __init__(self, http: httpx.AsyncClient, key: str) -> None:
+        self.http = http
+        self.headers = {"X-API-Key": key}
+
+    async def get(self, path: str) -> object:
+        response = await self.http.get(path, headers=self.headers)
+        response.raise_for_status()
+        return response.json()
+
+    async def command(self, drone: str, name: str, **params: object) -> dict:
+        response = await self.http.post(f"/drones/{drone}/command/{name}", params=params,
+                                        headers=self.headers)
+        response.raise_for_status()
+        return response.json()
+
+
+async def test_a_reference_style_client_flies_a_task_to_a_pass() -> None:
+    async with served() as (http, hub, data):
+        agent = PlatClient(http, KEYS["agent"])
+        task = await agent.get("/sessions/current/tasks/next")
+        assert task["content"] == data["tasks"][0]["text"] and set(task) == {"id", "content"}
+        drones = await agent.get("/drones")
+        assert {d["id"] for d in drones} == {d["id"] for d in data["drones"]}  # type: ignore[union-attr]
+        op = data["tasks"][0]["oracle"][0][0]  # the test knows the answer; the client does not
+        result = await agent.command(op["drone"], "take_off", altitude=op["altitude_m"])
+        assert result["status"] == "success", result
+        seen = await agent.get(f"/drones/{op['drone']}/nearby")
+        assert set(seen) == {"drones", "targets", "obstacles"}  # type: ignore[arg-type]
+        state = await agent.get(f"/drones/{op['drone']}")
+        assert abs(state["position"]["z"] - op["altitude_m"]) < 1.0  # type: ignore[index]
+        # The agent cannot run the checks; the admin can, and the task passed.
+        (sid,) = hub.sessions
+        denied = await http.get(f"/check/sessions/{sid}/task", headers=agent.headers)
+        assert denied.status_code == 403
+        verdict = await http.get(f"/check/sessions/{sid}/task",
+                                 headers={"X-API-Key": KEYS["admin"]})
+        assert verdict.status_code == 200 and verdict.json()["passed"] is True, verdict.json()
