@@ -49,6 +49,10 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("--base-url", default="",
                      help="LLM agents: OpenAI-compatible base URL (or OPENAI_BASE_URL; the "
                           "key comes from OPENAI_API_KEY)")
+    run.add_argument("--price-in", type=float, default=0.0, metavar="USD",
+                     help="LLM agents: price per million prompt tokens, for the cost per task")
+    run.add_argument("--price-out", type=float, default=0.0, metavar="USD",
+                     help="LLM agents: price per million completion tokens")
     group = run.add_mutually_exclusive_group()
     group.add_argument("--suite", choices=SUITES, default="smoke",
                        help="smoke: 3 easy sessions, 6 tasks each; full: 75 sessions, 1500 tasks")
@@ -91,7 +95,8 @@ def _run(args: argparse.Namespace) -> int:
         label = args.suite
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
-                   out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url)
+                   out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
+                   price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out)
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s); results in {plan.results_path}")

@@ -209,7 +209,8 @@ async def _run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm
     leaves = [leaf.to_json() for leaf in result.leaves]
     tokens = None
     if tools.prompt_tokens or tools.completion_tokens:
-        tokens = {"prompt": tools.prompt_tokens, "completion": tools.completion_tokens}
+        tokens = {"prompt": tools.prompt_tokens, "completion": tools.completion_tokens,
+                  "cost_usd": round(tools.cost_usd, 6)}
     return {**_base_record(session, task, agent.name, options.trial),
             "passed": result.passed, "checks": leaves,
             "checks_total": leaf_count(task.checks),

@@ -285,6 +285,7 @@ def pass_hat_k(records: Iterable[Record], k: int) -> float | None:
 
 def _token_totals(records: list[Record]) -> dict[str, int]:
     prompt = completion = counted = 0
+    cost_usd = 0.0
     for record in records:
         tokens = record.get("tokens")
         if tokens is None:
@@ -295,8 +296,11 @@ def _token_totals(records: list[Record]) -> dict[str, int]:
             )
         prompt += _int_field(tokens, "prompt")
         completion += _int_field(tokens, "completion")
+        cost = tokens.get("cost_usd", 0.0)
+        cost_usd += float(cost) if isinstance(cost, int | float) else 0.0
         counted += 1
-    return {"prompt": prompt, "completion": completion, "records": counted}
+    return {"prompt": prompt, "completion": completion, "records": counted,
+            "cost_usd": round(cost_usd, 6)}
 
 
 def _summary_of_unique(records: list[Record]) -> dict[str, Any]:

@@ -40,6 +40,8 @@ class RunPlan:
     physics_hz: float = 50.0
     model: str = ""  # LLM agents: model name and OpenAI-compatible base URL (else from the
     base_url: str = ""  # environment: OPENAI_MODEL, OPENAI_BASE_URL; key: OPENAI_API_KEY)
+    price_in_usd_per_mtok: float = 0.0  # token prices for the cost per task (else from
+    price_out_usd_per_mtok: float = 0.0  # MAVSWARM_PRICE_IN / MAVSWARM_PRICE_OUT)
 
     @property
     def results_path(self) -> Path:
@@ -61,7 +63,9 @@ def make_agent(name: str, session: Session, plan: RunPlan | None = None) -> Agen
     if name in LLM_AGENTS:
         from llm_tools.agents import ModelConfig, ReactAgent, WorkflowAgent
         plan = plan or RunPlan(sessions=())
-        config = ModelConfig(base_url=plan.base_url, model=plan.model)
+        config = ModelConfig(base_url=plan.base_url, model=plan.model,
+                             price_in_usd_per_mtok=plan.price_in_usd_per_mtok,
+                             price_out_usd_per_mtok=plan.price_out_usd_per_mtok)
         return ReactAgent(config) if name == "react" else WorkflowAgent(config)
     if name == "oracle":
         from benchmark.oracle import OracleAgent

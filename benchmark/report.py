@@ -170,8 +170,9 @@ def render_markdown(summary: Mapping[str, Any], *, title: str = "mavswarm benchm
             "## Tokens",
             "",
             _table(
-                ("records", "prompt", "completion"),
-                [(tokens["records"], tokens["prompt"], tokens["completion"])],
+                ("records", "prompt", "completion", "cost (USD)"),
+                [(tokens["records"], tokens["prompt"], tokens["completion"],
+                  f"{float(tokens.get('cost_usd', 0.0)):.4f}")],
             ),
         ]
     return "\n".join(parts) + "\n"

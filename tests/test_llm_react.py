@@ -52,7 +52,8 @@ async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
     (record,) = records
     assert record["passed"], record["checks"]
     assert record["finish"] == "finished"
-    assert record["tokens"] == {"prompt": 600, "completion": 120}  # 6 answers, not the 500
+    # 6 answers (not the 500); no prices given, so no cost.
+    assert record["tokens"] == {"prompt": 600, "completion": 120, "cost_usd": 0.0}
     # Every bad call was answered with an error the model could read, and changed nothing.
     tool_msgs = [m for m in llm.requests[-1]["messages"] if m["role"] == "tool"]
     by_id = {m["tool_call_id"]: json.loads(m["content"]) for m in tool_msgs}
@@ -84,9 +85,9 @@ def test_bench_run_with_the_react_agent(tmp_path) -> None:
         run = subprocess.run(
             [sys.executable, "-m", "benchmark.cli", "bench", "run", "--agent", "react",
              "--model", "scripted", "--base-url", llm.base_url, "--sessions", str(session),
-             "--out", str(tmp_path / "out")],
+             "--out", str(tmp_path / "out"), "--price-in", "2.0", "--price-out", "8.0"],
             cwd=root, capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr[-2000:]
     record = json.loads((tmp_path / "out" / "results.jsonl").read_text())
     assert record["agent"] == "react" and record["passed"]
-    assert record["tokens"] == {"prompt": 200, "completion": 40}
+    assert record["tokens"] == {"prompt": 200, "completion": 40, "cost_usd": 0.00072}

@@ -108,7 +108,7 @@ async def test_takeoff_passes_through_plan_execute_verify() -> None:
     record, llm, agent = await _run(session, script)
     assert record["passed"], record["checks"]
     assert record["finish"] == "finished"
-    assert record["tokens"] == {"prompt": 200, "completion": 40}
+    assert record["tokens"] == {"prompt": 200, "completion": 40, "cost_usd": 0.0}
     # Planning calls offer the model no tools.
     assert len(llm.requests) == 2 and "tools" not in llm.requests[0]
     assert "Task: Take off" in llm.requests[0]["messages"][1]["content"]
@@ -128,7 +128,7 @@ async def test_malformed_plan_is_reasked_then_succeeds() -> None:
               _verdict(True, "hovering")]
     record, llm, _ = await _run(session, script)
     assert record["passed"], record["checks"]
-    assert record["tokens"] == {"prompt": 300, "completion": 60}
+    assert record["tokens"] == {"prompt": 300, "completion": 60, "cost_usd": 0.0}
     reask = llm.requests[1]["messages"]
     assert reask[-2] == {"role": "assistant",
                          "content": "I would take off the drone and then hover."}

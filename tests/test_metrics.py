@@ -225,7 +225,7 @@ def test_summarize_shape_and_per_agent_section() -> None:
     assert summary["pass_hat_k"]["2"] == 0.0
     assert list(summary["finish"]) == ["finished", "tool_call_budget", "agent_error"]
     assert summary["finish"]["finished"] == 4
-    assert summary["tokens"] == {"prompt": 10, "completion": 4, "records": 1}
+    assert summary["tokens"] == {"prompt": 10, "completion": 4, "records": 1, "cost_usd": 0.0}
     assert summary["agents"] == ["llm", "oracle"]
     assert summary["by_agent"]["oracle"]["overall"]["passed_tasks"] == 1
     assert summary["by_agent"]["llm"]["overall"]["tasks"] == 3

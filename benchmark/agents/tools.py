@@ -30,6 +30,7 @@ class AgentTools:
         self.summary = ""
         self.prompt_tokens = 0
         self.completion_tokens = 0
+        self.cost_usd = 0.0
         self.spent: BudgetExhausted | None = None
 
     # ------------------------------------------------------------ accounting
@@ -45,10 +46,11 @@ class AgentTools:
     def drone_ids(self) -> list[str]:
         return list(self._gw.drones)
 
-    def add_tokens(self, prompt: int, completion: int) -> None:
-        """Token use of the agent's model, reported in the task's record."""
+    def add_tokens(self, prompt: int, completion: int, cost_usd: float = 0.0) -> None:
+        """Token use (and its price) of the agent's model, reported in the task's record."""
         self.prompt_tokens += int(prompt)
         self.completion_tokens += int(completion)
+        self.cost_usd += float(cost_usd)
 
     def _charge(self, name: str) -> Outcome | None:
         if self.finished:

@@ -28,6 +28,8 @@ class ModelConfig:
     temperature: float = 0.0
     timeout_s: float = 120.0
     retries: int = 2
+    price_in_usd_per_mtok: float = 0.0  # per million prompt tokens (else MAVSWARM_PRICE_IN)
+    price_out_usd_per_mtok: float = 0.0  # per million completion tokens (MAVSWARM_PRICE_OUT)
 
     def resolved(self) -> ModelConfig:
         base = self.base_url or os.environ.get("OPENAI_BASE_URL", "https://api.openai.com/v1")
@@ -35,8 +37,16 @@ class ModelConfig:
         if not model:
             raise ValueError("no model: pass --model or set OPENAI_MODEL")
         key = self.api_key or os.environ.get("OPENAI_API_KEY", "")
+        price_in = self.price_in_usd_per_mtok or float(os.environ.get("MAVSWARM_PRICE_IN", 0))
+        price_out = self.price_out_usd_per_mtok or float(
+            os.environ.get("MAVSWARM_PRICE_OUT", 0))
         return ModelConfig(base.rstrip("/"), model, key, self.temperature, self.timeout_s,
-                           self.retries)
+                           self.retries, price_in, price_out)
+
+    def cost_usd(self, usage: Mapping[str, int]) -> float:
+        """The price of one answer's token use."""
+        return (usage["prompt"] * self.price_in_usd_per_mtok
+                + usage["completion"] * self.price_out_usd_per_mtok) / 1e6
 
 
 class ChatClient:

@@ -52,7 +52,8 @@ class ReactAgent:
         nudges = 0
         for _ in range(self.max_steps):
             message, usage = await client.complete(messages, schema)
-            tools.add_tokens(usage["prompt"], usage["completion"])
+            tools.add_tokens(usage["prompt"], usage["completion"],
+                             client.config.cost_usd(usage))
             messages.append(_assistant(message))
             calls = parse_tool_calls(message)
             if not calls:

@@ -213,7 +213,7 @@ class WorkflowAgent:
                    messages: list[dict[str, Any]],
                    schema: list[dict[str, Any]] | None = None) -> dict[str, Any]:
         message, usage = await client.complete(messages, schema or [])
-        tools.add_tokens(usage["prompt"], usage["completion"])
+        tools.add_tokens(usage["prompt"], usage["completion"], client.config.cost_usd(usage))
         return message
 
     # --------------------------------------------------------------- observe
