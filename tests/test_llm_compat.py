@@ -51,3 +51,29 @@ async def test_a_reference_style_client_flies_a_task_to_a_pass() -> None:
         verdict = await http.get(f"/check/sessions/{sid}/task",
                                  headers={"X-API-Key": KEYS["admin"]})
         assert verdict.status_code == 200 and verdict.json()["passed"] is True, verdict.json()
+
+
+async def test_entities_by_id_only_within_perception_and_generic_commands() -> None:
+    async with served() as (http, _hub, data):
+        agent = PlatClient(http, KEYS["agent"])
+        drone = data["drones"][0]["id"]
+        seen = await agent.get(f"/drones/{drone}/nearby")
+        visible = {e["id"] for e in seen["targets"]}  # type: ignore[index]
+        for target in data["targets"]:
+            r = await http.get(f"/targets/{target['id']}", headers=agent.headers)
+            if target["id"] in visible:
+                assert r.status_code == 200 and r.json()["id"] == target["id"]
+            else:
+                assert r.status_code == 404 and "perception" in r.json()["detail"]
+        # The operator sees any target by id.
+        any_target = data["targets"][0]["id"]
+        r = await http.get(f"/targets/{any_target}", headers={"X-API-Key": KEYS["operator"]})
+        assert r.status_code == 200
+        current = await agent.get("/sessions/current")
+        assert "targets" not in current and "checks" not in str(current)  # type: ignore[operator]
+        r = await http.post(f"/drones/{drone}/command", headers=agent.headers,
+                            json={"command": "take_off", "parameters": {"altitude": 8}})
+        assert r.status_code == 200 and r.json()["status"] == "success", r.text
+        r = await http.post(f"/drones/{drone}/command", headers=agent.headers,
+                            json={"command": "warp", "parameters": {}})
+        assert r.status_code == 404 and "take_off" in r.json()["detail"]

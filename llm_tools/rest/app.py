@@ -13,6 +13,7 @@ from benchmark.validators import CheckContext, evaluate
 from llm_tools.registry import ToolRegistry, default_registry
 from llm_tools.rest.auth import live_session, require
 from llm_tools.rest.compat import add_compat_routes
+from llm_tools.rest.compat_world import add_compat_world_routes
 from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
 from llm_tools.rest.views import session_view, task_view
 
@@ -138,6 +139,7 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     async def budget_spent(_: Request, error: BudgetExhausted) -> JSONResponse:
         return JSONResponse({"detail": str(error), "reason": error.reason}, status_code=409)
 
+    add_compat_world_routes(app, hub)  # first: /sessions/current is not a session id
     _add_session_routes(app, hub, registry)
     _add_check_routes(app, hub)
     add_compat_routes(app, hub)

@@ -113,7 +113,8 @@ COMMANDS: dict[str, Command] = {
 }
 
 
-def _resolve(hub: Hub, caller: Caller, session: str | None) -> LiveSession:
+def resolve_session(hub: Hub, caller: Caller, session: str | None) -> LiveSession:
+    """The caller's session: an agent's own, else the one named (or the only one)."""
     if caller.role is Role.AGENT:
         assert caller.session_id is not None
         return live_session(hub, caller, session or caller.session_id)
@@ -133,6 +134,19 @@ def _state(live: LiveSession, drone: str) -> DroneState:
     return outcome.state
 
 
+async def run_command(live: LiveSession, drone_id: str, name: str,
+                      params: Mapping[str, Any], body: Any) -> dict[str, Any]:
+    """Run a MultiUAV-Plat command; the answer in the reference's shape."""
+    run = COMMANDS.get(name)
+    if run is None:
+        raise HTTPException(404, f"unknown command {name!r}; commands: {', '.join(COMMANDS)}")
+    state = _state(live, drone_id)
+    outcome = await run(live.tools, drone_id, dict(params), body, state)
+    return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
+            "status": _STATUS.get(outcome.status, "error"), "message": outcome.message,
+            "timestamp": time.time()}
+
+
 def add_compat_routes(app: FastAPI, hub: Hub) -> None:
     """Add the MultiUAV-Plat compatible /drones routes to `app`."""
     anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
@@ -142,34 +156,26 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
     @app.get("/drones", tags=["multiuav-plat"], summary="The session's drones")
     def drones(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                ) -> list[dict[str, Any]]:
-        live = _resolve(hub, caller, session)
+        live = resolve_session(hub, caller, session)
         return [compat_drone(s) for s in live.gateway.list_drones()]
 
     @app.get("/drones/{drone_id}", tags=["multiuav-plat"], summary="One drone")
     def drone(drone_id: str, caller: Annotated[Caller, Depends(anyone)],
               session: str | None = pick) -> dict[str, Any]:
-        return compat_drone(_state(_resolve(hub, caller, session), drone_id))
+        return compat_drone(_state(resolve_session(hub, caller, session), drone_id))
 
     @app.post("/drones/{drone_id}/command/{name}", tags=["multiuav-plat"],
               summary="A direct command; scalar parameters as query parameters")
     async def command(drone_id: str, name: str, request: Request,
                       caller: Annotated[Caller, Depends(actor)], session: str | None = pick
                       ) -> dict[str, Any]:
-        live = _resolve(hub, caller, session)
-        run = COMMANDS.get(name)
-        if run is None:
-            raise HTTPException(404, f"unknown command {name!r}; commands: "
-                                f"{', '.join(COMMANDS)}")
-        state = _state(live, drone_id)
         raw = (await request.body()).strip()
         try:
             body = json.loads(raw) if raw else None
         except ValueError:
             raise HTTPException(422, f"{name}: the body is not valid JSON") from None
-        outcome = await run(live.tools, drone_id, dict(request.query_params), body, state)
-        return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
-                "status": _STATUS.get(outcome.status, "error"), "message": outcome.message,
-                "timestamp": time.time()}
+        return await run_command(resolve_session(hub, caller, session), drone_id, name,
+                                 dict(request.query_params), body)
 
     def _nearby(live: LiveSession, caller: Caller, drone_id: str) -> dict[str, Any]:
         _state(live, drone_id)
@@ -182,7 +188,7 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
              summary="What the drone senses: {drones, targets, obstacles}")
     def nearby(drone_id: str, caller: Annotated[Caller, Depends(anyone)],
                session: str | None = pick) -> dict[str, Any]:
-        return _nearby(_resolve(hub, caller, session), caller, drone_id)
+        return _nearby(resolve_session(hub, caller, session), caller, drone_id)
 
     @app.get("/drones/{drone_id}/nearby/{kind}", tags=["multiuav-plat"],
              summary="One kind of what the drone senses: drones, targets or obstacles")
@@ -190,11 +196,11 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
                     session: str | None = pick) -> list[dict[str, Any]]:
         if kind not in ("drones", "targets", "obstacles"):
             raise HTTPException(404, f"unknown kind {kind!r}; use drones, targets or obstacles")
-        return _nearby(_resolve(hub, caller, session), caller, drone_id)[kind]
+        return _nearby(resolve_session(hub, caller, session), caller, drone_id)[kind]
 
     @app.get("/sessions/current/tasks/next", tags=["multiuav-plat"],
              summary="The task to do now (its text only)")
     def next_task(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                   ) -> dict[str, Any]:
-        live = _resolve(hub, caller, session)
+        live = resolve_session(hub, caller, session)
         return {"id": live.task.id, "content": live.task.text}

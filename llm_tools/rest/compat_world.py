@@ -1,0 +1,94 @@
+"""More MultiUAV-Plat compatible routes: the current session, its tasks (masked), the
+environment, a generic command route, and targets or obstacles by id — for an agent, only
+while one of its drones perceives them."""
+
+from typing import Annotated, Any
+
+from fastapi import Depends, FastAPI, HTTPException, Query, Request
+
+from llm_tools.rest.auth import require
+from llm_tools.rest.compat import COMMANDS, resolve_session, run_command
+from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
+from llm_tools.rest.views import session_view, task_view
+
+__all__ = ["add_compat_world_routes"]
+
+
+def _perceived(live: LiveSession, kind: str) -> dict[str, dict[str, Any]]:
+    """Entities of `kind` ("targets" or "obstacles") the session's drones sense now, by id.
+    Reads perception without charging the agent's budget: it is what the drones already
+    report."""
+    seen: dict[str, dict[str, Any]] = {}
+    for drone in live.gateway.drones:
+        data = live.gateway.nearby(drone).data or {}
+        for entity in data.get(kind, []):
+            seen.setdefault(entity["id"], entity)
+    return seen
+
+
+def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dict[str, Any]:
+    if caller.role is Role.AGENT:
+        seen = _perceived(live, kind)
+        if entity_id not in seen:
+            raise HTTPException(404, f"no {kind[:-1]} {entity_id!r} within your drones' "
+                                "perception")
+        return seen[entity_id]
+    for entity in live.session.data.get(kind, []):
+        if isinstance(entity, dict) and entity.get("id") == entity_id:
+            return entity
+    raise HTTPException(404, f"unknown {kind[:-1]} {entity_id!r}")
+
+
+def add_compat_world_routes(app: FastAPI, hub: Hub) -> None:
+    anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
+    actor = require(hub, Role.AGENT, Role.ADMIN)
+    pick = Query(None, description="session id (operator and admin keys)")
+
+    @app.get("/sessions/current", tags=["multiuav-plat"], summary="The caller's session")
+    def current(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
+                ) -> dict[str, Any]:
+        return session_view(resolve_session(hub, caller, session), caller.role)
+
+    @app.get("/sessions/current/tasks", tags=["multiuav-plat"],
+             summary="The session's current task (masked for agents)")
+    def tasks(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
+              ) -> list[dict[str, Any]]:
+        live = resolve_session(hub, caller, session)
+        view = task_view(live, caller.role)
+        return [{**view, "content": view["text"]}]
+
+    @app.get("/environments/current", tags=["multiuav-plat"], summary="Weather and wind")
+    def environment(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
+                    ) -> dict[str, Any]:
+        return dict(resolve_session(hub, caller, session).session.data.get("environment")
+                    or {})
+
+    @app.get("/targets/{target_id}", tags=["multiuav-plat"], summary="A target by id")
+    def target(target_id: str, caller: Annotated[Caller, Depends(anyone)],
+               session: str | None = pick) -> dict[str, Any]:
+        return _entity(resolve_session(hub, caller, session), caller, "targets", target_id)
+
+    @app.get("/obstacles/{obstacle_id}", tags=["multiuav-plat"], summary="An obstacle by id")
+    def obstacle(obstacle_id: str, caller: Annotated[Caller, Depends(anyone)],
+                 session: str | None = pick) -> dict[str, Any]:
+        return _entity(resolve_session(hub, caller, session), caller, "obstacles",
+                       obstacle_id)
+
+    @app.post("/drones/{drone_id}/command", tags=["multiuav-plat"],
+              summary="A command named in the body: {command, parameters}")
+    async def generic_command(drone_id: str, request: Request,
+                              caller: Annotated[Caller, Depends(actor)],
+                              session: str | None = pick) -> dict[str, Any]:
+        try:
+            body = await request.json()
+        except ValueError:
+            raise HTTPException(422, "the body is not valid JSON") from None
+        if not isinstance(body, dict) or not isinstance(body.get("command"), str):
+            raise HTTPException(422, "the body must be {\"command\": name, \"parameters\": "
+                                f"{{...}}}}; commands: {', '.join(COMMANDS)}")
+        params = body.get("parameters") or {}
+        if not isinstance(params, dict):
+            raise HTTPException(422, "parameters must be an object")
+        live = resolve_session(hub, caller, session)
+        scalars = {k: v for k, v in params.items() if not isinstance(v, list | dict)}
+        return await run_command(live, drone_id, body["command"], scalars, params or None)
