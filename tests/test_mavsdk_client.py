@@ -379,7 +379,8 @@ async def test_mission_raw_pause_jump_resume_clear(swarm_factory, mavsdk_client)
         paused_at = truth_pos(swarm, 1)
         await asyncio.sleep(0.3)  # 6 s simulated
         assert math.dist(truth_pos(swarm, 1), paused_at) < 0.2
-        assert 0.0 < paused_at[1] < 60.0 - ap.params["NAV_ACC_RAD"]
+        # Held short of item 1 (under load the pause may land before it even set off).
+        assert 0.0 <= paused_at[1] < 60.0 - ap.params["NAV_ACC_RAD"]
         assert (await mission.mission_progress()).current == 1
 
         await mission.set_current_mission_item(2)  # skip item 1
