@@ -13,21 +13,14 @@ from benchmark.templates.base import (
     Template,
     TemplateUnfit,
     all_of,
-    fmt_xy,
     leaf,
     pick,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import target_xy as _xy
 from emulator.world import Target
 
 __all__ = ["TEMPLATES"]
-
-
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
-
-
-def _xy(t: Target) -> str:
-    return fmt_xy(t.position_m[0], t.position_m[1])
 
 
 def _fixed(view: SessionView, k: int) -> list[Target]:

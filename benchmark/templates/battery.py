@@ -23,6 +23,10 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import home_xy as _home_xy
+from benchmark.templates.common import nearest_first as _nearest_first
+from benchmark.templates.common import visited as _visited
 from emulator.world import Target
 
 __all__ = ["DRAIN_PCT_PER_M", "MAX_RESERVE_TOUR_M", "TEMPLATES"]
@@ -34,15 +38,6 @@ _TRIES = 60
 Point = tuple[float, float]
 Node = dict[str, Any]
 Rect = tuple[float, float, float, float]
-
-
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
-
-
-def _home_xy(view: SessionView, drone_index: int) -> Point:
-    home = view.drones[drone_index].home_m
-    return float(home[0]), float(home[1])
 
 
 def _around(center: Point, half_m: float) -> Rect:
@@ -60,16 +55,6 @@ def _spaced(view: SessionView, rng: random.Random, n: int, region: Rect,
             if len(points) == n:
                 return points
     raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart in {region}")
-
-
-def _nearest_first(start: Point, points: Sequence[Point]) -> list[Point]:
-    """points in nearest-neighbour order from start."""
-    left, order, here = list(points), [], start
-    while left:
-        here = min(left, key=lambda p: math.dist(here, p))
-        left.remove(here)
-        order.append(here)
-    return order
 
 
 def _charge_s(station: Target, flight_m: float) -> float:
@@ -92,11 +77,6 @@ def _route_ops(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:
         ops.append({"op": "path", "drone": drone_id,
                     "points": [[x, y, alt] for x, y in points[1:]]})
     return ops
-
-
-def _visited(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:
-    return [leaf("drone_has_visited_position", drone_id=drone_id, x=x, y=y, z=float(alt),
-                 tolerance=3.0) for x, y in points]
 
 
 def _recharge_stop(view: SessionView, rng: random.Random) -> TaskDraft:

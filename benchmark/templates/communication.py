@@ -6,7 +6,6 @@ the given words exactly (case included); a broadcast counts as a message to ever
 
 from __future__ import annotations
 
-import math
 import random
 
 from benchmark.templates.base import (
@@ -19,15 +18,12 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
 
 __all__ = ["CODE_WORDS", "TEMPLATES"]
 
 CODE_WORDS = ("SECTOR", "GRID", "ALPHA", "BRAVO", "DELTA", "ECHO", "KILO", "RIDGE", "VALLEY",
               "HARBOR")
-
-
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
 
 
 def _relay_report(view: SessionView, rng: random.Random) -> TaskDraft:

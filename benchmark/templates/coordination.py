@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Sequence
 
 import shapely
 
@@ -19,25 +18,14 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
-from emulator.scenario import VehicleSpec
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import names as _names
+from benchmark.templates.common import target_xy as _xy
 from emulator.world import Target
 
 __all__ = ["TEMPLATES"]
 
 _CATEGORY = "multi_drone_coordination"
-
-
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
-
-
-def _xy(t: Target) -> str:
-    return fmt_xy(t.position_m[0], t.position_m[1])
-
-
-def _names(items: Sequence[VehicleSpec | Target]) -> str:
-    names = [item.name for item in items]
-    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
 def _inspectable(view: SessionView, k: int) -> list[Target]:

@@ -23,6 +23,9 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import home_xy as _home_xy
+from benchmark.templates.common import nearest_first as _nearest_first
 
 __all__ = ["AREA_SIDE_M", "TEMPLATES"]
 
@@ -31,10 +34,6 @@ _TRIES = 60
 
 Point = tuple[float, float]
 Node = dict[str, Any]
-
-
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
 
 
 def _spots(view: SessionView, rng: random.Random, n: int, min_gap_m: float) -> list[Point]:
@@ -52,21 +51,6 @@ def _spots(view: SessionView, rng: random.Random, n: int, min_gap_m: float) -> l
                 if len(points) == n:
                     return points
     raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart")
-
-
-def _nearest_first(start: Point, points: Sequence[Point]) -> list[Point]:
-    """points in nearest-neighbour order from start."""
-    left, order, here = list(points), [], start
-    while left:
-        here = min(left, key=lambda p: math.dist(here, p))
-        left.remove(here)
-        order.append(here)
-    return order
-
-
-def _home_xy(view: SessionView, drone_index: int) -> Point:
-    home = view.drones[drone_index].home_m
-    return float(home[0]), float(home[1])
 
 
 def _landed_at(drone_id: str, point: Point) -> Node:

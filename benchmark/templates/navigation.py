@@ -23,6 +23,9 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import home_xy as _home_xy
+from benchmark.templates.common import visited as _visited
 
 __all__ = ["MAX_ROUTE_M", "TEMPLATES"]
 
@@ -35,22 +38,8 @@ Rect = tuple[float, float, float, float]
 Node = dict[str, Any]
 
 
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
-
-
 def _xy_list(points: Sequence[Point]) -> str:
     return ", ".join(fmt_xy(x, y) for x, y in points)
-
-
-def _home_xy(view: SessionView, drone_index: int) -> Point:
-    home = view.drones[drone_index].home_m
-    return float(home[0]), float(home[1])
-
-
-def _visited(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:
-    return [leaf("drone_has_visited_position", drone_id=drone_id, x=x, y=y, z=float(alt),
-                 tolerance=3.0) for x, y in points]
 
 
 def _fly_route(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:

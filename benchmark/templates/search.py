@@ -18,6 +18,10 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import inspectable as _inspectable
+from benchmark.templates.common import names as _names
+from benchmark.templates.common import target_xy as _xy
 from emulator.scenario import VehicleSpec
 from emulator.world import Target
 
@@ -27,27 +31,6 @@ _AREA_FAMILIES = ("area_search", "area_assignment_and_patrol")
 
 
 # ------------------------------------------------------------------ helpers
-def _diagonal_m(view: SessionView) -> float:
-    return math.hypot(view.map_w_m, view.map_h_m)
-
-
-def _xy(t: Target) -> str:
-    return fmt_xy(t.position_m[0], t.position_m[1])
-
-
-def _names(items: Sequence[VehicleSpec | Target]) -> str:
-    names = [item.name for item in items]
-    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
-
-
-def _inspectable(view: SessionView, k: int) -> list[Target]:
-    """Fixed point targets and area targets: those a drone can fly over and photograph."""
-    pool = [t for t in view.points if t.kind == "fixed"] + list(view.areas)
-    if len(pool) < k:
-        raise TemplateUnfit(f"needs {k} fixed or area targets, the session has {len(pool)}")
-    return pool
-
-
 def _nearest_first(start: Sequence[float], targets: list[Target]) -> list[Target]:
     return sorted(targets, key=lambda t: math.dist(start[:2], t.position_m[:2]))
 
