@@ -29,7 +29,8 @@ from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
 
-__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "record_key", "run_session", "swarm_gateway"]
+__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "record_key", "run_session", "run_task",
+           "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
 # goal reached, and a reset when telemetry shows it, so wall time per task follows these rates.
@@ -178,12 +179,13 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
-            emit(await _run_task(session, task, agent, swarm, services, gateway, options))
+            emit(await run_task(session, task, agent, swarm, services, gateway, options))
 
 
-async def _run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
-                    services: SwarmServices, gateway: Gateway,
-                    options: EpisodeOptions) -> dict[str, Any]:
+async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
+                   services: SwarmServices, gateway: Gateway,
+                   options: EpisodeOptions) -> dict[str, Any]:
+    """Reset, run the agent on one task, evaluate its checks; the task's record."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
     await _reset(swarm, services, gateway)

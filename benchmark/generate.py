@@ -17,12 +17,22 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from benchmark.episode import EpisodeOptions, _run_task, swarm_gateway
+from benchmark.agents import Agent
+from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.oracle import OracleAgent
 from benchmark.scenarios import generate_world
-from benchmark.session_file import dump_session, session_from_dict, task_from_dict
+from benchmark.session_file import (
+    Session,
+    TaskSpec,
+    dump_session,
+    session_from_dict,
+    task_from_dict,
+)
 from benchmark.templates import CATALOGUE, SessionView, Template, TemplateUnfit
 from benchmark.validators import leaf_count, parse_tree
+from emulator.services import SwarmServices
+from emulator.swarm import Swarm
+from mavlink_gateway import Gateway
 
 __all__ = [
     "TASKS_PER_SESSION",
@@ -96,30 +106,29 @@ class _Drawer:
         self.used[task["template"]] = self.used.get(task["template"], 0) + 1
 
 
-def _view(world: dict[str, Any]) -> SessionView:
-    session = session_from_dict({**world, "tasks": []}, source=world["id"])
+def _view(world: dict[str, Any], session: Session) -> SessionView:
     w, h = world["map_size_m"]
     return SessionView(world["family"], session.scenario, float(w), float(h))
 
 
-async def _prove(session: Any, spec: Any, agent: OracleAgent, swarm: Any, services: Any,
-                 gateway: Any, start: dict[str, Any]) -> dict[str, Any]:
+async def _prove(session: Session, spec: TaskSpec, agent: Agent, swarm: Swarm,
+                 services: SwarmServices, gateway: Gateway, start: dict[str, Any]
+                 ) -> dict[str, Any]:
     """Fly a task with the oracle, up to ORACLE_TRIES times from the same start: a task is
     kept if the oracle can pass it, so a rare slow telemetry hiccup does not change the
     suite. After a failure the drones are put back where the task started."""
     record: dict[str, Any] = {}
     for _ in range(ORACLE_TRIES):
-        record = await _run_task(session, spec, agent, swarm, services, gateway,
-                                 EpisodeOptions())
+        record = await run_task(session, spec, agent, swarm, services, gateway,
+                                EpisodeOptions())
         if record["passed"]:
             return record
         services.operator_restore(start)
     return record
 
 
-async def _verified_tasks(world: dict[str, Any], drawer: _Drawer, count: int,
-                          progress: Callable[[str], None]) -> list[dict[str, Any]]:
-    session = session_from_dict({**world, "tasks": []}, source=world["id"])
+async def _verified_tasks(world: dict[str, Any], session: Session, drawer: _Drawer,
+                          count: int, progress: Callable[[str], None]) -> list[dict[str, Any]]:
     agent = OracleAgent(session.scenario, {})
     tasks: list[dict[str, Any]] = []
     async with swarm_gateway(session) as (swarm, services, gateway):
@@ -169,10 +178,11 @@ def generate_session(family: str, level: str, index: int, *, verify: bool = True
                      progress: Callable[[str], None] = print) -> dict[str, Any]:
     """The full session object for (family, level, index)."""
     world = generate_world(family, level, index)
-    view = _view(world)
+    empty = session_from_dict({**world, "tasks": []}, source=world["id"])
+    view = _view(world, empty)
     drawer = _Drawer(family, int(world["seed"]), view)
     if verify:
-        drawn = asyncio.run(_verified_tasks(world, drawer, tasks, progress))
+        drawn = asyncio.run(_verified_tasks(world, empty, drawer, tasks, progress))
     else:
         drawn = _unverified_tasks(drawer, tasks)
     session = {**world, "tasks": drawn}

@@ -10,6 +10,7 @@ every task already recorded and restores the layout the last one left.
 from __future__ import annotations
 
 import asyncio
+import json
 import multiprocessing
 import queue as queue_module
 import time
@@ -104,8 +105,25 @@ def _worker(units: Any, results: Any, plan: RunPlan) -> None:
         results.put(("unit_done", (path, trial)))
 
 
-def _done_by_unit(records: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
-    return {r["key"]: r.get("end_state") for r in records if "key" in r}
+def _done_by_unit(records: Sequence[Mapping[str, Any]]
+                  ) -> dict[tuple[str, int], dict[str, Any]]:
+    """Recorded end states, grouped by (session id, trial): each unit gets only its own."""
+    done: dict[tuple[str, int], dict[str, Any]] = {}
+    for r in records:
+        if "key" in r:
+            unit = (str(r.get("session")), int(r.get("trial", 0)))
+            done.setdefault(unit, {})[r["key"]] = r.get("end_state")
+    return done
+
+
+def _session_id(path: Path) -> str | None:
+    """A session file's id without validating it (an unreadable file: None; the worker
+    reports the problem)."""
+    try:
+        ident = json.loads(path.read_text(encoding="utf-8")).get("id")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return ident if isinstance(ident, str) else None
 
 
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> RunOutcome:
@@ -123,8 +141,10 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
     keys = log.open()
     if log.repaired:
         progress(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
-    done_states = _done_by_unit(read_records(plan.results_path)) if keys else {}
-    units = [(str(p), trial, done_states) for trial in range(plan.trials) for p in plan.sessions]
+    done = _done_by_unit(read_records(plan.results_path)) if keys else {}
+    ids = {p: _session_id(p) for p in plan.sessions} if done else {}
+    units = [(str(p), trial, done.get((ids.get(p) or "", trial), {}))
+             for trial in range(plan.trials) for p in plan.sessions]
 
     def handle(message: tuple[str, Any]) -> None:
         kind, payload = message

@@ -127,8 +127,9 @@ class OracleAgent:
     def _target_point(self, target_id: str) -> tuple[float, float]:
         target = self._world.target(target_id)
         if target.kind == "polygon":
-            p = target.geometry.representative_point() if not target.geometry.contains(
-                target.geometry.centroid) else target.geometry.centroid
+            centroid = target.geometry.centroid
+            inside = target.geometry.contains(centroid)
+            p = centroid if inside else target.geometry.representative_point()
             return float(p.x), float(p.y)
         return float(target.position_m[0]), float(target.position_m[1])
 
