@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import statistics
 import sys
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -19,8 +18,10 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import httpx
+from _common import pct
 from mcp import Client
 
 from benchmark.agents import AgentTask, AgentTools, TaskBudget
@@ -36,8 +37,7 @@ KEY = "bench-agent"
 
 
 def _ms(samples: list[float]) -> str:
-    q = statistics.quantiles(samples, n=100)
-    return f"p50 {statistics.median(samples) * 1000:7.3f} ms  p95 {q[94] * 1000:7.3f} ms"
+    return f"p50 {pct(samples, 50) * 1000:7.3f} ms  p95 {pct(samples, 95) * 1000:7.3f} ms"
 
 
 @contextlib.asynccontextmanager

@@ -11,10 +11,15 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import tempfile
 import time
 from collections import Counter
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import pct
 
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
@@ -42,10 +47,6 @@ def _counts(paths: tuple[Path, ...], limit: int | None) -> None:
                                                      endpoints.most_common()))
 
 
-def _pct(values: list[float], q: float) -> float:
-    return statistics.quantiles(values, n=100)[int(q) - 1] if len(values) > 1 else values[0]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--suite", choices=("smoke", "full"), default="full")
@@ -71,9 +72,9 @@ def main() -> None:
     print(f"{args.agent} on {args.suite}: {len(records)} tasks, {passed} passed, "
           f"{len(outcome.errors)} errors, wall {wall_s:.1f} s with {args.workers} workers "
           f"({wall_s / max(len(records), 1):.2f} s per task)")
-    print(f"per task: reset p50 {statistics.median(resets):.1f} ms p95 {_pct(resets, 95):.1f} ms;"
-          f" evaluation p50 {statistics.median(evals):.1f} ms p95 {_pct(evals, 95):.1f} ms;"
-          f" agent wall p50 {statistics.median(agent):.2f} s p95 {_pct(agent, 95):.2f} s;"
+    print(f"per task: reset p50 {statistics.median(resets):.1f} ms p95 {pct(resets, 95):.1f} ms;"
+          f" evaluation p50 {statistics.median(evals):.1f} ms p95 {pct(evals, 95):.1f} ms;"
+          f" agent wall p50 {statistics.median(agent):.2f} s p95 {pct(agent, 95):.2f} s;"
           f" simulated {sum(r['sim_time_s'] for r in records) / 3600:.1f} h in all")
 
 

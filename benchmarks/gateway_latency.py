@@ -48,7 +48,7 @@ from collections import Counter
 from collections.abc import Awaitable, Callable
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import LOOPBACK, free_udp_port, machine_line, table
+from _common import LOOPBACK, free_udp_port, machine_line, pct, table
 from _mavsdk import quiet_mavsdk, warnings_line
 
 from emulator.clock import ClockConfig
@@ -65,12 +65,6 @@ CMD_TARGET_MS = 5.0
 NEARBY_TARGET_MS = 2.0
 VERBOSE = False
 CEILING_M = 50.0  # d1's GF_MAX_VER_DIST in part 1: a move_to above it is refused by PX4 rules
-
-
-def pct(values: list[float], p: float) -> float:
-    """Nearest-rank percentile."""
-    s = sorted(values)
-    return s[max(0, math.ceil(p / 100.0 * len(s)) - 1)]
 
 
 def ms(v: float) -> str:

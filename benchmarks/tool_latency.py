@@ -15,6 +15,9 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import pct
 
 from benchmark.agents import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
@@ -24,8 +27,7 @@ from tests.bench_fixtures import small_session
 
 
 def _ms(samples: list[float]) -> str:
-    q = statistics.quantiles(samples, n=100)
-    return f"p50 {statistics.median(samples) * 1000:.3f} ms  p95 {q[94] * 1000:.3f} ms"
+    return f"p50 {pct(samples, 50) * 1000:.3f} ms  p95 {pct(samples, 95) * 1000:.3f} ms"
 
 
 async def main(calls: int) -> None:
