@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -14,10 +15,12 @@ __all__ = ["MAX_INBOX", "MAX_TEXT_CHARS", "Message", "Radio", "RadioError"]
 
 MAX_TEXT_CHARS = 500
 MAX_INBOX = 200  # oldest messages are dropped beyond this, and the drop is recorded
+_UNSENDABLE = re.compile(r"[\ud800-\udfff\x00-\x08\x0b-\x1f\x7f]")
 
 
 class RadioError(ValueError):
-    """Raised when a message cannot be sent (unknown drone, empty or oversized text)."""
+    """Raised when a message cannot be sent (unknown drone; empty, oversized or unencodable
+    text)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -52,6 +55,11 @@ class Radio:
             raise RadioError("message text is empty")
         if len(text) > MAX_TEXT_CHARS:
             raise RadioError(f"message text is {len(text)} characters, limit {MAX_TEXT_CHARS}")
+        bad = _UNSENDABLE.search(text)
+        if bad is not None:
+            raise RadioError(f"message text holds an unsendable character "
+                             f"(U+{ord(bad.group()):04X}) at character {bad.start()}; send "
+                             "valid Unicode text without control characters")
 
     def _deliver(self, message: Message) -> None:
         inbox = self._inboxes[message.recipient]

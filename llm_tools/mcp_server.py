@@ -24,6 +24,8 @@ from mcp.server.stdio import stdio_server
 from starlette.applications import Starlette
 
 from benchmark.agents import AgentTools, BudgetExhausted
+from llm_tools.body_limit import BodyLimit
+from llm_tools.input_limits import preview
 from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry
 
 __all__ = ["ERROR_STATUSES", "SERVER_NAME", "ToolsProvider", "build_server", "call_result",
@@ -87,7 +89,7 @@ async def _run(registry: ToolRegistry, provider: ToolsProvider, name: str,
                arguments: Mapping[str, Any] | None) -> dict[str, Any]:
     if registry.get(name) is None:
         known = ", ".join(spec.name for spec in registry.specs())
-        return _error(f"unknown tool {name!r}; available tools: {known}")
+        return _error(f"unknown tool {preview(name)}; available tools: {known}")
     tools = provider()
     if tools is None:
         return _error(f"{name}: no task is running, so there are no drones to command")
@@ -112,9 +114,12 @@ def streamable_http_app(registry: ToolRegistry, provider: ToolsProvider, *,
                         json_response: bool = False, name: str = SERVER_NAME) -> Starlette:
     """An ASGI app serving the tools over Streamable HTTP at `path` (run it with uvicorn;
     its lifespan starts the session manager). `host` is the address it will be served on,
-    which sets the SDK's DNS-rebinding protection for local addresses."""
+    which sets the SDK's DNS-rebinding protection for local addresses. Request bodies over
+    the input limit are refused with HTTP 413."""
     if not path.startswith("/"):
         raise ValueError(f"path must start with '/', got {path!r}")
     server = build_server(registry, provider, name=name)
-    return server.streamable_http_app(streamable_http_path=path, host=host,
-                                      json_response=json_response)
+    app = server.streamable_http_app(streamable_http_path=path, host=host,
+                                     json_response=json_response)
+    app.add_middleware(BodyLimit)
+    return app

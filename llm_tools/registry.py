@@ -7,12 +7,12 @@ the gateway unless the arguments validate.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from benchmark.agents import AgentTools, BudgetExhausted
+from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
 from llm_tools.schema import describe, schema_for, validate
 from llm_tools.tools import TOOL_FUNCTIONS
 
@@ -68,14 +68,15 @@ class ToolRegistry:
         spec = self._specs.get(name) if isinstance(name, str) else None
         if spec is None:
             known = ", ".join(self._specs)
-            return _error(f"unknown tool {name!r}; available tools: {known}")
-        if isinstance(arguments, str):
-            text = arguments.strip() or "{}"
-            try:
-                arguments = json.loads(text)
-            except json.JSONDecodeError as error:
-                return _error(f"{name}: arguments are not valid JSON ({error.msg} at "
-                              f"character {error.pos}); send a JSON object")
+            return _error(f"unknown tool {preview(name)}; available tools: {known}")
+        try:
+            if isinstance(arguments, str):
+                arguments = parse_json(arguments.strip() or "{}", "the arguments text")
+            else:
+                check_bounds(arguments)
+        except InputError as error:
+            hint = "; send a JSON object" if "JSON" in error.problem else ""
+            return _error(f"{name}: {error}{hint}")
         values, problems = validate(arguments, spec.input_schema)
         if problems:
             return _error(f"{name}: " + "; ".join(problems))

@@ -9,15 +9,17 @@ of readable problems rather than raising, so a model gets something it can act o
 from __future__ import annotations
 
 import inspect
-import math
 import re
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+from llm_tools.input_limits import MAX_ITEMS, InputError, check_bounds, check_text, preview
+
 __all__ = ["describe", "schema_for", "validate"]
 
+MAX_LISTED = 5  # unknown argument names echoed back at most
 _ARGS_LINE = re.compile(r"^\s+(\w+)(?:\s*\([^)]*\))?:\s*(.*)$")
 
 
@@ -93,7 +95,12 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         if not isinstance(value, str):
             problems.append(f"{where} must be a string, got {_show(value)}")
         elif "enum" in schema and value not in schema["enum"]:
-            problems.append(f"{where} must be one of {schema['enum']}, got {value!r}")
+            problems.append(f"{where} must be one of {schema['enum']}, got {_show(value)}")
+        else:
+            try:
+                check_text(value, where)
+            except InputError as error:
+                problems.append(str(error))
         return value
     if kind == "boolean":
         if not isinstance(value, bool):
@@ -103,8 +110,11 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         if isinstance(value, bool) or not isinstance(value, int | float):
             problems.append(f"{where} must be a number, got {_show(value)}")
             return value
-        if not math.isfinite(value):
-            problems.append(f"{where} must be finite, got {value}")
+        try:
+            check_bounds(value, where)
+        except InputError as error:
+            problems.append(str(error))
+            return value
         if kind == "integer":
             if float(value) != int(value):
                 problems.append(f"{where} must be a whole number, got {value}")
@@ -114,30 +124,37 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         if not isinstance(value, list):
             problems.append(f"{where} must be a list, got {_show(value)}")
             return value
+        if len(value) > MAX_ITEMS:
+            problems.append(f"{where} has {len(value)} items; the limit is {MAX_ITEMS}")
+            return value
         return [_check(v, schema["items"], f"{where}[{i}]", problems)
                 for i, v in enumerate(value)]
     return value
 
 
 def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
+    return preview(value)
 
 
 def validate(arguments: Any, schema: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """(coerced arguments, problems) for an object schema from `schema_for`."""
+    """(coerced arguments, problems) for an object schema from `schema_for`. Never raises:
+    any value, however large, deep or odd, gives problems a caller can read."""
     if arguments is None:
         arguments = {}
     if not isinstance(arguments, Mapping):
         return {}, [f"arguments must be a JSON object, got {_show(arguments)}"]
-    problems: list[str] = []
     props = schema["properties"]
-    extra = sorted(k for k in arguments if k not in props)
+    extra = [k for k in arguments if k not in props]
+    problems: list[str] = []
     if extra:
-        problems.append(f"unknown argument(s) {', '.join(map(repr, extra))}; expected "
+        shown = ", ".join(_show(k) for k in extra[:MAX_LISTED])
+        more = f" and {len(extra) - MAX_LISTED} more" if len(extra) > MAX_LISTED else ""
+        problems.append(f"unknown argument(s) {shown}{more}; expected "
                         f"{', '.join(props) or 'none'}")
     missing = [k for k in schema["required"] if k not in arguments]
     if missing:
         problems.append(f"missing required argument(s) {', '.join(map(repr, missing))}")
     values = {k: _check(v, props[k], k, problems) for k, v in arguments.items() if k in props}
+    if len(problems) > MAX_LISTED:
+        problems[MAX_LISTED:] = [f"and {len(problems) - MAX_LISTED} more problems"]
     return values, problems

@@ -2,7 +2,6 @@
 `/sessions/{id}`, admin-only check routes under `/check`, and MultiUAV-Plat compatible
 `/drones` routes. OpenAPI docs are served at /docs."""
 
-import json
 from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Request
@@ -10,11 +9,14 @@ from fastapi.responses import JSONResponse
 
 from benchmark.agents import BudgetExhausted
 from benchmark.validators import CheckContext, evaluate
+from llm_tools.body_limit import BodyLimit
+from llm_tools.input_limits import InputError, preview
 from llm_tools.registry import ToolRegistry, default_registry
 from llm_tools.rest.auth import live_session, require
 from llm_tools.rest.compat import add_compat_routes
 from llm_tools.rest.compat_world import add_compat_world_routes
 from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
+from llm_tools.rest.openapi_roles import add_role_docs
 from llm_tools.rest.views import session_view, task_view
 
 __all__ = ["create_app", "drone_or_404"]
@@ -26,8 +28,8 @@ ACTORS = (Role.AGENT, Role.ADMIN)
 def drone_or_404(live: LiveSession, drone: str) -> str:
     """The drone id if the session has it, else HTTP 404 naming the session's drones."""
     if drone not in live.gateway.drones:
-        raise HTTPException(404, f"unknown drone {drone!r} in session {live.id!r}; drones: "
-                            f"{', '.join(live.gateway.drones)}")
+        raise HTTPException(404, f"unknown drone {preview(drone)} in session {live.id!r}; "
+                            f"drones: {', '.join(live.gateway.drones)}")
     return drone
 
 
@@ -39,17 +41,13 @@ def _drones(live: LiveSession, caller: Caller) -> dict[str, Any]:
             "drones": [s.to_dict() for s in states]}
 
 
-async def _json_body(request: Request) -> Any:
-    """The request body as JSON, or its text when it is not valid JSON (the registry answers
-    that with an error a model can read); an empty body is no arguments."""
-    raw = await request.body()
-    if not raw.strip():
-        return None
-    text = raw.decode("utf-8", errors="replace")
+async def _body_text(request: Request) -> str:
+    """The request body as text for the registry to parse (it answers bad JSON with an error
+    a model can read); an empty body is no arguments."""
     try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
+        return (await request.body()).decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise InputError("the body", f"is not UTF-8 text (byte {error.start})") from None
 
 
 def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
@@ -101,14 +99,17 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
                 for s in registry.specs()]
 
     @app.post("/sessions/{session_id}/tools/{name}", tags=["tools"],
-              summary="Call an agent tool (agent, admin); the body is its arguments object")
+              summary="Call an agent tool (agent, admin); the body is its arguments object",
+              description="Answers 200 with the tool's result, or 422 with an error result "
+                          "({status: error, message}) when the arguments are refused.")
     async def call_tool(session_id: str, name: str, request: Request,
-                        caller: Annotated[Caller, Depends(actor)]) -> dict[str, Any]:
+                        caller: Annotated[Caller, Depends(actor)]) -> JSONResponse:
         live = live_session(hub, caller, session_id)
         if registry.get(name) is None:
-            raise HTTPException(404, f"unknown tool {name!r}; available tools: "
+            raise HTTPException(404, f"unknown tool {preview(name)}; available tools: "
                                 f"{', '.join(s.name for s in registry.specs())}")
-        return await registry.call(live.tools, name, await _json_body(request))
+        result = await registry.call(live.tools, name, await _body_text(request))
+        return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
 
 
 def _add_check_routes(app: FastAPI, hub: Hub) -> None:
@@ -133,14 +134,21 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     registry = registry or default_registry()
     app = FastAPI(title="mavswarm agent API",
                   description="Live benchmark sessions; roles agent, operator and admin by "
-                              "API key (X-API-Key header).")
+                              "API key (X-API-Key header).",
+                  openapi_url=None, docs_url=None, redoc_url=None)
+    app.add_middleware(BodyLimit)
 
     @app.exception_handler(BudgetExhausted)
     async def budget_spent(_: Request, error: BudgetExhausted) -> JSONResponse:
         return JSONResponse({"detail": str(error), "reason": error.reason}, status_code=409)
 
+    @app.exception_handler(InputError)
+    async def bad_input(_: Request, error: InputError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=error.http_status)
+
     add_compat_world_routes(app, hub)  # first: /sessions/current is not a session id
     _add_session_routes(app, hub, registry)
     _add_check_routes(app, hub)
     add_compat_routes(app, hub)
+    add_role_docs(app, hub)
     return app

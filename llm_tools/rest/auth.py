@@ -8,20 +8,21 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Security
 from fastapi.security import APIKeyHeader
 
+from llm_tools.input_limits import preview
 from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
 
-__all__ = ["API_KEY_HEADER", "caller_dependency", "live_session", "require"]
+__all__ = ["API_KEY_HEADER", "caller_dependency", "key_header", "live_session", "require"]
 
 API_KEY_HEADER = "X-API-Key"
 
-_header = APIKeyHeader(name=API_KEY_HEADER, auto_error=False,
+key_header = APIKeyHeader(name=API_KEY_HEADER, auto_error=False,
                        description="API key; its role is agent, operator or admin")
 
 
 def caller_dependency(hub: Hub) -> Callable[..., Caller]:
     """A FastAPI dependency giving the Caller of a request's API key."""
 
-    def caller(key: Annotated[str | None, Security(_header)]) -> Caller:
+    def caller(key: Annotated[str | None, Security(key_header)]) -> Caller:
         if not key:
             raise HTTPException(401, f"missing API key: send it in the {API_KEY_HEADER} header",
                                 headers={"WWW-Authenticate": "APIKey"})
@@ -45,6 +46,7 @@ def require(hub: Hub, *roles: Role) -> Callable[..., Caller]:
                                 f"it needs one of: {allowed}")
         return caller
 
+    check.roles = frozenset(roles)  # type: ignore[attr-defined]  # read by the role docs
     return check
 
 
@@ -53,9 +55,9 @@ def live_session(hub: Hub, caller: Caller, session_id: str) -> LiveSession:
     own (whether or not it exists), 404 for an unknown id."""
     if caller.role is Role.AGENT and caller.session_id != session_id:
         raise HTTPException(403, f"this agent key is bound to session {caller.session_id!r}, "
-                            f"not {session_id!r}")
+                            f"not {preview(session_id)}")
     live = hub.sessions.get(session_id)
     if live is None:
-        raise HTTPException(404, f"unknown session {session_id!r}; sessions: "
+        raise HTTPException(404, f"unknown session {preview(session_id)}; sessions: "
                             f"{', '.join(hub.sessions) or 'none'}")
     return live

@@ -3,7 +3,6 @@ commands `POST /drones/{id}/command/{name}` (scalar parameters as query paramete
 `move_along_path` waypoints as a JSON body), answered in the reference command-response
 shape. An agent key acts on its own session; other roles name one with `?session=`."""
 
-import json
 import math
 import secrets
 import time
@@ -13,6 +12,7 @@ from typing import Annotated, Any
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.agents import AgentTools
+from llm_tools.input_limits import InputError, check_text, parse_json, parse_number, preview
 from llm_tools.rest.auth import live_session, require
 from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
 from mavlink_gateway import DroneState, Outcome, Status
@@ -38,20 +38,14 @@ def _num(params: Mapping[str, Any], key: str, default: Any = _REQUIRED) -> float
         if default is _REQUIRED:
             raise HTTPException(422, f"parameter {key!r} is required")
         return float(default)
-    value = params[key]
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise HTTPException(422, f"parameter {key!r} must be a number, got {value!r}") from None
-    if isinstance(value, bool) or not math.isfinite(number):
-        raise HTTPException(422, f"parameter {key!r} must be a finite number, got {value!r}")
-    return number
+    return parse_number(params[key], f"parameter {key!r}")
 
 
 def _text(params: Mapping[str, Any], key: str) -> str:
     value = params.get(key)
     if not isinstance(value, str) or not value:
         raise HTTPException(422, f"parameter {key!r} is required (a non-empty string)")
+    check_text(value, f"parameter {key!r}")
     return value
 
 
@@ -79,9 +73,12 @@ def _waypoints(body: Any, state: DroneState) -> list[list[float]]:
             point = point["coordinates"]
         if not isinstance(point, Mapping):
             raise HTTPException(422, f"waypoints[{k}]: expected an object {{x, y[, z]}}, "
-                                f"got {point!r}")
-        points.append([_num(point, "x"), _num(point, "y"),
-                       _num(point, "z", state.altitude_m)])
+                                f"got {preview(point)}")
+        try:
+            points.append([_num(point, "x"), _num(point, "y"),
+                           _num(point, "z", state.altitude_m)])
+        except InputError as error:
+            raise InputError(f"waypoints[{k}]: {error.where}", error.problem) from None
     return points
 
 
@@ -129,8 +126,8 @@ def resolve_session(hub: Hub, caller: Caller, session: str | None) -> LiveSessio
 def _state(live: LiveSession, drone: str) -> DroneState:
     outcome = live.gateway.drone_state(drone)
     if outcome.state is None:
-        raise HTTPException(404, f"unknown drone {drone!r} in session {live.id!r}; drones: "
-                            f"{', '.join(live.gateway.drones)}")
+        raise HTTPException(404, f"unknown drone {preview(drone)} in session {live.id!r}; "
+                            f"drones: {', '.join(live.gateway.drones)}")
     return outcome.state
 
 
@@ -139,7 +136,8 @@ async def run_command(live: LiveSession, drone_id: str, name: str,
     """Run a MultiUAV-Plat command; the answer in the reference's shape."""
     run = COMMANDS.get(name)
     if run is None:
-        raise HTTPException(404, f"unknown command {name!r}; commands: {', '.join(COMMANDS)}")
+        raise HTTPException(404, f"unknown command {preview(name)}; commands: "
+                            f"{', '.join(COMMANDS)}")
     state = _state(live, drone_id)
     outcome = await run(live.tools, drone_id, dict(params), body, state)
     return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
@@ -171,9 +169,10 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
                       ) -> dict[str, Any]:
         raw = (await request.body()).strip()
         try:
-            body = json.loads(raw) if raw else None
-        except ValueError:
-            raise HTTPException(422, f"{name}: the body is not valid JSON") from None
+            body = parse_json(raw) if raw else None
+        except InputError as error:
+            raise InputError(f"{preview(name)}: {error.where}", error.problem,
+                             http_status=error.http_status) from None
         return await run_command(resolve_session(hub, caller, session), drone_id, name,
                                  dict(request.query_params), body)
 
@@ -195,7 +194,8 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
     def nearby_kind(drone_id: str, kind: str, caller: Annotated[Caller, Depends(anyone)],
                     session: str | None = pick) -> list[dict[str, Any]]:
         if kind not in ("drones", "targets", "obstacles"):
-            raise HTTPException(404, f"unknown kind {kind!r}; use drones, targets or obstacles")
+            raise HTTPException(404, f"unknown kind {preview(kind)}; use drones, targets or "
+                                "obstacles")
         return _nearby(resolve_session(hub, caller, session), caller, drone_id)[kind]
 
     @app.get("/sessions/current/tasks/next", tags=["multiuav-plat"],

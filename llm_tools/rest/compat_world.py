@@ -6,6 +6,7 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
+from llm_tools.input_limits import parse_json, preview
 from llm_tools.rest.auth import require
 from llm_tools.rest.compat import COMMANDS, resolve_session, run_command
 from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
@@ -30,13 +31,13 @@ def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dic
     if caller.role is Role.AGENT:
         seen = _perceived(live, kind)
         if entity_id not in seen:
-            raise HTTPException(404, f"no {kind[:-1]} {entity_id!r} within your drones' "
+            raise HTTPException(404, f"no {kind[:-1]} {preview(entity_id)} within your drones' "
                                 "perception")
         return seen[entity_id]
     for entity in live.session.data.get(kind, []):
         if isinstance(entity, dict) and entity.get("id") == entity_id:
             return entity
-    raise HTTPException(404, f"unknown {kind[:-1]} {entity_id!r}")
+    raise HTTPException(404, f"unknown {kind[:-1]} {preview(entity_id)}")
 
 
 def add_compat_world_routes(app: FastAPI, hub: Hub) -> None:
@@ -79,10 +80,7 @@ def add_compat_world_routes(app: FastAPI, hub: Hub) -> None:
     async def generic_command(drone_id: str, request: Request,
                               caller: Annotated[Caller, Depends(actor)],
                               session: str | None = pick) -> dict[str, Any]:
-        try:
-            body = await request.json()
-        except ValueError:
-            raise HTTPException(422, "the body is not valid JSON") from None
+        body = parse_json(await request.body())
         if not isinstance(body, dict) or not isinstance(body.get("command"), str):
             raise HTTPException(422, "the body must be {\"command\": name, \"parameters\": "
                                 f"{{...}}}}; commands: {', '.join(COMMANDS)}")
