@@ -1,4 +1,4 @@
-"""mavswarm's command line: `mavswarm up` (a swarm) and `mavswarm bench` (the benchmark).
+"""`mavswarm bench`: generate, run, report and import the benchmark.
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
   mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
@@ -6,33 +6,26 @@
                      [--workers N] [--trials K] [--out DIR]
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
   mavswarm bench import FILE [FILE ...] --out DIR
-  mavswarm serve (--sessions FILE ... | --suite smoke|full) [--port P] [--key ROLE[:SESSION]=KEY]
-  mavswarm mcp FILE [--transport stdio|http] [--port P]
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
 from pathlib import Path
 
 from benchmark.orchestrator import AGENTS
 from benchmark.suite import SUITES, suite_paths
-from emulator.cli import add_up_parser, run_up
 
-__all__ = ["main"]
+__all__ = ["add_parsers", "run_bench"]
 
 
-def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="mavswarm", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
-    add_up_parser(sub)
-    from llm_tools.serve import add_mcp_arguments, add_serve_arguments
-    add_serve_arguments(sub.add_parser("serve", help="serve live sessions over the REST API"))
-    add_mcp_arguments(sub.add_parser("mcp", help="serve one session's agent tools over MCP"))
-    bench = sub.add_parser("bench", help="generate, run and report the benchmark")
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """The `bench` command and its subcommands, on the `mavswarm` command's subparsers."""
+    bench = sub.add_parser("bench", help="generate, run and report the benchmark",
+                           description=__doc__,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    bench.set_defaults(run=run_bench)
     bsub = bench.add_subparsers(dest="bench_command", required=True)
 
     gen = bsub.add_parser("generate", help="generate the 75 seeded sessions with their tasks")
@@ -72,7 +65,6 @@ def _build_parser() -> argparse.ArgumentParser:
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
-    return parser
 
 
 def _generate(args: argparse.Namespace) -> int:
@@ -134,21 +126,10 @@ def _import(args: argparse.Namespace) -> int:
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    args = _build_parser().parse_args(argv)
-    if args.command == "up":
-        return run_up(args)
+def run_bench(args: argparse.Namespace) -> int:
+    """Run a parsed `mavswarm bench` command; bad input is printed, exit 2."""
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
-    if args.command in ("serve", "mcp"):
-        from llm_tools.serve import run_mcp, run_serve
-        try:
-            return (run_serve if args.command == "serve" else run_mcp)(args)
-        except (SessionFileError, ValueError, OSError) as error:
-            print(f"mavswarm: {error}", file=sys.stderr)
-            return 2
-        except KeyboardInterrupt:
-            return 130
     handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import}
     try:
         return handlers[args.bench_command](args)
@@ -158,7 +139,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("\nmavswarm: interrupted; re-run the same command to resume", file=sys.stderr)
         return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

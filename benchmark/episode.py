@@ -21,7 +21,7 @@ from collections.abc import AsyncIterator, Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from benchmark.agents import Agent, AgentTask, AgentTools, BudgetExhausted
+from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
 from benchmark.session_file import Session, TaskSpec
 from benchmark.validators import CheckContext, evaluate, leaf_count
 from emulator.clock import ClockConfig

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from benchmark.agents import Agent
+from agent_contract import Agent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.oracle import OracleAgent
 from benchmark.scenarios import generate_world

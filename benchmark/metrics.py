@@ -283,7 +283,7 @@ def pass_hat_k(records: Iterable[Record], k: int) -> float | None:
     return sum(ratios) / len(ratios) if ratios else None
 
 
-def _token_totals(records: list[Record]) -> dict[str, int]:
+def _token_totals(records: list[Record]) -> dict[str, int | float]:
     prompt = completion = counted = 0
     cost_usd = 0.0
     for record in records:

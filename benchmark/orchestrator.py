@@ -19,7 +19,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from benchmark.agents import Agent, NoopAgent
+from agent_contract import Agent
+from benchmark.agents import NoopAgent
 from benchmark.episode import EpisodeOptions, run_session
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, load_session
@@ -143,7 +144,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         progress(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
     done = _done_by_unit(read_records(plan.results_path)) if keys else {}
     ids = {p: _session_id(p) for p in plan.sessions} if done else {}
-    units = [(str(p), trial, done.get((ids.get(p) or "", trial), {}))
+    units: list[tuple[str, int, Mapping[str, Any]]] = [
+        (str(p), trial, done.get((ids.get(p) or "", trial), {}))
              for trial in range(plan.trials) for p in plan.sessions]
 
     def handle(message: tuple[str, Any]) -> None:
@@ -160,8 +162,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
 
     try:
         if plan.workers == 1:
-            for path, trial, done in units:
-                _run_unit(path, trial, plan, done, handle)
+            for path, trial, unit_done in units:
+                _run_unit(path, trial, plan, unit_done, handle)
         else:
             _run_parallel(plan, units, handle)
     finally:

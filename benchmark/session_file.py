@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from benchmark.agents.protocol import TaskBudget
+from agent_contract.protocol import TaskBudget
 from benchmark.validators import CheckDefinitionError, Node, parse_tree
 from emulator.scenario import Scenario, ScenarioError, scenario_from_dict
 

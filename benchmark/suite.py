@@ -20,6 +20,8 @@ SMOKE_TASKS = 6
 
 def suite_paths(name: str) -> tuple[tuple[Path, ...], int | None]:
     """The session files of a suite and its per-session task limit."""
+    ids: tuple[str, ...]
+    limit: int | None
     if name == "smoke":
         ids, limit = SMOKE_SESSIONS, SMOKE_TASKS
     elif name == "full":

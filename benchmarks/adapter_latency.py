@@ -24,13 +24,13 @@ import httpx
 from _common import pct
 from mcp import Client
 
-from benchmark.agents import AgentTask, AgentTools, TaskBudget
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
+from benchmark.server import Hub, LiveSession, Role, create_app
+from benchmark.server.serve import serve_asgi
 from benchmark.session_file import session_from_dict
 from llm_tools import default_registry
 from llm_tools.mcp_server import streamable_http_app
-from llm_tools.rest import Hub, LiveSession, Role, create_app
-from llm_tools.serve import serve_asgi
 from tests.bench_fixtures import small_session
 
 KEY = "bench-agent"

@@ -19,7 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _common import pct
 
-from benchmark.agents import AgentTask, AgentTools, TaskBudget
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
 from benchmark.session_file import session_from_dict
 from llm_tools import default_registry

@@ -1,4 +1,4 @@
-"""The `mavswarm` command line."""
+"""`mavswarm up`: a swarm of emulated PX4 quadrotors until Ctrl-C."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import multiprocessing
 import signal
 import sys
 import time
-from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,20 +17,15 @@ from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
-__all__ = ["add_up_parser", "main", "run_up"]
+__all__ = ["add_parsers", "run_up"]
 
 MAX_VEHICLES_PER_NETWORK = 250
 
 
-def _build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="mavswarm", description=__doc__)
-    add_up_parser(parser.add_subparsers(dest="command", required=True))
-    return parser
-
-
-def add_up_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    """The `up` command's options, on a subparsers object."""
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """The `up` command, on the `mavswarm` command's subparsers."""
     up = sub.add_parser("up", help="run a swarm of emulated PX4 quadrotors until Ctrl-C")
+    up.set_defaults(run=run_up)
     up.add_argument("--drones", type=int, help="number of vehicles (default 5, or the session's)")
     up.add_argument("--session", type=Path, help="MultiUAV-Plat or mavswarm session JSON file")
     up.add_argument("--speed", type=float, default=1.0, help="simulation speed x real time")
@@ -159,11 +153,3 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
             proc.join()
     return 0
 
-
-def main(argv: Sequence[str] | None = None) -> int:
-    args = _build_parser().parse_args(argv)
-    return run_up(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

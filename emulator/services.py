@@ -9,7 +9,8 @@ benchmark tasks, which are marked `operator_*` and recorded as such in the groun
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
+from typing import Any
 
 from emulator.flight.battery import MESSAGE_COST_PCT
 from emulator.flight.operator import place_on_ground, set_battery
@@ -100,13 +101,14 @@ class SwarmServices:
             for ap in self._fleet.autopilots
         }
 
-    def operator_restore(self, snapshot: dict[str, dict[str, list[float] | float]]) -> None:
+    def operator_restore(self, snapshot: Mapping[str, Mapping[str, Any]]) -> None:
         """Operator reset: drones put on the ground where a snapshot had them, with its homes."""
         for drone_id, spot in snapshot.items():
             ap = self._autopilot(drone_id)
-            x, y, _ = spot["position_m"]  # type: ignore[misc]
-            place_on_ground(ap, float(x), float(y), float(spot["heading_deg"]))  # type: ignore[arg-type]
-            ap.home_m = tuple(float(v) for v in spot["home_m"])  # type: ignore[union-attr]
+            x, y, _ = spot["position_m"]
+            place_on_ground(ap, float(x), float(y), float(spot["heading_deg"]))
+            hx, hy, hz = (float(v) for v in spot["home_m"])
+            ap.home_m = (hx, hy, hz)
             ap.listener.on_home_changed()
 
     @contextlib.contextmanager

@@ -128,11 +128,11 @@ class UdpEndpoint:
                 for link in links.values():
                     self._deliver(link, m, now)
             else:
-                link = links.get(target)
-                if link is None:
+                addressed = links.get(target)
+                if addressed is None:
                     self.stats.unroutable += 1
                 else:
-                    self._deliver(link, m, now)
+                    self._deliver(addressed, m, now)
 
     def _deliver(self, link: VehicleLink, m, now: float) -> None:
         # The I/O edge: a handler bug is logged with its traceback and counted, and the

@@ -23,7 +23,7 @@ from mcp.server.lowlevel import Server
 from mcp.server.stdio import stdio_server
 from starlette.applications import Starlette
 
-from benchmark.agents import AgentTools, BudgetExhausted
+from agent_contract import AgentTools, BudgetExhausted
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
 from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry

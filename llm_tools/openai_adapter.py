@@ -35,7 +35,8 @@ def parse_tool_calls(message: Mapping[str, Any]) -> list[ToolCall]:
         if not isinstance(raw, Mapping):
             calls.append(ToolCall(f"call_{k}", "", None))
             continue
-        function = raw.get("function") if isinstance(raw.get("function"), Mapping) else {}
+        found = raw.get("function")
+        function: Mapping[str, Any] = found if isinstance(found, Mapping) else {}
         calls.append(ToolCall(str(raw.get("id") or f"call_{k}"), str(function.get("name") or ""),
                               function.get("arguments")))
     return calls

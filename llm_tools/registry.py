@@ -7,18 +7,16 @@ the gateway unless the arguments validate.
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable, Mapping, Sequence
+import inspect
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from benchmark.agents import AgentTools, BudgetExhausted
+from agent_contract import AgentTools, BudgetExhausted, tool_names
 from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
 from llm_tools.schema import describe, schema_for, validate
-from llm_tools.tools import TOOL_FUNCTIONS
 
 __all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry"]
-
-ToolFn = Callable[..., Awaitable[dict[str, Any]]]
 
 OUTPUT_SCHEMA: dict[str, Any] = {
     "type": "object",
@@ -33,10 +31,11 @@ OUTPUT_SCHEMA: dict[str, Any] = {
 
 @dataclass(frozen=True)
 class ToolSpec:
+    """One tool as models see it: generated from its `AgentTools` method."""
+
     name: str
     description: str
     input_schema: dict[str, Any]
-    fn: ToolFn
 
 
 def _error(message: str) -> dict[str, Any]:
@@ -46,14 +45,18 @@ def _error(message: str) -> dict[str, Any]:
 class ToolRegistry:
     """Tools by name, with their schemas; calls validated before they run."""
 
-    def __init__(self, functions: Sequence[ToolFn]) -> None:
+    def __init__(self, names: Sequence[str] | None = None) -> None:
+        """The tools named (default: every agent tool), from their `AgentTools` methods."""
         self._specs: dict[str, ToolSpec] = {}
-        for fn in functions:
-            summary, _ = describe(fn)
-            spec = ToolSpec(fn.__name__, summary, schema_for(fn), fn)
-            if spec.name in self._specs:
-                raise ValueError(f"two tools named {spec.name!r}")
-            self._specs[spec.name] = spec
+        known = tool_names()
+        for name in known if names is None else names:
+            if name not in known:
+                raise ValueError(f"{name!r} is not an agent tool; tools: {', '.join(known)}")
+            if name in self._specs:
+                raise ValueError(f"two tools named {name!r}")
+            method = getattr(AgentTools, name)
+            summary, _ = describe(method)
+            self._specs[name] = ToolSpec(name, summary, schema_for(method, skip=1))
 
     def specs(self) -> list[ToolSpec]:
         return list(self._specs.values())
@@ -81,7 +84,10 @@ class ToolRegistry:
         if problems:
             return _error(f"{name}: " + "; ".join(problems))
         try:
-            return await spec.fn(tools, **values)
+            outcome = getattr(tools, spec.name)(**values)
+            if inspect.isawaitable(outcome):
+                outcome = await outcome
+            return outcome.to_dict()
         except BudgetExhausted:
             raise
         except (TypeError, ValueError) as error:  # e.g. a gateway refusing an odd value
@@ -89,5 +95,5 @@ class ToolRegistry:
 
 
 def default_registry() -> ToolRegistry:
-    """The agent-side primitives."""
-    return ToolRegistry(TOOL_FUNCTIONS)
+    """Every agent tool."""
+    return ToolRegistry()

@@ -3,6 +3,7 @@
 from mavlink_gateway.drone_link import DroneLink, DroneProfile
 from mavlink_gateway.fleet import FleetConnection, FleetError
 from mavlink_gateway.gateway import Gateway, profiles_from_scenario
+from mavlink_gateway.interfaces import FleetSpec, GeoFrame, Services
 from mavlink_gateway.outcomes import DroneState, Outcome, Status
 
 __all__ = [
@@ -11,8 +12,11 @@ __all__ = [
     "DroneState",
     "FleetConnection",
     "FleetError",
+    "FleetSpec",
     "Gateway",
+    "GeoFrame",
     "Outcome",
+    "Services",
     "Status",
     "profiles_from_scenario",
 ]

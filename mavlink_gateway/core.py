@@ -3,18 +3,17 @@ precondition checks, and waiting for an outcome within a simulated-time budget."
 
 from __future__ import annotations
 
-import contextlib
 import inspect
 import math
 import time
 from collections.abc import Awaitable, Callable, Mapping
-from typing import Any, Protocol
+from typing import Any
 
-from emulator.perception import Perception
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.interfaces import Services
 from mavlink_gateway.outcomes import Outcome, Status
 
-__all__ = ["GatewayCore", "Refusal", "Services"]
+__all__ = ["GatewayCore", "Refusal"]
 
 POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry arrives
 STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
@@ -28,20 +27,6 @@ FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints l
 # The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
 # cm/s per axis, which can read a little higher. A stepped clock stops right then.
 ARRIVED_SPEED_M_S = 0.5
-
-class Services(Protocol):
-    """What the gateway needs from the swarm besides MAVLink (see emulator.services)."""
-
-    def clock_s(self) -> float: ...
-    def clock_limit(self, t_s: float) -> contextlib.AbstractContextManager[None]: ...
-    def sense(self, drone_id: str) -> Perception: ...
-    def send_message(self, sender: str, recipient: str, text: str) -> Any: ...
-    def broadcast(self, sender: str, text: str) -> int: ...
-    def read_messages(self, drone_id: str) -> list[Any]: ...
-    def operator_land_all(self) -> None: ...
-    def operator_reset_batteries(self, pct: float = 100.0) -> None: ...
-    def operator_reset_to_start(self) -> None: ...
-
 
 class Refusal(Exception):
     """A precondition failed: the primitive is refused and nothing is sent."""

@@ -20,7 +20,7 @@ from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
-from emulator.geo import GeoOrigin, wrap_heading_deg
+from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
 
 __all__ = ["DroneLink", "DroneProfile"]
@@ -57,7 +57,7 @@ class DroneProfile:
 class DroneLink:
     """MAVSDK plugins of one system plus its live telemetry."""
 
-    def __init__(self, profile: DroneProfile, system: Any, origin: GeoOrigin) -> None:
+    def __init__(self, profile: DroneProfile, system: Any, origin: GeoFrame) -> None:
         self.profile = profile
         self.system = system
         self.origin = origin

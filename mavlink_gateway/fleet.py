@@ -9,8 +9,8 @@ from collections.abc import Sequence
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
-from emulator.geo import GeoOrigin
 from mavlink_gateway.drone_link import DroneLink, DroneProfile
+from mavlink_gateway.interfaces import GeoFrame
 
 __all__ = ["FleetConnection", "FleetError"]
 
@@ -32,7 +32,7 @@ class FleetConnection:
         self.drones = drones
 
     @classmethod
-    async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoOrigin, *,
+    async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoFrame, *,
                       timeout_s: float = DISCOVERY_TIMEOUT_S) -> FleetConnection:
         """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles."""
         loop = asyncio.get_running_loop()

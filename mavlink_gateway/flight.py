@@ -15,9 +15,9 @@ from collections.abc import Sequence
 
 from mavsdk.asyncio.plugins.mission_raw import MissionItem
 
-from emulator.geo import wrap_heading_deg
 from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.interfaces import wrap_heading_deg
 from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["FlightPrimitives"]

@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-from emulator.scenario import Scenario
 from mavlink_gateway.core import Refusal
 from mavlink_gateway.drone_link import DroneProfile
-from mavlink_gateway.flight import FlightPrimitives
+from mavlink_gateway.interfaces import FleetSpec
 from mavlink_gateway.outcomes import DroneState, Outcome, Status
 from mavlink_gateway.payload import PayloadPrimitives
 
 __all__ = ["Gateway", "profiles_from_scenario"]
 
 
-class Gateway(FlightPrimitives, PayloadPrimitives):
+class Gateway(PayloadPrimitives):
     """All primitives for the drones of one swarm.
 
     Each primitive takes a drone id and returns an Outcome. Primitives for different drones
@@ -31,7 +30,7 @@ class Gateway(FlightPrimitives, PayloadPrimitives):
         return Outcome(Status.OK, state.describe(), state)
 
 
-def profiles_from_scenario(scenario: Scenario) -> list[DroneProfile]:
+def profiles_from_scenario(scenario: FleetSpec) -> list[DroneProfile]:
     """The fleet owner's view of a scenario's drones: ids, system ids and limits."""
     return [
         DroneProfile(spec.id, spec.name, k + 1, spec.max_altitude_m, spec.max_speed_m_s,

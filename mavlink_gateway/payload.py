@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from emulator.perception import Perception, SensedEntity
-from emulator.radio import RadioError
-from mavlink_gateway.core import GatewayCore, Refusal
+from mavlink_gateway.core import Refusal
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.flight import FlightPrimitives
+from mavlink_gateway.interfaces import Sensed, SensedWorld
 from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["PayloadPrimitives", "perception_dict"]
@@ -17,20 +17,21 @@ CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targe
 FULL_PCT = 99.5
 
 
-def _entity(e: SensedEntity) -> dict[str, Any]:
+def _entity(e: Sensed) -> dict[str, Any]:
     return {"id": e.id, "kind": e.kind, "distance_m": round(e.distance_m, 1),
             "position": [round(v, 1) for v in e.position_m]}
 
 
-def perception_dict(p: Perception) -> dict[str, Any]:
+def perception_dict(p: SensedWorld) -> dict[str, Any]:
     """What one drone senses, as plain data (never more than its sensor reports)."""
     return {"targets": [_entity(e) for e in p.targets],
             "obstacles": [_entity(e) for e in p.obstacles],
             "drones": [_entity(e) for e in p.vehicles]}
 
 
-class PayloadPrimitives(GatewayCore):
-    """Primitives that use the camera, the charger, the radio and the sensor feed."""
+class PayloadPrimitives(FlightPrimitives):
+    """Primitives that use the camera, the charger (flying to a station first), the radio and
+    the sensor feed."""
 
     async def take_photo(self, drone: str) -> Outcome:
         async def body(link: DroneLink) -> Outcome:
@@ -93,7 +94,8 @@ class PayloadPrimitives(GatewayCore):
             return Outcome(Status.REJECTED, f"{action} refused: {error}")
         try:
             return call(link)
-        except RadioError as error:  # a known drone: its state, as every other refusal gives
+        except ValueError as error:  # the radio refused; a known drone: its state, as every
+            # other refusal gives
             return Outcome(Status.REJECTED, f"{action} refused: {error}", link.state())
 
     def send_message(self, drone: str, to: str, text: str) -> Outcome:

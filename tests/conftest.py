@@ -5,7 +5,6 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import socket
 import time
 import weakref
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -15,23 +14,11 @@ import pytest
 from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
+from tests.ports import unused_udp_port
 
-_handed_out: set[int] = set()
 _executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
     weakref.WeakKeyDictionary()
 )
-
-
-def unused_udp_port(host: str = "127.0.0.1") -> int:
-    """A UDP port nobody is bound to now, never the same one twice in a session."""
-    for _ in range(100):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-            s.bind((host, 0))
-            port = s.getsockname()[1]
-        if port not in _handed_out:
-            _handed_out.add(port)
-            return port
-    raise RuntimeError("no unused UDP port found")
 
 
 @pytest.fixture

@@ -23,7 +23,7 @@ from emulator.swarm import PortPlan, Swarm
 from emulator.world import CALM, Obstacle, Target, Wind, World
 from mavlink_gateway import FleetConnection, Gateway, Outcome, Status, profiles_from_scenario
 from mavlink_gateway.drone_link import DroneLink
-from tests.conftest import unused_udp_port
+from tests.ports import unused_udp_port
 
 __all__ = [
     "FAST_TELEMETRY_HZ",

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.agents import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools
 from benchmark.episode import run_session
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records

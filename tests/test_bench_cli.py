@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.bench_fixtures import reference_session, small_session, write_json
+from tests.cli_fixtures import MAVSWARM
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _mavswarm(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "benchmark.cli", *args], cwd=ROOT,
+    return subprocess.run([*MAVSWARM, *args], cwd=ROOT,
                           capture_output=True, text=True, timeout=timeout)
 
 

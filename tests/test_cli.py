@@ -6,7 +6,6 @@ import os
 import signal
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -14,17 +13,13 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from emulator.truth import TruthRecorder
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from tests.cli_fixtures import MAVSWARM
+from tests.ports import unused_udp_port
 
 
 def _start(*args: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-m", "emulator.cli", "up", *args],
+        [*MAVSWARM, "up", *args],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
@@ -45,7 +40,7 @@ def _read_until(proc: subprocess.Popen[str], needle: str, timeout_s: float = 20.
 
 
 def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
-    api, gcs, bind = _free_port(), _free_port(), _free_port()
+    api, gcs, bind = unused_udp_port(), unused_udp_port(), unused_udp_port()
     truth = tmp_path / "run.truth.npz"
     proc = _start("--drones", "3", "--speed", "5", "--bind-host", "127.0.0.1",
                   "--bind-port", str(bind), "--api-port", str(api), "--gcs-port", str(gcs),
@@ -89,7 +84,7 @@ def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
     ],
 )
 def test_bad_options_give_a_clear_error(args: list[str], message: str):
-    proc = subprocess.run([sys.executable, "-m", "emulator.cli", "up", *args],
+    proc = subprocess.run([*MAVSWARM, "up", *args],
                           capture_output=True, text=True, timeout=30)
     assert proc.returncode == 2
     assert message in proc.stderr, proc.stderr

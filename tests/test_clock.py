@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
-import socket
 import time
 
 import numpy as np
@@ -16,20 +15,15 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from emulator.clock import ClockConfig
 from emulator.scenario import default_scenario
 from emulator.swarm import PortPlan, Swarm
+from tests.ports import unused_udp_port
 
 pytestmark = pytest.mark.mavsdk
-
-
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 async def _fly(clock: ClockConfig, pause_s: float) -> tuple[Swarm, float]:
     """Arm, take off, go somewhere, land: with `pause_s` of client idleness between steps."""
     asyncio.get_running_loop().set_default_executor(concurrent.futures.ThreadPoolExecutor(16))
-    port = _free_udp_port()
+    port = unused_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
     swarm = Swarm(default_scenario(1), clock=clock, ports=ports)
     async with swarm, Mavsdk(Configuration.create_with_component_type(

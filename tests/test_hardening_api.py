@@ -12,15 +12,15 @@ import httpx
 import pytest
 from mcp import Client
 
-from benchmark.agents import AgentTask, AgentTools, TaskBudget
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
+from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.session_file import session_from_dict
 from emulator.radio import Radio, RadioError
 from emulator.truth import TruthRecorder
 from llm_tools import default_registry
 from llm_tools.input_limits import MAX_BODY_BYTES
 from llm_tools.mcp_server import build_server
-from llm_tools.rest import Hub, LiveSession, Role, create_app
 from tests.bench_fixtures import small_session
 
 pytestmark = pytest.mark.mavsdk

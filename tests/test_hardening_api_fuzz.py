@@ -32,11 +32,11 @@ import uvicorn
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from benchmark.agents import BudgetExhausted
+from agent_contract import BudgetExhausted
+from benchmark.server import LiveSession
 from llm_tools import default_registry
 from llm_tools.input_limits import MAX_BODY_BYTES
 from llm_tools.mcp_server import streamable_http_app
-from llm_tools.rest import LiveSession
 from tests.test_hardening_api import _snapshot, raw_object, served
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]

@@ -15,8 +15,8 @@ import pytest
 import uvicorn
 from mcp import Client, StdioServerParameters
 
-from benchmark.agents import AgentTask, AgentTools
-from benchmark.agents.protocol import TaskBudget
+from agent_contract import AgentTask, AgentTools
+from agent_contract.protocol import TaskBudget
 from benchmark.episode import swarm_gateway
 from benchmark.session_file import session_from_dict
 from llm_tools import OUTPUT_SCHEMA, default_registry

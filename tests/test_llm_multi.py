@@ -7,10 +7,10 @@ import contextlib
 import httpx
 import pytest
 
-from benchmark.agents import AgentTask, AgentTools, TaskBudget
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
+from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.session_file import session_from_dict
-from llm_tools.rest import Hub, LiveSession, Role, create_app
 from tests.bench_fixtures import small_session
 
 pytestmark = pytest.mark.mavsdk

@@ -12,6 +12,7 @@ from benchmark.session_file import session_from_dict
 from llm_tools import default_registry, openai_tools
 from llm_tools.agents import ModelConfig, ReactAgent
 from tests.bench_fixtures import small_session
+from tests.cli_fixtures import MAVSWARM
 from tests.scripted_llm import call, scripted_llm
 
 
@@ -71,7 +72,6 @@ async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
 @pytest.mark.mavsdk
 def test_bench_run_with_the_react_agent(tmp_path) -> None:
     import subprocess
-    import sys
     from pathlib import Path
 
     from tests.bench_fixtures import write_json
@@ -83,7 +83,7 @@ def test_bench_run_with_the_react_agent(tmp_path) -> None:
     root = Path(__file__).resolve().parents[1]
     with scripted_llm(script) as llm:
         run = subprocess.run(
-            [sys.executable, "-m", "benchmark.cli", "bench", "run", "--agent", "react",
+            [*MAVSWARM, "bench", "run", "--agent", "react",
              "--model", "scripted", "--base-url", llm.base_url, "--sessions", str(session),
              "--out", str(tmp_path / "out"), "--price-in", "2.0", "--price-out", "8.0"],
             cwd=root, capture_output=True, text=True, timeout=120)

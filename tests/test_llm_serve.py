@@ -8,7 +8,6 @@ import asyncio
 import contextlib
 import io
 import json
-import sys
 from collections.abc import AsyncIterator, Callable, Coroutine
 from pathlib import Path
 from types import SimpleNamespace
@@ -18,18 +17,19 @@ import httpx
 import pytest
 from mcp import Client, StdioServerParameters
 
-from benchmark.session_file import dump_session
-from llm_tools.rest import Hub, Role
-from llm_tools.serve import (
+from benchmark.server import Hub, Role
+from benchmark.server.serve import (
     ApiKey,
     _add_keys,
     generated_keys,
-    main_serve,
     parse_api_key,
     serve_mcp,
     serve_rest,
 )
+from benchmark.session_file import dump_session
+from mavswarm.cli import main
 from tests.bench_fixtures import small_session
+from tests.cli_fixtures import MAVSWARM
 
 
 @pytest.fixture(scope="module")
@@ -119,7 +119,7 @@ async def test_sessions_without_a_usable_task_are_refused_before_any_swarm(
     with pytest.raises(ValueError, match="transport"):
         await serve_mcp(same, transport="carrier-pigeon")  # type: ignore[arg-type]
     with pytest.raises(SystemExit):
-        main_serve(["--port", "1"])  # neither --sessions nor --suite
+        main(["serve", "--port", "1"])  # neither --sessions nor --suite
 
 
 @pytest.mark.mavsdk
@@ -208,9 +208,7 @@ async def test_mcp_server_over_streamable_http(tmp_path: Path,
 async def test_mcp_server_over_stdio_in_a_subprocess(tmp_path: Path,
                                                      session_data: dict[str, Any]) -> None:
     path = _write(tmp_path, session_data)
-    code = ("import sys; from llm_tools.serve import main_mcp; "
-            "sys.exit(main_mcp(sys.argv[1:]))")
-    params = StdioServerParameters(command=sys.executable, args=["-c", code, str(path)],
+    params = StdioServerParameters(command=MAVSWARM[0], args=[*MAVSWARM[1:], "mcp", str(path)],
                                    cwd=str(Path(__file__).resolve().parents[1]))
     async with Client(params) as client:
         listed = await client.call_tool("list_drones", {})

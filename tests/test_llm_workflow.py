@@ -15,7 +15,6 @@ from llm_tools.agents import ModelConfig, WorkflowAgent
 from llm_tools.agents.blackboard import Blackboard
 from llm_tools.agents.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from llm_tools.registry import ToolRegistry
-from llm_tools.tools import TOOL_FUNCTIONS
 from tests.bench_fixtures import small_session
 from tests.scripted_llm import call, scripted_llm
 
@@ -170,7 +169,7 @@ async def test_incomplete_verdict_triggers_a_replan_with_the_failures() -> None:
 
 class _RecordingRegistry(ToolRegistry):
     def __init__(self) -> None:
-        super().__init__(TOOL_FUNCTIONS)
+        super().__init__()
         self.results: list[tuple[str, dict[str, Any]]] = []
 
     async def call(self, tools: Any, name: str, arguments: Any) -> dict[str, Any]:

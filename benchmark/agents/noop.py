@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from benchmark.agents.protocol import AgentTask
-from benchmark.agents.tools import AgentTools
+from agent_contract import AgentTask, AgentTools
 
 __all__ = ["NoopAgent"]
 

@@ -9,7 +9,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from benchmark.agents import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools
 from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
 from benchmark.oracle.planner import NoPath, PathPlanner
 from emulator.scenario import Scenario

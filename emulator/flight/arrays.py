@@ -10,7 +10,7 @@ _count = np.count_nonzero
 
 
 def any_true(mask: np.ndarray) -> bool:
-    return _count(mask) > 0
+    return bool(_count(mask))
 
 
 def indices(mask: np.ndarray) -> np.ndarray:

@@ -58,7 +58,7 @@ class VehicleLink:
             AUTOPILOT_COMPONENT_ID: Encoder(self.system_id, AUTOPILOT_COMPONENT_ID),
             CAMERA_COMPONENT_ID: Encoder(self.system_id, CAMERA_COMPONENT_ID),
         }
-        self._after_ack: list[Callable[[], None]] = []
+        self._after_ack: list[Callable[[], object]] = []
         self.camera = CameraComponent(self)
         self.missions = MissionTransfer(self)
         self.wall_now_s = wall_clock()
@@ -76,7 +76,7 @@ class VehicleLink:
     def time_boot_ms(self) -> int:
         return int(self.ap.now_s * 1000.0) & 0xFFFFFFFF
 
-    def after_ack(self, action: Callable[[], None]) -> None:
+    def after_ack(self, action: Callable[[], object]) -> None:
         self._after_ack.append(action)
 
     def build(self, msg_id: int) -> mavlink.MAVLink_message | None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from benchmark.agents import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.chat import ChatClient, ModelConfig
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from benchmark.agents import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.blackboard import Blackboard, StepRecord
 from llm_tools.agents.chat import ChatClient, ModelConfig
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls

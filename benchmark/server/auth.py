@@ -8,8 +8,8 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Security
 from fastapi.security import APIKeyHeader
 
+from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from llm_tools.input_limits import preview
-from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
 
 __all__ = ["API_KEY_HEADER", "caller_dependency", "key_header", "live_session", "require"]
 

@@ -18,8 +18,8 @@ from fastapi.openapi.utils import get_openapi
 from fastapi.responses import HTMLResponse
 from fastapi.routing import APIRoute
 
-from llm_tools.rest.auth import API_KEY_HEADER, key_header
-from llm_tools.rest.hub import Hub, Role
+from benchmark.server.auth import API_KEY_HEADER, key_header
+from benchmark.server.hub import Hub, Role
 
 __all__ = ["add_role_docs", "route_roles"]
 

@@ -24,23 +24,20 @@ from typing import Any, Literal, TextIO
 
 import uvicorn
 
-from benchmark.agents import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools
 from benchmark.episode import swarm_gateway
+from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.session_file import Session, TaskSpec, load_session
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
-from llm_tools.rest import Hub, LiveSession, Role, create_app
 from mavlink_gateway import Gateway
 
 __all__ = [
     "ApiKey",
-    "add_mcp_arguments",
-    "add_serve_arguments",
+    "add_parsers",
     "current_task_tools",
     "generated_keys",
     "live_hub",
-    "main_mcp",
-    "main_serve",
     "parse_api_key",
     "run_mcp",
     "run_serve",
@@ -244,49 +241,48 @@ def _sessions(args: argparse.Namespace) -> list[Path]:
     return list(paths)
 
 
-def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of `mavswarm serve`."""
-    group = parser.add_mutually_exclusive_group(required=True)
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """`serve` and `mcp`, on the `mavswarm` command's subparsers."""
+    rest = sub.add_parser("serve", help="serve live sessions over the REST API",
+                          description="Serve live sessions over the REST API.")
+    group = rest.add_mutually_exclusive_group(required=True)
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to serve")
     group.add_argument("--suite", choices=("smoke", "full"), help="serve a suite's sessions")
-    parser.add_argument("--host", default=DEFAULT_HOST, help="address to listen on")
-    parser.add_argument("--port", type=int, default=DEFAULT_REST_PORT, help="TCP port")
-    parser.add_argument("--key", dest="keys", action="append", default=[],
-                        metavar="ROLE[:SESSION]=KEY",
-                        help="an API key (repeatable); none: generate and print keys")
+    rest.add_argument("--host", default=DEFAULT_HOST, help="address to listen on")
+    rest.add_argument("--port", type=int, default=DEFAULT_REST_PORT, help="TCP port")
+    rest.add_argument("--key", dest="keys", action="append", default=[],
+                      metavar="ROLE[:SESSION]=KEY",
+                      help="an API key (repeatable); none: generate and print keys")
+    rest.set_defaults(run=run_serve)
+    mcp = sub.add_parser("mcp", help="serve one session's agent tools over MCP",
+                         description="Serve one session's agent tools over MCP.")
+    mcp.add_argument("session", type=Path, help="the session file to serve")
+    mcp.add_argument("--transport", choices=TRANSPORTS, default="stdio")
+    mcp.add_argument("--host", default=DEFAULT_HOST, help="http: address to listen on")
+    mcp.add_argument("--port", type=int, default=DEFAULT_MCP_PORT, help="http: TCP port")
+    mcp.set_defaults(run=run_mcp)
 
 
-def add_mcp_arguments(parser: argparse.ArgumentParser) -> None:
-    """Options of `mavswarm mcp`."""
-    parser.add_argument("session", type=Path, help="the session file to serve")
-    parser.add_argument("--transport", choices=TRANSPORTS, default="stdio")
-    parser.add_argument("--host", default=DEFAULT_HOST, help="http: address to listen on")
-    parser.add_argument("--port", type=int, default=DEFAULT_MCP_PORT, help="http: TCP port")
+def _guarded(run: Callable[[], None]) -> int:
+    from benchmark.session_file import SessionFileError
+    try:
+        run()
+    except (SessionFileError, ValueError, OSError) as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return 0
 
 
 def run_serve(args: argparse.Namespace) -> int:
-    """Run `mavswarm serve` with parsed options until interrupted."""
-    asyncio.run(serve_rest(_sessions(args), host=args.host, port=args.port, keys=args.keys))
-    return 0
+    """Run a parsed `mavswarm serve` until interrupted; bad input is printed, exit 2."""
+    return _guarded(lambda: asyncio.run(serve_rest(_sessions(args), host=args.host,
+                                                   port=args.port, keys=args.keys)))
 
 
 def run_mcp(args: argparse.Namespace) -> int:
-    """Run `mavswarm mcp` with parsed options until interrupted or the client leaves."""
-    asyncio.run(serve_mcp(args.session, transport=args.transport, host=args.host,
-                          port=args.port))
-    return 0
-
-
-def main_serve(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="mavswarm serve",
-                                     description="Serve live sessions over the REST API.")
-    add_serve_arguments(parser)
-    return run_serve(parser.parse_args(argv))
-
-
-def main_mcp(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="mavswarm mcp",
-                                     description="Serve one session's tools over MCP.")
-    add_mcp_arguments(parser)
-    return run_mcp(parser.parse_args(argv))
+    """Run a parsed `mavswarm mcp` until interrupted or the client leaves."""
+    return _guarded(lambda: asyncio.run(serve_mcp(args.session, transport=args.transport,
+                                                  host=args.host, port=args.port)))

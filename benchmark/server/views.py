@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from llm_tools.rest.hub import LiveSession, Role
+from benchmark.server.hub import LiveSession, Role
 
 __all__ = ["session_view", "task_view"]
 

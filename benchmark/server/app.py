@@ -7,17 +7,17 @@ from typing import Annotated, Any
 from fastapi import Depends, FastAPI, HTTPException, Request
 from fastapi.responses import JSONResponse
 
-from benchmark.agents import BudgetExhausted
+from agent_contract import BudgetExhausted
+from benchmark.server.auth import live_session, require
+from benchmark.server.compat import add_compat_routes
+from benchmark.server.compat_world import add_compat_world_routes
+from benchmark.server.hub import Caller, Hub, LiveSession, Role
+from benchmark.server.openapi_roles import add_role_docs
+from benchmark.server.views import session_view, task_view
 from benchmark.validators import CheckContext, evaluate
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import InputError, preview
 from llm_tools.registry import ToolRegistry, default_registry
-from llm_tools.rest.auth import live_session, require
-from llm_tools.rest.compat import add_compat_routes
-from llm_tools.rest.compat_world import add_compat_world_routes
-from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
-from llm_tools.rest.openapi_roles import add_role_docs
-from llm_tools.rest.views import session_view, task_view
 
 __all__ = ["create_app", "drone_or_404"]
 
@@ -146,9 +146,9 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     async def bad_input(_: Request, error: InputError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=error.http_status)
 
-    add_compat_world_routes(app, hub)  # first: /sessions/current is not a session id
+    add_compat_world_routes(app, hub, registry)  # first: /sessions/current is not a session id
     _add_session_routes(app, hub, registry)
     _add_check_routes(app, hub)
-    add_compat_routes(app, hub)
+    add_compat_routes(app, hub, registry)
     add_role_docs(app, hub)
     return app

@@ -6,11 +6,12 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
+from benchmark.server.auth import require
+from benchmark.server.compat import COMMANDS, resolve_session, run_command
+from benchmark.server.hub import Caller, Hub, LiveSession, Role
+from benchmark.server.views import session_view, task_view
 from llm_tools.input_limits import parse_json, preview
-from llm_tools.rest.auth import require
-from llm_tools.rest.compat import COMMANDS, resolve_session, run_command
-from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
-from llm_tools.rest.views import session_view, task_view
+from llm_tools.registry import ToolRegistry
 
 __all__ = ["add_compat_world_routes"]
 
@@ -40,7 +41,7 @@ def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dic
     raise HTTPException(404, f"unknown {kind[:-1]} {preview(entity_id)}")
 
 
-def add_compat_world_routes(app: FastAPI, hub: Hub) -> None:
+def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
     actor = require(hub, Role.AGENT, Role.ADMIN)
     pick = Query(None, description="session id (operator and admin keys)")
@@ -89,4 +90,5 @@ def add_compat_world_routes(app: FastAPI, hub: Hub) -> None:
             raise HTTPException(422, "parameters must be an object")
         live = resolve_session(hub, caller, session)
         scalars = {k: v for k, v in params.items() if not isinstance(v, list | dict)}
-        return await run_command(live, drone_id, body["command"], scalars, params or None)
+        return await run_command(live, registry, drone_id, body["command"], scalars,
+                                 params or None)

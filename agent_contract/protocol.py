@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
-    from benchmark.agents.tools import AgentTools
+    from agent_contract.tools import AgentTools
 
 __all__ = ["Agent", "AgentTask", "BudgetExhausted", "TaskBudget"]
 

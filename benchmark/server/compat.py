@@ -6,20 +6,21 @@ shape. An agent key acts on its own session; other roles name one with `?session
 import math
 import secrets
 import time
-from collections.abc import Awaitable, Callable, Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
-from benchmark.agents import AgentTools
+from benchmark.server.auth import live_session, require
+from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from llm_tools.input_limits import InputError, check_text, parse_json, parse_number, preview
-from llm_tools.rest.auth import live_session, require
-from llm_tools.rest.hub import Caller, Hub, LiveSession, Role
-from mavlink_gateway import DroneState, Outcome, Status
+from llm_tools.registry import ToolRegistry
+from mavlink_gateway import DroneState, Status
 
-__all__ = ["COMMANDS", "add_compat_routes", "compat_drone"]
+__all__ = ["COMMANDS", "Command", "add_compat_routes", "compat_drone", "run_command"]
 
-_STATUS = {Status.OK: "success", Status.PARTIAL: "partial_success"}
+_STATUS = {Status.OK.value: "success", Status.PARTIAL.value: "partial_success"}
 _FLIGHT = {"on_ground": "idle"}
 _REQUIRED = object()
 
@@ -82,31 +83,45 @@ def _waypoints(body: Any, state: DroneState) -> list[list[float]]:
     return points
 
 
-Command = Callable[[AgentTools, str, Mapping[str, Any], Any, DroneState], Awaitable[Outcome]]
+ToolArguments = Callable[[Mapping[str, Any], Any, DroneState], dict[str, Any]]
 
 
-async def _sync(outcome: Outcome) -> Outcome:
-    return outcome
+def _none(params: Mapping[str, Any], body: Any, state: DroneState) -> dict[str, Any]:
+    return {}
+
+
+@dataclass(frozen=True)
+class Command:
+    """A MultiUAV-Plat command: the agent tool it runs, and how the reference's parameters
+    (query strings, a JSON body, defaults from the drone's state) become that tool's typed
+    arguments. The tool itself, with its validation and budget, is the one definition in
+    `agent_contract.AgentTools`."""
+
+    tool: str
+    arguments: ToolArguments = _none
 
 
 COMMANDS: dict[str, Command] = {
-    "take_off": lambda t, d, p, b, s: t.take_off(d, _num(p, "altitude", 10.0)),
-    "land": lambda t, d, p, b, s: t.land(d),
-    "move_to": lambda t, d, p, b, s: t.move_to(d, _num(p, "x", s.x_m), _num(p, "y", s.y_m),
-                                               _num(p, "z", s.altitude_m)),
-    "move_towards": lambda t, d, p, b, s: t.move_towards(d, _heading(p), _num(p, "distance"),
-                                                         _num(p, "dz", 0.0)),
-    "move_along_path": lambda t, d, p, b, s: t.move_along_path(d, _waypoints(b, s)),
-    "change_altitude": lambda t, d, p, b, s: t.change_altitude(d, _num(p, "altitude")),
-    "hover": lambda t, d, p, b, s: t.hover(d, _num(p, "duration", 1.0)),
-    "rotate": lambda t, d, p, b, s: t.rotate(d, _num(p, "heading")),
-    "return_home": lambda t, d, p, b, s: t.return_home(d),
-    "set_home": lambda t, d, p, b, s: t.set_home(d),
-    "take_photo": lambda t, d, p, b, s: t.take_photo(d),
-    "charge": lambda t, d, p, b, s: t.charge(d),
-    "send_message": lambda t, d, p, b, s: _sync(
-        t.send_message(d, _text(p, "target_drone_id"), _text(p, "message"))),
-    "broadcast": lambda t, d, p, b, s: _sync(t.broadcast(d, _text(p, "message"))),
+    "take_off": Command("take_off", lambda p, b, s: {"altitude_m": _num(p, "altitude", 10.0)}),
+    "land": Command("land"),
+    "move_to": Command("move_to", lambda p, b, s: {
+        "x": _num(p, "x", s.x_m), "y": _num(p, "y", s.y_m), "z": _num(p, "z", s.altitude_m)}),
+    "move_towards": Command("move_towards", lambda p, b, s: {
+        "heading_deg": _heading(p), "distance_m": _num(p, "distance"),
+        "dz_m": _num(p, "dz", 0.0)}),
+    "move_along_path": Command("move_along_path",
+                               lambda p, b, s: {"waypoints": _waypoints(b, s)}),
+    "change_altitude": Command("change_altitude",
+                               lambda p, b, s: {"altitude_m": _num(p, "altitude")}),
+    "hover": Command("hover", lambda p, b, s: {"duration_s": _num(p, "duration", 1.0)}),
+    "rotate": Command("rotate", lambda p, b, s: {"heading_deg": _num(p, "heading")}),
+    "return_home": Command("return_home"),
+    "set_home": Command("set_home"),
+    "take_photo": Command("take_photo"),
+    "charge": Command("charge"),
+    "send_message": Command("send_message", lambda p, b, s: {
+        "to_drone_id": _text(p, "target_drone_id"), "text": _text(p, "message")}),
+    "broadcast": Command("broadcast", lambda p, b, s: {"text": _text(p, "message")}),
 }
 
 
@@ -131,21 +146,23 @@ def _state(live: LiveSession, drone: str) -> DroneState:
     return outcome.state
 
 
-async def run_command(live: LiveSession, drone_id: str, name: str,
+async def run_command(live: LiveSession, registry: ToolRegistry, drone_id: str, name: str,
                       params: Mapping[str, Any], body: Any) -> dict[str, Any]:
-    """Run a MultiUAV-Plat command; the answer in the reference's shape."""
-    run = COMMANDS.get(name)
-    if run is None:
+    """Run a MultiUAV-Plat command through its agent tool; the answer in the reference's
+    shape."""
+    command = COMMANDS.get(name)
+    if command is None:
         raise HTTPException(404, f"unknown command {preview(name)}; commands: "
                             f"{', '.join(COMMANDS)}")
     state = _state(live, drone_id)
-    outcome = await run(live.tools, drone_id, dict(params), body, state)
+    arguments = {"drone_id": drone_id, **command.arguments(dict(params), body, state)}
+    result = await registry.call(live.tools, command.tool, arguments)
     return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
-            "status": _STATUS.get(outcome.status, "error"), "message": outcome.message,
+            "status": _STATUS.get(result["status"], "error"), "message": result["message"],
             "timestamp": time.time()}
 
 
-def add_compat_routes(app: FastAPI, hub: Hub) -> None:
+def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     """Add the MultiUAV-Plat compatible /drones routes to `app`."""
     anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
     actor = require(hub, Role.AGENT, Role.ADMIN)
@@ -173,8 +190,8 @@ def add_compat_routes(app: FastAPI, hub: Hub) -> None:
         except InputError as error:
             raise InputError(f"{preview(name)}: {error.where}", error.problem,
                              http_status=error.http_status) from None
-        return await run_command(resolve_session(hub, caller, session), drone_id, name,
-                                 dict(request.query_params), body)
+        return await run_command(resolve_session(hub, caller, session), registry, drone_id,
+                                 name, dict(request.query_params), body)
 
     def _nearby(live: LiveSession, caller: Caller, drone_id: str) -> dict[str, Any]:
         _state(live, drone_id)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
-from benchmark.agents import AgentTools
+from agent_contract import AgentTools
 from benchmark.session_file import Session, TaskSpec
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm

@@ -1,0 +1,1 @@
+"""The mavswarm distribution's composition root: the one `mavswarm` command (`mavswarm.cli`)."""

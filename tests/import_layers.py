@@ -1,0 +1,72 @@
+"""The package layers of mavswarm and a scanner that finds every import crossing them.
+
+Each package may import only the packages listed for it: the emulator and the MAVLink gateway
+nothing of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
+the benchmark all of them, and the composition root (`mavswarm`) whatever it assembles. Every
+import counts wherever it stands: at the top, inside a function, under `TYPE_CHECKING`, or as
+a string passed to `__import__` / `importlib.import_module`.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["LAYERS", "Crossing", "crossings", "imports_of"]
+
+LAYERS: dict[str, frozenset[str]] = {
+    "emulator": frozenset(),
+    "mavlink_gateway": frozenset(),
+    "agent_contract": frozenset({"mavlink_gateway"}),
+    "llm_tools": frozenset({"mavlink_gateway", "agent_contract"}),
+    "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
+    "mavswarm": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                           "benchmark"}),
+}
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """One import from `package` of `imported` that its layer does not allow."""
+
+    path: str
+    line: int
+    package: str
+    imported: str
+
+    def __str__(self) -> str:
+        return f"{self.path}:{self.line}: {self.package} imports {self.imported}"
+
+
+def imports_of(source: str) -> Iterator[tuple[int, str]]:
+    """(line, module) for every absolute import in a module's source."""
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:  # relative: stays inside its own package
+                continue
+            if node.module:
+                yield node.lineno, node.module
+        elif isinstance(node, ast.Call):
+            name = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+            if name in ("__import__", "import_module") and node.args:
+                first = node.args[0]
+                if isinstance(first, ast.Constant) and isinstance(first.value, str):
+                    yield node.lineno, first.value
+
+
+def crossings(root: Path, layers: Mapping[str, frozenset[str]] = LAYERS) -> list[Crossing]:
+    """Every import under `root` from one of `layers`' packages into another package of
+    `layers` that it may not import."""
+    found = []
+    for package, allowed in layers.items():
+        for path in sorted((root / package).rglob("*.py")):
+            for line, module in imports_of(path.read_text(encoding="utf-8")):
+                top = module.split(".")[0]
+                if top in layers and top != package and top not in allowed:
+                    found.append(Crossing(str(path.relative_to(root)), line, package, module))
+    return found

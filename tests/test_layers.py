@@ -1,0 +1,62 @@
+"""The packages import one way only (tests/import_layers.py), with no exemption; the scanner
+finds a planted violation; and loading the agent side loads nothing of the benchmark or the
+emulator, so no validator, hidden task data or ground truth can reach an agent."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.cli_fixtures import ROOT
+from tests.import_layers import LAYERS, crossings
+
+AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools")
+
+
+def test_every_package_imports_only_the_layers_below_it() -> None:
+    assert set(LAYERS) <= {p.name for p in ROOT.iterdir() if (p / "__init__.py").exists()}
+    found = crossings(ROOT)
+    assert not found, "\n".join(map(str, found))
+
+
+def test_the_layers_form_no_cycle() -> None:
+    order: list[str] = []
+    while len(order) < len(LAYERS):
+        ready = [p for p, allowed in LAYERS.items() if p not in order and allowed <= set(order)]
+        assert ready, f"a cycle among {set(LAYERS) - set(order)}"
+        order.extend(sorted(ready))
+    assert order[-1] == "mavswarm"
+
+
+def test_a_planted_violation_is_found(tmp_path: Path) -> None:
+    for package in LAYERS:
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("")
+    (tmp_path / "mavlink_gateway" / "up.py").write_text(
+        "import json\nfrom emulator.geo import GeoOrigin\n")
+    (tmp_path / "llm_tools" / "sneaky.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import benchmark.episode\n"
+        "def f():\n    from benchmark.validators import evaluate\n"
+        "    return __import__('emulator.truth')\n")
+    (tmp_path / "emulator" / "fine.py").write_text("from . import geo\nimport numpy\n")
+    (tmp_path / "benchmark" / "fine.py").write_text("import llm_tools.registry\n")
+    found = sorted((c.path, c.line, c.imported) for c in crossings(tmp_path))
+    assert found == [("llm_tools/sneaky.py", 3, "benchmark.episode"),
+                     ("llm_tools/sneaky.py", 5, "benchmark.validators"),
+                     ("llm_tools/sneaky.py", 6, "emulator.truth"),
+                     ("mavlink_gateway/up.py", 2, "emulator.geo")]
+
+
+def test_loading_the_agent_side_loads_no_benchmark_or_emulator_module() -> None:
+    code = ("import json, sys\n"
+            f"for m in {list(AGENT_SIDE)!r}: __import__(m)\n"
+            "import llm_tools.agents, llm_tools.mcp_server, llm_tools.registry\n"
+            "print(json.dumps(sorted(sys.modules)))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, check=True, timeout=60)
+    loaded = json.loads(out.stdout)
+    assert "agent_contract.tools" in loaded and "llm_tools.mcp_server" in loaded
+    below = [m for m in loaded if m.split(".")[0] in ("benchmark", "emulator", "mavswarm")]
+    assert not below, below
