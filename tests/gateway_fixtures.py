@@ -10,17 +10,16 @@ import asyncio
 import contextlib
 import math
 import time
-from collections.abc import AsyncIterator, Mapping, Sequence
+from collections.abc import AsyncIterator, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from emulator.clock import ClockConfig
 from emulator.flight.autopilot import Autopilot
-from emulator.scenario import Scenario, VehicleSpec
+from emulator.scenario import Scenario
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
-from emulator.world import CALM, Obstacle, Target, Wind, World
 from mavlink_gateway import FleetConnection, Gateway, Outcome, Status, profiles_from_scenario
 from mavlink_gateway.drone_link import DroneLink
 from tests.ports import unused_udp_port
@@ -32,31 +31,12 @@ __all__ = [
     "assert_consistent",
     "expect_refusal",
     "gateway_session",
-    "make_scenario",
     "max_step_m",
     "no_teleport",
     "rejected",
     "same_truth",
-    "spec",
     "truth",
 ]
-
-
-def spec(k: int, x: float = 0.0, y: float = 0.0, *, battery_pct: float = 100.0,
-         perceived_radius_m: float = 50.0, heading_deg: float = 0.0) -> VehicleSpec:
-    """Drone d<k> on the ground at (x, y), home there."""
-    return VehicleSpec(
-        id=f"d{k}", name=f"Drone {k}", model="test", position_m=(x, y, 0.0),
-        heading_deg=heading_deg, home_m=(x, y, 0.0), max_speed_m_s=12.0, max_altitude_m=120.0,
-        perceived_radius_m=perceived_radius_m, task_radius_m=20.0, battery_pct=battery_pct,
-        battery_capacity_mah=5000.0,
-    )
-
-
-def make_scenario(vehicles: Sequence[VehicleSpec], *, obstacles: Sequence[Obstacle] = (),
-                  targets: Sequence[Target] = (), wind: Wind = CALM) -> Scenario:
-    world = World(obstacles=obstacles, targets=targets, wind=wind)
-    return Scenario("gateway-test", "others", world, tuple(vehicles), "tests")
 
 
 @dataclass

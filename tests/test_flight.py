@@ -11,22 +11,14 @@ from emulator.flight.autopilot import CommandRefused
 from emulator.flight.battery import BATTERY_CRITICAL
 from emulator.flight.fleet import Fleet
 from emulator.flight.modes import FlightMode, LandedState
-from emulator.scenario import Scenario, VehicleSpec
+from emulator.scenario import Scenario
 from emulator.world import Obstacle, World
-
-
-def _spec(k: int, x: float = 0.0, y: float = 0.0, z: float = 0.0) -> VehicleSpec:
-    return VehicleSpec(
-        id=f"d{k}", name=f"Drone {k}", model="test", position_m=(x, y, z), heading_deg=0.0,
-        home_m=(x, y, 0.0), max_speed_m_s=12.0, max_altitude_m=120.0, perceived_radius_m=50.0,
-        task_radius_m=20.0, battery_pct=100.0, battery_capacity_mah=5000.0,
-    )
+from tests.scenario_fixtures import tiny_scenario, vehicle
 
 
 def _fleet(n: int = 1, obstacles: tuple[Obstacle, ...] = (), physics_hz: float = 50.0) -> Fleet:
-    world = World(obstacles=obstacles)
-    specs = tuple(_spec(k + 1, x=10.0 * k) for k in range(n))
-    return Fleet(Scenario("test", "others", world, specs, "test"), physics_hz=physics_hz)
+    specs = [vehicle(k + 1, x=10.0 * k) for k in range(n)]
+    return Fleet(tiny_scenario(specs, obstacles=obstacles), physics_hz=physics_hz)
 
 
 def _run_until_idle(fleet: Fleet, limit_s: float = 2000.0, fast_forward: bool = True) -> float:
@@ -184,7 +176,7 @@ def test_battery_drains_more_with_speed_and_headwind():
         from emulator.world import Wind
 
         world = World(wind=Wind(6.0, wind_from_deg))
-        fleet = Fleet(Scenario("t", "others", world, (_spec(1),), "t"))
+        fleet = Fleet(Scenario("t", "others", world, (vehicle(1),), "t"))
         ap = fleet.autopilots[0]
         ap.set_param("MPC_XY_CRUISE", speed)
         ap.arm()

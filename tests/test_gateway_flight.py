@@ -20,11 +20,10 @@ from tests.gateway_fixtures import (
     assert_consistent,
     expect_refusal,
     gateway_session,
-    make_scenario,
     no_teleport,
-    spec,
     truth,
 )
+from tests.scenario_fixtures import tiny_scenario, vehicle
 
 pytestmark = pytest.mark.mavsdk
 
@@ -42,7 +41,7 @@ def _kinds(s, drone: str, t0_s: float) -> list[str]:
 
 async def test_take_off_and_land_fly_in_simulated_time():
     # Default telemetry rates here (the other tests run faster ones to wait less).
-    sc = make_scenario([spec(1), spec(2, 10.0, 0.0)])
+    sc = tiny_scenario([vehicle(1), vehicle(2, 10.0, 0.0)])
     async with gateway_session(sc, telemetry_hz=None) as s:
         gw, ap = s.gw, s.ap("d1")
         await expect_refusal(s, gw.land("d1"), "land refused: drone d1 is on the ground")
@@ -88,7 +87,7 @@ async def test_take_off_and_land_fly_in_simulated_time():
 
 
 async def test_take_off_refusals_change_nothing():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw = s.gw
         for altitude, reason in [
             (0.5, "altitude 0.5 m is below the 1 m minimum flight altitude"),
@@ -137,7 +136,7 @@ async def test_take_off_refusals_change_nothing():
 
 
 async def test_move_to_move_towards_and_change_altitude():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
 
@@ -189,7 +188,7 @@ async def test_move_to_move_towards_and_change_altitude():
 
 
 async def test_rotate_turns_in_place_at_the_yaw_rate():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
         start = ap.position_m
@@ -210,7 +209,7 @@ async def test_rotate_turns_in_place_at_the_yaw_rate():
 
 
 async def test_path_visits_every_waypoint_in_order():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw = s.gw
         assert (await gw.take_off("d1", 10)).ok
         t0 = s.now_s
@@ -254,7 +253,7 @@ async def test_path_visits_every_waypoint_in_order():
 async def test_obstacles_block_moves_and_paths():
     wall = Obstacle.disc("o-wall", "Wall", (60.0, 0.0), 10.0, height_m=0.0)
     shed = Obstacle.disc("o-shed", "Shed", (0.0, 60.0), 10.0, height_m=15.0)
-    async with gateway_session(make_scenario([spec(1)], obstacles=[wall, shed])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)], obstacles=[wall, shed])) as s:
         gw, ap = s.gw, s.ap("d1")
         margin = s.scenario.world.safety_margin_m
         assert (await gw.take_off("d1", 10)).ok
@@ -320,7 +319,7 @@ async def test_obstacles_block_moves_and_paths():
 
 
 async def test_timed_hover_holds_position_for_its_duration():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
         start, battery, t0 = ap.position_m, ap.battery_pct, s.now_s
@@ -343,7 +342,7 @@ async def test_timed_hover_holds_position_for_its_duration():
 
 
 async def test_set_home_then_return_home_lands_there():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
         assert (await gw.move_to("d1", 80, 40, 10)).ok
@@ -375,8 +374,8 @@ async def test_set_home_then_return_home_lands_there():
 
 
 async def test_five_drones_fly_concurrently_and_a_busy_drone_refuses():
-    drones = [spec(k, 5.0 * (k - 1), 0.0) for k in range(1, 6)]
-    async with gateway_session(make_scenario(drones), telemetry_hz=None) as s:
+    drones = [vehicle(k, 5.0 * (k - 1), 0.0) for k in range(1, 6)]
+    async with gateway_session(tiny_scenario(drones), telemetry_hz=None) as s:
         gw = s.gw
         ids = [f"d{k}" for k in range(1, 6)]
         outs = await asyncio.gather(*(gw.take_off(d, 10 + 2 * i) for i, d in enumerate(ids)))
@@ -424,7 +423,7 @@ async def test_five_drones_fly_concurrently_and_a_busy_drone_refuses():
 async def test_a_primitive_that_runs_out_of_time_ends_and_holds():
     # A headwind of 11 m/s against a 12 m/s airframe leaves 1 m/s over the ground: 100 m
     # would take 100 s, beyond the move's budget (100 m / 5 m/s * 2 + 30 s = 70 s).
-    sc = make_scenario([spec(1)], wind=Wind(11.0, 90.0))
+    sc = tiny_scenario([vehicle(1)], wind=Wind(11.0, 90.0))
     async with gateway_session(sc) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
@@ -447,7 +446,7 @@ async def test_a_primitive_that_runs_out_of_time_ends_and_holds():
 
 async def test_take_off_in_a_wind_beyond_the_airframe_times_out_below_its_goal():
     # 16 m/s of wind against a 12 m/s airframe: it drifts and cannot hold its take-off point.
-    sc = make_scenario([spec(1)], wind=Wind(16.0, 90.0))
+    sc = tiny_scenario([vehicle(1)], wind=Wind(16.0, 90.0))
     async with gateway_session(sc) as s:
         t0 = s.now_s
         out = await s.gw.take_off("d1", 10)
@@ -461,7 +460,7 @@ async def test_take_off_in_a_wind_beyond_the_airframe_times_out_below_its_goal()
 
 
 async def test_critical_battery_failsafe_stops_a_move():
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
         s.services.operator_reset_batteries(7.3)
@@ -480,7 +479,7 @@ async def test_outcomes_hold_when_the_clock_outruns_telemetry():
     # caller advancing it, as other drones' flights would): telemetry at its default wall
     # rates (landed state 1 Hz) then lags by many simulated seconds. A take-off or landing
     # that succeeded must not be reported as out of time because the news came late.
-    async with gateway_session(make_scenario([spec(1)]), telemetry_hz=None) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)]), telemetry_hz=None) as s:
         gw, ap = s.gw, s.ap("d1")
         for call, message, budget in [
             (lambda: gw.take_off("d1", 10), "d1 took off to 10.0 m", 40.0),
@@ -501,7 +500,7 @@ async def test_outcomes_hold_when_the_clock_outruns_telemetry():
 async def test_short_moves_within_the_acceptance_radius_still_fly():
     # NAV_ACC_RAD is 2 m: goals closer than that to a drone at rest must still be flown to,
     # not counted as reached before it moves.
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
         out = await asyncio.wait_for(gw.take_off("d1", 1.5), 15.0)
         assert out.status is Status.OK and out.message == "d1 took off to 1.5 m"
@@ -522,7 +521,7 @@ async def test_landing_is_reported_from_the_ground_even_with_slow_positions():
     # Landed state at 10 Hz, positions at 1 Hz: the landed state reaches the gateway first
     # (a stepped-mode descent takes a few wall milliseconds). The outcome must still give the
     # drone on the ground, not at the altitude of the last position before the descent.
-    async with gateway_session(make_scenario([spec(1)])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, link = s.gw, s.link("d1")
         assert (await gw.take_off("d1", 15)).ok
         await link.telemetry.set_rate_position(1.0)

@@ -18,10 +18,9 @@ from tests.gateway_fixtures import (
     assert_consistent,
     expect_refusal,
     gateway_session,
-    make_scenario,
     no_teleport,
-    spec,
 )
+from tests.scenario_fixtures import tiny_scenario, vehicle
 
 pytestmark = pytest.mark.mavsdk
 
@@ -34,7 +33,7 @@ def _mentions(outcome: Outcome, words: list[str]) -> list[str]:
 async def test_photos_capture_what_the_sensor_disc_holds():
     near = Target.disc("t-near", "Near Target", "fixed", (150.0, 0.0, 0.0), 3.0)
     far = Target.disc("t-far", "Far Target", "fixed", (400.0, 0.0, 0.0), 3.0)
-    async with gateway_session(make_scenario([spec(1)], targets=[near, far])) as s:
+    async with gateway_session(tiny_scenario([vehicle(1)], targets=[near, far])) as s:
         gw, ap = s.gw, s.ap("d1")
         assert (await gw.take_off("d1", 10)).ok
 
@@ -80,10 +79,10 @@ async def test_nearby_reports_exactly_the_entities_in_range():
                          [(-70.0, -5.0), (-45.0, -5.0), (-45.0, 5.0), (-70.0, 5.0)]),
         Obstacle.disc("ob-out", "Tower", (-100.0, 0.0), 10.0),  # 90 m
     ]
-    drones = [spec(1), spec(2, 30.0, 30.0), spec(3, 40.0, 40.0), spec(4, -20.0, 0.0)]
+    drones = [vehicle(1), vehicle(2, 30.0, 30.0), vehicle(3, 40.0, 40.0), vehicle(4, -20.0, 0.0)]
     absent = ["tg-edge-out", "Just Outside", "tg-poly-out", "Outside Field", "ob-out", "Tower",
               "d3"]
-    sc = make_scenario(drones, obstacles=obstacles, targets=targets)
+    sc = tiny_scenario(drones, obstacles=obstacles, targets=targets)
     async with gateway_session(sc) as s:
         gw = s.gw
 
@@ -136,7 +135,8 @@ async def test_nearby_reports_exactly_the_entities_in_range():
 
 
 async def test_messages_between_drones():
-    sc = make_scenario([spec(1), spec(2, 5.0, 0.0), spec(3, 10.0, 0.0), spec(4, 15.0, 0.0)])
+    sc = tiny_scenario([vehicle(1), vehicle(2, 5.0, 0.0), vehicle(3, 10.0, 0.0),
+                        vehicle(4, 15.0, 0.0)])
     async with gateway_session(sc) as s:
         gw, rec = s.gw, s.swarm.recorder
         out = gw.send_message("d1", "d2", "hello d2")
@@ -196,8 +196,8 @@ async def test_messages_between_drones():
 async def test_charge_at_a_station():
     station = Target.disc("st-1", "Station One", "waypoint", (50.0, 0.0, 0.0), 5.0,
                           charge_rate_pct_s=1.0)
-    drones = [spec(1), spec(2, 300.0, 0.0), spec(3, 25.0, 0.0)]
-    async with gateway_session(make_scenario(drones, targets=[station])) as s:
+    drones = [vehicle(1), vehicle(2, 300.0, 0.0), vehicle(3, 25.0, 0.0)]
+    async with gateway_session(tiny_scenario(drones, targets=[station])) as s:
         gw, ap = s.gw, s.ap("d1")
         await expect_refusal(s, gw.charge("d2"), "charge refused: no charging station within "
                              "50 m of d2")
@@ -241,8 +241,8 @@ async def test_charge_at_a_station():
 
 
 async def test_operator_resets():
-    drones = [spec(1), spec(2, 10.0, 0.0), spec(3, 20.0, 0.0, battery_pct=80.0)]
-    async with gateway_session(make_scenario(drones), telemetry_hz=None) as s:  # defaults
+    drones = [vehicle(1), vehicle(2, 10.0, 0.0), vehicle(3, 20.0, 0.0, battery_pct=80.0)]
+    async with gateway_session(tiny_scenario(drones), telemetry_hz=None) as s:  # defaults
         gw, rec = s.gw, s.swarm.recorder
         assert (await gw.take_off("d1", 10)).ok
         assert (await gw.move_to("d1", 50, 50, 10)).ok

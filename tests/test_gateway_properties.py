@@ -27,11 +27,10 @@ from tests.gateway_fixtures import (
     GatewaySession,
     assert_consistent,
     gateway_session,
-    make_scenario,
     same_truth,
-    spec,
     truth,
 )
+from tests.scenario_fixtures import tiny_scenario, vehicle
 
 pytestmark = pytest.mark.mavsdk
 
@@ -49,8 +48,9 @@ OBSTACLES = [
     Obstacle.polygon("OB-Papa", "Barn Papa", [(-10.0, 80.0), (10.0, 80.0), (10.0, 100.0),
                                               (-10.0, 100.0)], height_m=12.0),
 ]
-SCENARIO = make_scenario([spec(1), spec(2, 10.0, 0.0), spec(3, 20.0, 0.0, battery_pct=60.0)],
-                         obstacles=OBSTACLES, targets=TARGETS)
+SCENARIO = tiny_scenario(
+    [vehicle(1), vehicle(2, 10.0, 0.0), vehicle(3, 20.0, 0.0, battery_pct=60.0)],
+    obstacles=OBSTACLES, targets=TARGETS)
 ENTITY_WORDS = {e.id: (e.id, e.name) for e in (*TARGETS, *OBSTACLES)}
 
 # ------------------------------------------------------------------------ strategies

@@ -13,39 +13,20 @@ import numpy as np
 import pytest
 
 from benchmark.validators import CheckContext, LeafResult, evaluate, parse_tree
-from emulator.scenario import Scenario, VehicleSpec
+from emulator.scenario import Scenario
 from emulator.truth import TruthEvent, TruthHistory, TruthLog
-from emulator.world import Obstacle, Target, World
 
 __all__ = [
     "DT_S",
     "check",
     "context",
-    "drone",
     "event",
     "lawnmower",
     "log",
     "rows",
-    "scenario",
 ]
 
 DT_S = 0.02
-
-
-def drone(k: int, x: float = 0.0, y: float = 0.0, *, task_radius_m: float = 20.0,
-          perceived_radius_m: float = 50.0) -> VehicleSpec:
-    """Drone d<k> on the ground at (x, y), home there."""
-    return VehicleSpec(
-        id=f"d{k}", name=f"Drone {k}", model="test", position_m=(x, y, 0.0), heading_deg=0.0,
-        home_m=(x, y, 0.0), max_speed_m_s=12.0, max_altitude_m=120.0,
-        perceived_radius_m=perceived_radius_m, task_radius_m=task_radius_m, battery_pct=100.0,
-        battery_capacity_mah=5000.0)
-
-
-def scenario(vehicles: Sequence[VehicleSpec], *, targets: Sequence[Target] = (),
-             obstacles: Sequence[Obstacle] = (), task_type: str = "others") -> Scenario:
-    world = World(obstacles=obstacles, targets=targets)
-    return Scenario("validator-test", task_type, world, tuple(vehicles), "tests")
 
 
 def rows(keyframes: Sequence[Sequence[float]], *, t_end_s: float | None = None,

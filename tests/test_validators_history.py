@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from emulator.world import Target
-from tests.test_validators_fixtures import check, context, drone, event, log, rows, scenario
+from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_validators_fixtures import check, context, event, log, rows
 
-DRONES = [drone(1), drone(2, 50.0), drone(3, 0.0, 50.0), drone(4, 0.0, -50.0)]
-SCENARIO = scenario(DRONES, targets=[Target.disc("t1", "Crate", "fixed", (100, 0, 0), 2.0),
+DRONES = [vehicle(1), vehicle(2, 50.0), vehicle(3, 0.0, 50.0), vehicle(4, 0.0, -50.0)]
+SCENARIO = tiny_scenario(DRONES, targets=[Target.disc("t1", "Crate", "fixed", (100, 0, 0), 2.0),
                                      Target.disc("t2", "Box", "fixed", (0, 300, 0), 2.0)])
 
 # d1: climbs over (0, 0) to 20 m (t 2-6), east to (100, 0) (t 6-16), hovers (t 16-30),
@@ -76,7 +77,7 @@ def test_visited_position_uses_the_flown_segments_between_samples() -> None:
     leaf = check(ALL, "drone_has_visited_position", drone_id="d1", x=50.1, y=0, tolerance=0.01)
     assert (leaf.result, leaf.value) == (True, 0.0)
     sparse = log({"d1": np.array([[0, 0, 0, 10, 0, 100], [10, 100, 0, 10, 0, 99]], float)})
-    ctx = context(sparse, scenario([drone(1)]), 0.0, 10.0)
+    ctx = context(sparse, tiny_scenario([vehicle(1)]), 0.0, 10.0)
     assert check(ctx, "drone_has_visited_position", drone_id="d1", x=50, y=0).passed
     leaf = check(ctx, "drone_has_visited_position", drone_id="d1", x=50, y=6, tolerance=5)
     assert (leaf.result, leaf.value) == (False, 6.0)
@@ -176,12 +177,12 @@ def test_drone_has_sent_message_with_recipient_and_content() -> None:
 
 
 def test_all_drones_have_taken_off() -> None:
-    both = context(TRUTH, scenario(DRONES[:2]), 0.0, 60.0)
+    both = context(TRUTH, tiny_scenario(DRONES[:2]), 0.0, 60.0)
     leaf = check(both, "all_drones_have_taken_off")
     assert (leaf.result, leaf.value) == (True, 2)
     assert check(both, "all_drones_have_taken_off", min_altitude=15).value == 1
     assert not check(both, "all_drones_have_taken_off", min_altitude=15).passed
-    now = context(TRUTH, scenario(DRONES[:2]), 0.0, 20.0)
+    now = context(TRUTH, tiny_scenario(DRONES[:2]), 0.0, 20.0)
     assert check(now, "all_drones_have_taken_off", check_history=False).passed
     assert not check(now, "all_drones_have_taken_off", check_history="false",
                      min_altitude=15).passed
@@ -189,13 +190,13 @@ def test_all_drones_have_taken_off() -> None:
 
 
 def test_all_drones_have_landed() -> None:
-    both = context(TRUTH, scenario(DRONES[:2]), 0.0, 60.0)
+    both = context(TRUTH, tiny_scenario(DRONES[:2]), 0.0, 60.0)
     leaf = check(both, "all_drones_have_landed")
     assert (leaf.result, leaf.value) == (False, 1)
-    only_d1 = context(TRUTH, scenario(DRONES[:1]), 0.0, 60.0)
+    only_d1 = context(TRUTH, tiny_scenario(DRONES[:1]), 0.0, 60.0)
     assert check(only_d1, "all_drones_have_landed").passed
     assert check(only_d1, "all_drones_have_landed", check_history=False).passed
-    in_flight = context(TRUTH, scenario(DRONES[:1]), 0.0, 20.0)
+    in_flight = context(TRUTH, tiny_scenario(DRONES[:1]), 0.0, 20.0)
     assert not check(in_flight, "all_drones_have_landed", check_history=False).passed
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from emulator.world import Obstacle, Target
-from tests.test_validators_fixtures import check, context, drone, event, log, rows, scenario
+from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_validators_fixtures import check, context, event, log, rows
 
 TARGETS = (
     Target.disc("t1", "On top", "fixed", (100.0, 0.0, 0.0), 5.0),
@@ -17,7 +18,7 @@ OBSTACLES = (
     Obstacle.polygon("o1", "Box", [(110.0, -5.0), (120.0, -5.0), (120.0, 5.0), (110.0, 5.0)]),
     Obstacle.disc("o2", "Tower", (300.0, 0.0), 10.0),
 )
-SCENARIO = scenario([drone(1), drone(2, 50.0), drone(3, 60.0), drone(4, 0.0, 80.0)],
+SCENARIO = tiny_scenario([vehicle(1), vehicle(2, 50.0), vehicle(3, 60.0), vehicle(4, 0.0, 80.0)],
                     targets=TARGETS, obstacles=OBSTACLES)
 # d1: climbs to 10 m over (0, 0) by t=5, flies east to (100, 0) by t=15, hovers until t=30.
 # d2, d3: on the ground. d4: only recorded from t=5, heading 358.
@@ -93,15 +94,15 @@ def test_drone_on_ground_and_hovering() -> None:
 
 
 def test_all_drones_on_ground_and_hovering() -> None:
-    at_start = context(TRUTH, scenario([drone(1), drone(2, 50.0)]), 0.0, 0.0)
+    at_start = context(TRUTH, tiny_scenario([vehicle(1), vehicle(2, 50.0)]), 0.0, 0.0)
     leaf = check(at_start, "all_drones_on_ground")
     assert (leaf.result, leaf.value) == (True, 2)
-    two = context(TRUTH, scenario([drone(1), drone(2, 50.0)]), 0.0, 30.0)
+    two = context(TRUTH, tiny_scenario([vehicle(1), vehicle(2, 50.0)]), 0.0, 30.0)
     leaf = check(two, "all_drones_on_ground")
     assert (leaf.result, leaf.value) == (False, 1)
     assert (check(two, "all_drones_hovering").result, check(two, "all_drones_hovering").value) \
         == (False, 1)
-    only_d1 = context(TRUTH, scenario([drone(1)]), 0.0, 30.0)
+    only_d1 = context(TRUTH, tiny_scenario([vehicle(1)]), 0.0, 30.0)
     assert check(only_d1, "all_drones_hovering").passed
 
 

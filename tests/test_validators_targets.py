@@ -7,15 +7,8 @@ import pytest
 
 from benchmark.validators import CheckContext, evaluate, parse_tree
 from emulator.world import Target
-from tests.test_validators_fixtures import (
-    check,
-    context,
-    drone,
-    lawnmower,
-    log,
-    rows,
-    scenario,
-)
+from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_validators_fixtures import check, context, lawnmower, log, rows
 
 SQUARE = [(0.0, 0.0), (100.0, 0.0), (100.0, 100.0), (0.0, 100.0)]
 FAR_SQUARE = [(500.0, 500.0), (600.0, 500.0), (600.0, 600.0), (500.0, 600.0)]
@@ -42,8 +35,8 @@ D3 = rows([(0, 300, 100, 10), (10, 300, -85, 10), (22, 300, -85, 10), (30, 300, 
           t_end_s=60.0)
 D4 = rows([(0, 150, 0, 0), (20, 250, 0, 0)], t_end_s=60.0)
 TRUTH = log({"d1": D1, "d2": D2, "d3": D3, "d4": D4}, end_t_s=60.0)
-DRONES = [drone(1), drone(2), drone(3), drone(4)]
-REACH = context(TRUTH, scenario(DRONES, targets=_targets()), 0.0, 60.0)
+DRONES = [vehicle(1), vehicle(2), vehicle(3), vehicle(4)]
+REACH = context(TRUTH, tiny_scenario(DRONES, targets=_targets()), 0.0, 60.0)
 
 
 def test_a_pass_between_two_samples_reaches_a_target_within_the_task_radius() -> None:
@@ -108,7 +101,7 @@ def _coverage_context(y1: float, *, targets: list[Target] = SEARCH,
     keys = lawnmower(0.0, 12.5, 100.0, y1, 25.0, z_m=15.0, speed_m_s=10.0)
     hover = rows([(0, -200, 0, 0), (2, -200, 0, 10)], t_end_s=keys[-1][0])
     truth = log({"d1": rows(keys), "d2": hover})
-    scen = scenario([drone(1, task_radius_m=12.5), drone(2, task_radius_m=20.0)],
+    scen = tiny_scenario([vehicle(1, task_radius_m=12.5), vehicle(2, task_radius_m=20.0)],
                     targets=targets, task_type=task_type)
     return context(truth, scen, 0.0, keys[-1][0])
 
@@ -156,14 +149,14 @@ def test_task_progress_and_done_for_area_search() -> None:
                                                      ("others", 2 / 3)])
 def test_task_progress_for_target_families(task_type: str, progress: float) -> None:
     targets = [t for t in _targets() if t.id in ("near", "end", "off", "station")]
-    ctx = context(TRUTH, scenario(DRONES, targets=targets, task_type=task_type), 0.0, 60.0)
+    ctx = context(TRUTH, tiny_scenario(DRONES, targets=targets, task_type=task_type), 0.0, 60.0)
     leaf = check(ctx, "task_progress", expected_progress=0.66)
     assert leaf.result is True
     assert leaf.value == pytest.approx(progress, abs=1e-4)
     assert not check(ctx, "task_progress", expected_progress=0.7).passed
     assert not check(ctx, "task_done").passed
     reached = [t for t in targets if t.id != "off"]
-    ctx = context(TRUTH, scenario(DRONES, targets=reached, task_type=task_type), 0.0, 60.0)
+    ctx = context(TRUTH, tiny_scenario(DRONES, targets=reached, task_type=task_type), 0.0, 60.0)
     assert check(ctx, "task_done").passed
     assert check(ctx, "task_progress", expected_progress=1.0).passed
 

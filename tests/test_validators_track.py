@@ -14,7 +14,8 @@ from benchmark.validators.track import build_track
 from emulator.scenario import Scenario
 from emulator.truth import TruthLog, TruthRecorder
 from emulator.world import Target
-from tests.test_validators_fixtures import check, context, drone, lawnmower, log, rows, scenario
+from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_validators_fixtures import check, context, lawnmower, log, rows
 
 
 def test_track_is_interpolated_at_both_window_ends() -> None:
@@ -62,7 +63,7 @@ def _recorder_with_resets() -> TruthRecorder:
 def test_operator_resets_take_effect_between_keyframes_and_are_not_flown() -> None:
     recorder = _recorder_with_resets()
     assert recorder.trajectory("d1", 5.0, 5.9)[:, 1].tolist() == [0.0]  # no row after 5.3 yet
-    scen = scenario([drone(1)])
+    scen = tiny_scenario([vehicle(1)])
     ctx = context(recorder, scen, 5.5, 5.9)
     assert check(ctx, "drone_position", drone_id="d1", x=100, y=0, tolerance=0).passed
     assert check(ctx, "drone_battery_level", drone_id="d1", min_level=99).passed
@@ -79,7 +80,7 @@ def test_recorded_hover_between_keyframes() -> None:
         z = min(t, 5.0) * 2.0  # climbs at 2 m/s to 10 m by t 5, then holds
         moving = np.array([t <= 5.0])
         recorder.record_step(t, np.array([[0.0, 0.0, z]]), np.zeros(1), np.array([90.0]), moving)
-    scen = scenario([drone(1)])
+    scen = tiny_scenario([vehicle(1)])
     ctx = context(recorder, scen, 0.0, 12.0)
     assert check(ctx, "drone_hovering", drone_id="d1").passed
     assert check(ctx, "drone_has_hovered", drone_id="d1", min_duration=6.9).passed
@@ -131,7 +132,7 @@ def _swarm_truth(n: int, minutes: float) -> tuple[TruthLog, Scenario]:
     targets = [Target.disc(f"t{j}", f"T{j}", "fixed", (x, y, 0.0), 2.0)
                for j, (x, y) in enumerate(rng.uniform(-500, 500, size=(20, 2)))]
     targets.append(Target.polygon("area", "Area", [(0, 200), (200, 200), (200, 400), (0, 400)]))
-    scen = scenario([drone(k + 1, 10.0 * k) for k in range(n)], targets=targets,
+    scen = tiny_scenario([vehicle(k + 1, 10.0 * k) for k in range(n)], targets=targets,
                     task_type="area_search")
     return log(trajectories, end_t_s=t_end), scen
 

@@ -19,10 +19,11 @@ from benchmark.validators import (
     tree_to_json,
 )
 from emulator.world import Obstacle, Target
-from tests.test_validators_fixtures import context, drone, log, rows, scenario
+from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_validators_fixtures import context, log, rows
 
-SCENARIO = scenario(
-    [drone(1), drone(2, 20.0)],
+SCENARIO = tiny_scenario(
+    [vehicle(1), vehicle(2, 20.0)],
     targets=[Target.disc("t1", "Fixed", "fixed", (50.0, 0.0, 0.0), 2.0),
              Target.disc("m1", "Mover", "moving", (80.0, 0.0, 0.0), 1.0)],
     obstacles=[Obstacle.disc("o1", "Pole", (30.0, 30.0), 2.0)],
