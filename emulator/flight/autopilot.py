@@ -17,6 +17,15 @@ from emulator.flight import dynamics as dy
 from emulator.flight.autopilot_mission import MissionRunner
 from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY_LOW
 from emulator.flight.camera import ImageCapture, capture_image
+from emulator.flight.limits import (
+    SpeedKind,
+    check_altitude,
+    check_distance_from_home,
+    check_home,
+    check_speed,
+    check_target,
+    check_yaw_rate,
+)
 from emulator.flight.listener import AutopilotListener, SilentListener
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
@@ -154,27 +163,9 @@ class Autopilot:
         if not self.in_air:
             raise CommandRefused(f"{what} refused: vehicle is on the ground")
 
-    def _check_altitude(self, z_m: float, what: str) -> None:
-        ceiling = self.params["GF_MAX_VER_DIST"]
-        if not math.isfinite(z_m):
-            raise CommandRefused(f"{what} refused: altitude is not a number")
-        if z_m < 0.0:
-            raise CommandRefused(f"{what} refused: altitude {z_m:.1f} m is below ground")
-        if z_m - self.home_m[2] > ceiling:
-            raise CommandRefused(
-                f"{what} refused: altitude {z_m - self.home_m[2]:.0f} m exceeds ceiling "
-                f"{ceiling:.0f} m"
-            )
-
     def check_target(self, target_m: Vec3, what: str) -> None:
         """Refuse a destination outside the geofence (ceiling, distance from home)."""
-        self._check_altitude(target_m[2], what)
-        limit = self.params["GF_MAX_HOR_DIST"]
-        dist = math.hypot(target_m[0] - self.home_m[0], target_m[1] - self.home_m[1])
-        if dist > limit:
-            raise CommandRefused(
-                f"{what} refused: {dist:.0f} m from home exceeds geofence {limit:.0f} m"
-            )
+        check_target(self.params, self.home_m, target_m, what)
 
     # ------------------------------------------------------------------ goals
     def _set_goal(self, goal_m: Vec3, tracking: int, *, yaw_deg: float = math.nan) -> None:
@@ -360,7 +351,7 @@ class Autopilot:
             altitude_m = self.params["MIS_TAKEOFF_ALT"]
         x, y, z = self.position_m
         target = (x, y, self.home_m[2] + altitude_m)
-        self._check_altitude(target[2], "Takeoff")
+        check_altitude(self.params, self.home_m, target[2], "Takeoff")
         if target[2] <= z + 0.5:
             raise CommandRefused(f"Takeoff refused: altitude {altitude_m:.1f} m too low")
         self._set_mode(FlightMode.TAKEOFF)
@@ -383,6 +374,8 @@ class Autopilot:
 
     def land(self, at_m: tuple[float, float] | None = None) -> None:
         self._require_air("Land")
+        if at_m is not None:
+            check_distance_from_home(self.params, self.home_m, at_m[0], at_m[1], "Land")
         self._start_land(at_m)
 
     def _start_land(self, at_m: tuple[float, float] | None) -> None:
@@ -441,8 +434,8 @@ class Autopilot:
         """Go to a point and hold there (PX4 DO_REPOSITION)."""
         self._require_air("Reposition")
         self.check_target(target_m, "Reposition")
-        if speed_m_s is not None and not 0.0 < speed_m_s <= self.params["MPC_XY_VEL_MAX"]:
-            raise CommandRefused(f"Reposition refused: speed {speed_m_s:g} m/s out of range")
+        if speed_m_s is not None:
+            check_speed(self.params, SpeedKind.GROUND, speed_m_s, "Reposition")
         self.mission.pause()
         self._set_mode(FlightMode.HOLD)
         self.fly_to(target_m, speed_m_s=speed_m_s, yaw_deg=yaw_deg)
@@ -450,33 +443,38 @@ class Autopilot:
             self.fleet.dyn.yaw_tracking[self.k] = True
             self._refresh_busy()
 
-    def change_speed(self, kind: int, speed_m_s: float) -> None:
-        limit = self.params["MPC_XY_VEL_MAX"] if kind in (0, 1) else 10.0
-        if kind not in (0, 1, 2, 3):
-            raise CommandRefused(f"Speed change refused: unknown speed type {kind}")
+    def change_speed(self, kind: float, speed_m_s: float) -> None:
+        """MAV_CMD_DO_CHANGE_SPEED: speed -1 or -2 restores the configured value."""
+        if kind not in tuple(SpeedKind):
+            raise CommandRefused(f"Speed: unknown speed type {kind:g}")
+        speed_kind = SpeedKind(int(kind))
+        dyn, k, p = self.fleet.dyn, self.k, self.params
+        horizontal = speed_kind in (SpeedKind.AIRSPEED, SpeedKind.GROUND)
         if speed_m_s == -1.0 or speed_m_s == -2.0:
-            if kind in (0, 1):
+            if horizontal:
                 self.speed_override_m_s = None
-                self.apply_params()
+                dyn.speed_xy_m_s[k] = min(p["MPC_XY_CRUISE"], p["MPC_XY_VEL_MAX"])
+            elif speed_kind is SpeedKind.CLIMB:
+                dyn.climb_m_s[k] = p["MPC_Z_VEL_MAX_UP"]
+            else:
+                dyn.descent_m_s[k] = p["MPC_Z_VEL_MAX_DN"]
             return
-        if not (math.isfinite(speed_m_s) and 0.0 < speed_m_s <= limit):
-            raise CommandRefused(
-                f"Speed change refused: {speed_m_s:g} m/s outside (0, {limit:g}]"
-            )
-        dyn, k = self.fleet.dyn, self.k
-        if kind in (0, 1):
+        check_speed(p, speed_kind, speed_m_s, "Speed")
+        if horizontal:
             self.speed_override_m_s = speed_m_s
             dyn.speed_xy_m_s[k] = speed_m_s
-        elif kind == 2:
-            dyn.climb_m_s[k] = min(speed_m_s, self.params["MPC_Z_VEL_MAX_UP"])
+        elif speed_kind is SpeedKind.CLIMB:
+            dyn.climb_m_s[k] = speed_m_s
         else:
-            dyn.descent_m_s[k] = min(speed_m_s, self.params["MPC_Z_VEL_MAX_DN"])
+            dyn.descent_m_s[k] = speed_m_s
 
     def set_yaw(self, heading_deg: float, *, rate_deg_s: float = 0.0,
                 relative: bool = False, direction: int = 1) -> None:
         self._require_air("Yaw")
         if not math.isfinite(heading_deg) or not math.isfinite(rate_deg_s):
             raise CommandRefused("Yaw refused: angle and rate must be numbers")
+        if rate_deg_s > 0.0:
+            check_yaw_rate(self.params, rate_deg_s, "Yaw")
         dyn, k = self.fleet.dyn, self.k
         if relative:
             heading_deg = float(dyn.yaw_deg[k]) + (heading_deg if direction >= 0 else -heading_deg)
@@ -490,11 +488,8 @@ class Autopilot:
         self._refresh_busy()
 
     def set_home(self, home_m: Vec3) -> None:
-        if not all(math.isfinite(v) for v in home_m):
-            raise CommandRefused("Set home refused: coordinates must be numbers")
-        if home_m[2] < -100.0:
-            raise CommandRefused("Set home refused: altitude far below ground")
-        self.home_m = (float(home_m[0]), float(home_m[1]), float(home_m[2]))
+        """Move home; refused beyond SIM_HOME_MAXDIST or the geofence (see limits)."""
+        self.home_m = check_home(self.params, home_m, self.position_m)
         self._event("home", position_m=list(self.home_m))
         self.listener.on_home_changed()
 

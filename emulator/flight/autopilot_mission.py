@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from emulator.flight import dynamics as dy
@@ -37,6 +37,7 @@ class MissionRunner:
         self.state = MissionState.NO_MISSION
         self.active = False
         self._awaiting_yaw = False
+        self._wait_action: Callable[[], None] | None = None
 
     @property
     def total(self) -> int:
@@ -106,7 +107,20 @@ class MissionRunner:
             self.active = False
             self.state = MissionState.PAUSED
             self._awaiting_yaw = False
+            self._cancel_wait()
             self.ap.listener.on_mission_current()
+
+    def _wait(self, delay_s: float, then: Callable[[], None]) -> None:
+        """Run `then` after delay_s of simulated time (a hold, loiter or delay item)."""
+        self._wait_action = then
+        self.ap._set_timer(delay_s, then, busy=True)
+
+    def _cancel_wait(self) -> None:
+        """A paused mission's pending hold must not fire into a later flight or mission."""
+        action, self._wait_action = self._wait_action, None
+        if action is not None and self.ap._timer_action is action:
+            self.ap._cancel_timer()
+            self.ap._refresh_busy()
 
     # ---------------------------------------------------------------- progress
     def _execute(self, seq: int) -> None:
@@ -158,7 +172,7 @@ class MissionRunner:
                 return
             self._reached(seq)
             if hold_s > 0:
-                self.ap._set_timer(hold_s, lambda: self._execute(seq + 1), busy=True)
+                self._wait(hold_s, lambda: self._execute(seq + 1))
             else:
                 self._execute(seq + 1)
 
@@ -176,7 +190,7 @@ class MissionRunner:
 
         def arrived() -> None:
             if self.active:
-                self.ap._set_timer(wait_s, lambda: self._reached_then_next(seq), busy=True)
+                self._wait(wait_s, lambda: self._reached_then_next(seq))
 
         self.ap.fly_to(self._target(item), then=arrived)
 
@@ -200,7 +214,7 @@ class MissionRunner:
 
     def _delay(self, item: MissionItem) -> None:
         seq = item.seq
-        self.ap._set_timer(max(0.0, item.param1), lambda: self._execute(seq + 1), busy=True)
+        self._wait(max(0.0, item.param1), lambda: self._execute(seq + 1))
 
     def _yaw(self, item: MissionItem) -> None:
         self._awaiting_yaw = True
@@ -220,7 +234,7 @@ class MissionRunner:
 
     def _change_speed(self, item: MissionItem) -> None:
         try:
-            self.ap.change_speed(int(item.param1) if math.isfinite(item.param1) else 1,
+            self.ap.change_speed(item.param1 if math.isfinite(item.param1) else 1.0,
                                  item.param2)
         except CommandRefused as refusal:
             self.ap._say(Severity.WARNING, str(refusal))

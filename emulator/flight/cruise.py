@@ -17,7 +17,13 @@ import numpy as np
 
 from emulator.flight.arrays import any_true as _any
 from emulator.flight.arrays import indices as _indices
-from emulator.flight.dynamics import BRAKING_SHARE, CONTROL_NONE, CONTROL_POSITION, TRACK_NONE
+from emulator.flight.dynamics import (
+    BRAKING_SHARE,
+    CONTROL_NONE,
+    CONTROL_POSITION,
+    TRACK_NONE,
+    along_line_limit,
+)
 
 if TYPE_CHECKING:
     from emulator.flight.fleet import Fleet
@@ -48,6 +54,8 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
     dist = np.sqrt(np.einsum("ij,ij->i", err, err))
     if _any(active & ~moving & (dist > AT_GOAL_M)):
         return 0  # about to start moving
+    if _any(active & ~moving & (dyn.tracking != TRACK_NONE)):
+        return 0  # at rest on a goal whose arrival the next step reports
     if _any(moving):
         idx = _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
@@ -58,8 +66,7 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
             return 0
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
         w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
-        a_eff = np.minimum(dyn.accel_xy_m_s2[idx] / np.maximum(h, 1e-9),
-                           dyn.accel_z_m_s2[idx] / np.maximum(w, 1e-9))
+        a_eff = along_line_limit(dyn.accel_xy_m_s2[idx], dyn.accel_z_m_s2[idx], h, w)
         step_m = s * dt
         braking_m = s * s / (2.0 * BRAKING_SHARE * a_eff)
         free_m = d - braking_m

@@ -26,6 +26,7 @@ __all__ = [
     "TRACK_SETTLE",
     "FleetDynamics",
     "StepEvents",
+    "along_line_limit",
 ]
 
 CONTROL_NONE = 0  # resting on the ground: no motion
@@ -65,6 +66,19 @@ class StepEvents:
 
 
 _NO_EVENTS = StepEvents(_EMPTY, _EMPTY, _EMPTY, _EMPTY)
+
+
+def along_line_limit(limit_h: np.ndarray, limit_v: np.ndarray, h: np.ndarray,
+                     w: np.ndarray) -> np.ndarray:
+    """The largest magnitude along a line whose horizontal share is h and vertical share w
+    (direction cosines) that keeps its horizontal part within limit_h and its vertical part
+    within limit_v. A limit whose share is zero does not apply: a vertical climb is bounded
+    by the climb rate alone, however low the horizontal speed. A zero-length line gets the
+    smaller limit."""
+    along_h = np.divide(limit_h, h, out=np.full(h.shape, np.inf), where=h > 0.0)
+    along_v = np.divide(limit_v, w, out=np.full(w.shape, np.inf), where=w > 0.0)
+    along = np.minimum(along_h, along_v)
+    return np.where(np.isfinite(along), along, np.minimum(limit_h, limit_v))
 
 
 class FleetDynamics:
@@ -140,10 +154,8 @@ class FleetDynamics:
         w = np.abs(d_z) * inv
         vz_lim = np.where(d_z >= 0.0, self.climb_m_s, self.descent_m_s)
         # Speed along the line so that neither the horizontal nor the vertical limit is broken.
-        s_max = np.minimum(self.speed_xy_m_s * (1.0 / np.maximum(h, 1e-9)),
-                           vz_lim * (1.0 / np.maximum(w, 1e-9)))
-        a_eff = np.minimum(self.accel_xy_m_s2 * (1.0 / np.maximum(h, 1e-9)),
-                           self.accel_z_m_s2 * (1.0 / np.maximum(w, 1e-9)))
+        s_max = along_line_limit(self.speed_xy_m_s, vz_lim, h, w)
+        a_eff = along_line_limit(self.accel_xy_m_s2, self.accel_z_m_s2, h, w)
         # Braking follows v = sqrt(2 a' d) with a' a little below the limit, so the discrete
         # accel-limited velocity can track it and the vehicle stops on the goal, no overshoot.
         braking = np.sqrt(2.0 * BRAKING_SHARE * a_eff * dist)

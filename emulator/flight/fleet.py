@@ -12,7 +12,7 @@ from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
 from emulator.flight.cruise import steady_steps
-from emulator.flight.dynamics import CONTROL_NONE, FleetDynamics
+from emulator.flight.dynamics import CONTROL_NONE, CONTROL_VELOCITY, FleetDynamics
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
 from emulator.truth import TruthRecorder
@@ -91,6 +91,10 @@ class Fleet:
                 aps[k].on_yaw_reached()
         for k in levels:
             aps[k].on_battery_level(int(self.bat.level[k]))
+        by_velocity = dyn.control == CONTROL_VELOCITY
+        if _any(by_velocity):
+            for k in _indices(by_velocity):
+                aps[k].offboard.check_fence()
         charging = self.bat.charge_rate_pct_s > 0.0
         if levels is not _NO_LEVELS and _any(charging):
             for k in _indices(charging & (self.bat.pct >= 100.0)):

@@ -5,6 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from emulator.flight.limits import SpeedKind, check_speed, check_yaw_rate
+from emulator.flight.params import ParamStore
+from emulator.flight.refusal import CommandRefused
 from emulator.geo import GeoOrigin
 
 __all__ = [
@@ -14,6 +17,7 @@ __all__ = [
     "MissionItem",
     "MissionResult",
     "validate_item",
+    "validate_item_limits",
 ]
 
 
@@ -42,6 +46,7 @@ class MissionResult:
     NO_SPACE = 4
     INVALID = 5
     INVALID_PARAM1 = 6
+    INVALID_PARAM2 = 7
     INVALID_PARAM5_X = 11
     INVALID_PARAM6_Y = 12
     INVALID_PARAM7 = 13
@@ -151,4 +156,27 @@ def validate_item(
             f"{where}: {math.hypot(x_m - home_m[0], y_m - home_m[1]):.0f} m from home, "
             f"limit {max_distance_m:.0f} m"
         )
+    return MissionResult.ACCEPTED, ""
+
+
+def validate_item_limits(item: MissionItem, params: ParamStore) -> tuple[int, str]:
+    """Check the speeds and rates of one item against the vehicle's flight envelope now:
+    a speed change must name a known speed type and a speed the vehicle can fly (or -1/-2,
+    back to the configured speed), a yaw rate must not be vanishingly small."""
+    where = f"Item {item.seq}"
+    if item.command == Cmd.DO_CHANGE_SPEED:
+        kind = item.param1 if math.isfinite(item.param1) else float(SpeedKind.GROUND)
+        if kind not in tuple(SpeedKind):
+            return MissionResult.INVALID_PARAM1, f"{where}: unknown speed type {kind:g}"
+        if item.param2 in (-1.0, -2.0):
+            return MissionResult.ACCEPTED, ""
+        try:
+            check_speed(params, SpeedKind(int(kind)), item.param2, where)
+        except CommandRefused as refusal:
+            return MissionResult.INVALID_PARAM2, str(refusal)
+    elif item.command == Cmd.CONDITION_YAW and math.isfinite(item.param2) and item.param2 > 0:
+        try:
+            check_yaw_rate(params, item.param2, where)
+        except CommandRefused as refusal:
+            return MissionResult.INVALID_PARAM2, str(refusal)
     return MissionResult.ACCEPTED, ""

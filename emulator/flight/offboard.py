@@ -2,7 +2,9 @@
 
 PX4's rules: entering OFFBOARD needs a set-point received within COM_OF_LOSS_T, and when
 set-points stop arriving for that long the vehicle holds. Both are wall-clock rules, since
-they concern the link rather than the flight.
+they concern the link rather than the flight. The geofence applies as in every other mode:
+a position set-point outside it is refused, and a vehicle flown out of it by velocity
+set-points holds at the fence.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import math
 from typing import TYPE_CHECKING
 
 from emulator.flight import dynamics as dy
+from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.refusal import CommandRefused, Severity
 
@@ -32,7 +35,11 @@ class OffboardControl:
         self._applied: tuple[str, Vec3, float] | None = None
 
     def setpoint(self, kind: str, vector: Vec3, yaw_deg: float, wall_now_s: float) -> None:
-        """A position ('position', ENU m) or velocity ('velocity', ENU m/s) set-point."""
+        """A position ('position', ENU m; below ground means on it) or velocity ('velocity',
+        ENU m/s) set-point. Raises CommandRefused for a position outside the geofence."""
+        if kind == "position":
+            vector = (vector[0], vector[1], max(vector[2], 0.0))
+            check_target(self.ap.params, self.ap.home_m, vector, "Offboard set-point")
         self._setpoint = (kind, vector, yaw_deg)
         self._received_wall_s = wall_now_s
         if self.ap.mode is FlightMode.OFFBOARD and self._setpoint != self._applied:
@@ -64,7 +71,7 @@ class OffboardControl:
             ap._update_charging()
             ap._event("takeoff", altitude_m=vec[2] if kind == "position" else None)
         if kind == "position":
-            ap.fly_to((vec[0], vec[1], max(vec[2], 0.0)), tracking=dy.TRACK_SETTLE, yaw_deg=yaw)
+            ap.fly_to(vec, tracking=dy.TRACK_SETTLE, yaw_deg=yaw)
         else:
             ap._on_arrive = None
             ap._blockage = None
@@ -74,6 +81,24 @@ class OffboardControl:
             dyn.goal_yaw_deg[k] = yaw
             ap._goal_pending = False
             ap._refresh_busy()
+
+    def check_fence(self) -> None:
+        """Geofence for velocity set-points: hold once beyond the ceiling or the fence radius
+        and still moving outwards (called every physics step while flying by velocity)."""
+        ap = self.ap
+        p, k = ap.params, ap.k
+        x, y, z = ap.position_m
+        hx, hy, hz = ap.home_m
+        vx, vy, vz = (float(v) for v in ap.fleet.dyn.velocity_sp_m_s[k])
+        above = z - hz > p["GF_MAX_VER_DIST"] and vz > 0.0
+        outside = math.hypot(x - hx, y - hy) > p["GF_MAX_HOR_DIST"] and (
+            (x - hx) * vx + (y - hy) * vy > 0.0
+        )
+        if above or outside:
+            ap._event("failsafe", reason="geofence")
+            ap._say(Severity.WARNING, "Geofence reached: holding")
+            self._applied = None
+            ap.hold()
 
     def check_link(self, wall_now_s: float) -> None:
         """Offboard failsafe: hold when set-points stop arriving (wall-clock timeout)."""

@@ -10,7 +10,12 @@ import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
-__all__ = ["PARAM_DEFINITIONS", "ParamDefinition", "ParamError", "ParamStore"]
+__all__ = [
+    "PARAM_DEFINITIONS", "PARAM_ID_MAX_CHARS", "ParamDefinition", "ParamError", "ParamStore",
+]
+
+
+PARAM_ID_MAX_CHARS = 16  # PARAM_VALUE.param_id is char[16]
 
 
 class ParamError(ValueError):
@@ -25,6 +30,10 @@ class ParamDefinition:
     maximum: float
     is_int: bool = False
     description: str = ""
+
+    def __post_init__(self) -> None:
+        if not 0 < len(self.name) <= PARAM_ID_MAX_CHARS:
+            raise ValueError(f"parameter name {self.name!r}: 1 to {PARAM_ID_MAX_CHARS} chars")
 
 
 def _p(name: str, default: float, lo: float, hi: float, desc: str, *,
@@ -62,6 +71,8 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("SIM_HOVER_ENDUR", 1200.0, 60.0, 36000.0, "hover endurance on a full battery (s)"),
     _p("SIM_SENS_RAD", 50.0, 1.0, 10000.0, "sensor (perceived) radius (m)"),
     _p("SIM_TASK_RAD", 20.0, 0.1, 10000.0, "task radius (m)"),
+    _p("SIM_HOME_MAXDIST", 10000.0, 10.0, 100000.0,
+       "maximum horizontal distance of home from the session origin (m)"),
     _p("MAV_SYS_ID", 1, 1, 250, "MAVLink system id", is_int=True),
     _p("MAV_TYPE", 2, 0, 50, "MAVLink vehicle type (2 = quadrotor)", is_int=True),
     _p("SYS_AUTOSTART", 10016, 0, 9999999, "airframe id (SITL quadrotor)", is_int=True),

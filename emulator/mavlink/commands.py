@@ -22,7 +22,6 @@ __all__ = ["CommandArgs", "Result", "execute_command"]
 INT32_MAX = 2**31 - 1
 FRAMES_AMSL = frozenset({0, 5})
 FRAMES_RELATIVE = frozenset({3, 6})
-MAX_HOME_HEIGHT_M = 10_000.0  # a home further above/below the ground is refused
 
 
 class Result:
@@ -145,7 +144,7 @@ def _set_mode(link: VehicleLink, a: CommandArgs) -> Outcome:
 
 def _reposition(link: VehicleLink, a: CommandArgs) -> Outcome:
     target = _local_target(link, a, "Reposition")
-    speed = a.p1 if _finite(a.p1) and a.p1 > 0 else None
+    speed = a.p1 if a.p1 > 0 else None  # NaN, 0 or negative: the configured speed
     yaw = math.degrees(a.p4) % 360.0 if _finite(a.p4) else math.nan
     link.ap.reposition(target, speed_m_s=speed, yaw_deg=yaw)
     return Result.ACCEPTED, None
@@ -163,15 +162,12 @@ def _set_home(link: VehicleLink, a: CommandArgs) -> Outcome:
         frame = a.frame if a.frame in FRAMES_RELATIVE else 0
         args = CommandArgs(a.command, a.p1, a.p2, a.p3, a.p4, a.latitude_deg, a.longitude_deg,
                            a.altitude_m, frame)
-        home = _local_target(link, args, "Set home")
-        if abs(home[2]) > MAX_HOME_HEIGHT_M:
-            return Result.DENIED, f"Set home: altitude {home[2]:.0f} m from the ground"
-        ap.set_home(home)
+        ap.set_home(_local_target(link, args, "Set home"))
     return Result.ACCEPTED, None
 
 
 def _change_speed(link: VehicleLink, a: CommandArgs) -> Outcome:
-    kind = int(a.p1) if _finite(a.p1) else 1
+    kind = a.p1 if _finite(a.p1) else 1.0
     link.ap.change_speed(kind, a.p2)
     return Result.ACCEPTED, None
 
@@ -200,6 +196,8 @@ def _message_interval(link: VehicleLink, a: CommandArgs) -> Outcome:
     if not (_finite(a.p1) and _finite(a.p2)):
         return Result.DENIED, "Message interval: parameters must be numbers"
     interval_us = a.p2
+    if a.p1 < 0:
+        return Result.DENIED, f"Message interval: message id {a.p1:g} is invalid"
     if interval_us < -1:
         return Result.DENIED, f"Message interval: {interval_us:g} us is invalid"
     interval = None if interval_us == 0 else math.inf if interval_us == -1 else interval_us / 1e6

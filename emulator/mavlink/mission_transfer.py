@@ -10,7 +10,13 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from emulator.flight.mission import MAX_ITEMS, MissionItem, MissionResult, validate_item
+from emulator.flight.mission import (
+    MAX_ITEMS,
+    MissionItem,
+    MissionResult,
+    validate_item,
+    validate_item_limits,
+)
 from emulator.flight.refusal import Severity
 from emulator.mavlink.codec import mavlink
 
@@ -99,6 +105,8 @@ class MissionTransfer:
             item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
             ap.params["GF_MAX_HOR_DIST"],
         )
+        if code == MissionResult.ACCEPTED:
+            code, reason = validate_item_limits(item, ap.params)
         if code != MissionResult.ACCEPTED:
             self._upload = None
             self._ack(peer, code)

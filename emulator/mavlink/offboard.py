@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from emulator.flight.refusal import Severity
+from emulator.flight.refusal import CommandRefused, Severity
 
 if TYPE_CHECKING:
     from emulator.mavlink.vehicle_link import VehicleLink
@@ -48,6 +48,13 @@ def _rotate_body(link: VehicleLink, forward: float, right: float) -> tuple[float
     return east, north
 
 
+def _position(link: VehicleLink, enu_m: tuple[float, float, float], yaw_deg: float) -> None:
+    try:
+        link.ap.offboard.setpoint("position", enu_m, yaw_deg, link.wall_now_s)
+    except CommandRefused as refusal:
+        _complain(link, "fence", str(refusal))
+
+
 def apply_local_setpoint(link: VehicleLink, m) -> None:
     if m.coordinate_frame not in _LOCAL_FRAMES:
         _complain(link, f"frame{m.coordinate_frame}",
@@ -68,8 +75,7 @@ def apply_local_setpoint(link: VehicleLink, m) -> None:
         if offset:
             x0, y0, z0 = link.ap.position_m
             east, north, up = east + x0, north + y0, up + z0
-        link.ap.offboard.setpoint("position", (east, north, up), _yaw_deg(m),
-                                  link.wall_now_s)
+        _position(link, (east, north, up), _yaw_deg(m))
     elif not m.type_mask & _IGNORE_VELOCITY:
         values = (m.vx, m.vy, m.vz)
         if not all(math.isfinite(v) for v in values):
@@ -96,7 +102,7 @@ def apply_global_setpoint(link: VehicleLink, m) -> None:
         origin = ap.fleet.world.origin
         x, y, _ = origin.to_local(lat, lon, origin.altitude_amsl_m)
         z = m.alt - origin.altitude_amsl_m if frame in _GLOBAL_AMSL else ap.home_m[2] + m.alt
-        ap.offboard.setpoint("position", (x, y, z), _yaw_deg(m), link.wall_now_s)
+        _position(link, (x, y, z), _yaw_deg(m))
     elif not m.type_mask & _IGNORE_VELOCITY:
         if not all(math.isfinite(v) for v in (m.vx, m.vy, m.vz)):
             _complain(link, "nan", "Offboard: set-point with NaN ignored")

@@ -22,7 +22,7 @@ from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import apply_global_setpoint, apply_local_setpoint
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 
-__all__ = ["VehicleLink"]
+__all__ = ["HANDLED_MESSAGES", "VehicleLink"]
 
 PARAM_TYPE_INT32 = 6
 PARAM_TYPE_REAL32 = 9
@@ -329,3 +329,5 @@ _DISPATCH: dict[str, Callable[[VehicleLink, mavlink.MAVLink_message], None]] = {
     "TIMESYNC": VehicleLink._timesync,
     "FILE_TRANSFER_PROTOCOL": VehicleLink._file_transfer,
 }
+
+HANDLED_MESSAGES: frozenset[str] = frozenset(_DISPATCH)  # what a vehicle acts on or answers
