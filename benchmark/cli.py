@@ -118,8 +118,9 @@ def _report(args: argparse.Namespace) -> int:
 
 def _import(args: argparse.Namespace) -> int:
     from benchmark.importer import import_session_file
+    taken: set[str] = set()
     for path in args.files:
-        written, notes = import_session_file(path, args.out)
+        written, notes = import_session_file(path, args.out, taken=taken)
         print(f"{path} -> {written}")
         for note in notes:
             print(f"  note: {note}")

@@ -29,7 +29,8 @@ from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
 
-__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "record_key", "run_session", "run_task",
+__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "base_record", "error_record", "record_key",
+           "run_session", "run_task",
            "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
@@ -125,19 +126,30 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
     return swarm.fleet.now_s
 
 
+def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
+                category: str, agent: str, trial: int) -> dict[str, Any]:
+    """The fields that name a task's record."""
+    return {"key": record_key(session_id, task_id, agent, trial), "session": session_id,
+            "family": family, "level": level, "task": task_id, "template": template,
+            "category": category, "agent": agent, "trial": trial}
+
+
 def _base_record(session: Session, task: TaskSpec, agent: str, trial: int) -> dict[str, Any]:
-    return {"key": record_key(session.id, task.id, agent, trial), "session": session.id,
-            "family": session.family, "level": session.level, "task": task.id,
-            "template": task.template, "category": task.category, "agent": agent,
-            "trial": trial}
+    return base_record(session_id=session.id, family=session.family, level=session.level,
+                       task_id=task.id, template=task.template, category=task.category,
+                       agent=agent, trial=trial)
+
+
+def error_record(base: Mapping[str, Any], error: str) -> dict[str, Any]:
+    """A failed record for a task that could not be run (finish "task_error")."""
+    return {**base, "passed": False, "checks": [], "checks_total": 0, "checks_passed": 0,
+            "finish": "task_error", "error": error, "tool_calls": 0, "sim_time_s": 0.0,
+            "wall_time_s": 0.0, "tokens": None, "overhead_s": {"reset": 0.0, "evaluate": 0.0}}
 
 
 def task_error_record(session: Session, task: TaskSpec, agent: str, trial: int,
                       error: str) -> dict[str, Any]:
-    return {**_base_record(session, task, agent, trial), "passed": False, "checks": [],
-            "checks_total": 0, "checks_passed": 0, "finish": "task_error", "error": error,
-            "tool_calls": 0, "sim_time_s": 0.0, "wall_time_s": 0.0, "tokens": None,
-            "overhead_s": {"reset": 0.0, "evaluate": 0.0}}
+    return error_record(_base_record(session, task, agent, trial), error)
 
 
 async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
@@ -166,7 +178,18 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
     keys = [record_key(session.id, t.id, agent.name, options.trial) for t in session.tasks]
     if all(k in done for k in keys):
         return
-    async with swarm_gateway(session, options.physics_hz) as (swarm, services, gateway):
+    stack = contextlib.AsyncExitStack()
+    try:
+        swarm, services, gateway = await stack.enter_async_context(
+            swarm_gateway(session, options.physics_hz))
+    except ValueError as error:  # the world cannot fly (a vehicle parameter out of range...)
+        await stack.aclose()
+        for task, key in zip(session.tasks, keys, strict=True):
+            if key not in done:
+                emit(task_error_record(session, task, agent.name, options.trial,
+                                       f"{session.source}: the session cannot start: {error}"))
+        return
+    async with stack:
         restore: Mapping[str, Any] | None = None
         for task, key in zip(session.tasks, keys, strict=True):
             if key in done:

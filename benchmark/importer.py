@@ -17,12 +17,19 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from benchmark.session_file import SCHEMA, dump_session, session_from_dict
+from benchmark.session_file import (
+    SCHEMA,
+    Session,
+    SessionFileError,
+    dump_session,
+    read_session_json,
+    session_from_dict,
+)
 from benchmark.validators import ENDPOINTS
 from benchmark.validators.endpoint import IGNORED_PARAMETERS
 from emulator.scenario import ScenarioError, scenario_from_dict
 
-__all__ = ["SessionImportError", "import_session", "import_session_file"]
+__all__ = ["SessionImportError", "import_session", "import_session_file", "load_any_session"]
 
 DEFAULT_BUDGET = {"tool_calls": 120, "sim_time_s": 1800.0}
 ENTITY_KEYS = ("drones", "targets", "obstacles", "environment")
@@ -95,7 +102,7 @@ def import_session(data: Any, *, source: str = "<dict>") -> tuple[dict[str, Any]
         scenario = scenario_from_dict(data, source=source)
     except ScenarioError as error:
         raise SessionImportError(str(error)) from None
-    notes: list[str] = []
+    notes: list[str] = list(scenario.notes)
     tasks_raw = data.get("tasks") or []
     if not isinstance(tasks_raw, list):
         raise SessionImportError(f"{source}: tasks: expected a list")
@@ -123,8 +130,11 @@ def import_session(data: Any, *, source: str = "<dict>") -> tuple[dict[str, Any]
     return session, notes
 
 
-def import_session_file(path: str | Path, out_dir: str | Path) -> tuple[Path, list[str]]:
-    """Convert one file into out_dir/<id>.json; returns its path and the notes."""
+def import_session_file(path: str | Path, out_dir: str | Path, *,
+                        taken: set[str] | None = None) -> tuple[Path, list[str]]:
+    """Convert one file into out_dir/<id>.json; returns its path and the notes. An id already
+    in `taken` (the files converted before it in the same import) gets a numbered suffix, so
+    no file overwrites another; the id written is added to `taken`."""
     source = str(path)
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -133,8 +143,32 @@ def import_session_file(path: str | Path, out_dir: str | Path) -> tuple[Path, li
     except json.JSONDecodeError as error:
         raise SessionImportError(f"{source}: not valid JSON: {error}") from None
     session, notes = import_session(data, source=source)
+    if taken is not None:
+        ident, n = session["id"], 2
+        while session["id"] in taken:
+            session["id"], n = f"{ident}-{n}", n + 1
+        if session["id"] != ident:
+            notes.append(f"id {ident!r} was taken by an earlier file of this import; written "
+                         f"as {session['id']!r}")
+        taken.add(session["id"])
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     target = out / f"{session['id']}.json"
     target.write_text(dump_session(session), encoding="utf-8")
     return target, notes
+
+
+def load_any_session(path: str | Path) -> tuple[Session, list[str]]:
+    """A session from a mavswarm session file, or from a MultiUAV-Plat file converted in memory
+    as `bench import` would; with the notes on what was read differently. Raises
+    SessionFileError naming the file and the field."""
+    source = str(path)
+    data = read_session_json(path)
+    if isinstance(data, Mapping) and data.get("schema") is None and "drones" in data:
+        try:
+            converted, notes = import_session(data, source=source)
+        except SessionImportError as error:
+            raise SessionFileError(str(error)) from None
+        return session_from_dict(converted, source=source), notes
+    session = session_from_dict(data, source=source)
+    return session, list(session.scenario.notes)

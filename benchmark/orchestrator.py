@@ -21,9 +21,10 @@ from typing import Any
 
 from agent_contract import Agent
 from benchmark.agents import NoopAgent
-from benchmark.episode import EpisodeOptions, run_session
+from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
+from benchmark.importer import load_any_session
 from benchmark.results import ResultsLog, read_records
-from benchmark.session_file import Session, SessionFileError, load_session
+from benchmark.session_file import Session, SessionFileError
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
 
@@ -83,10 +84,20 @@ def _limited(session: Session, limit: int | None) -> Session:
 def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
               send: Callable[[tuple[str, Any]], None]) -> None:
     try:
-        session = _limited(load_session(path), plan.task_limit)
+        loaded, notes = load_any_session(path)
+        session = _limited(loaded, plan.task_limit)
     except SessionFileError as error:
-        send(("error", str(error)))
+        records = _unloadable_records(path, plan, trial, str(error), done)
+        for record in records:
+            send(("record", record))
+        if not records:
+            send(("error", str(error)))
         return
+    if trial == 0:
+        for note in notes:
+            send(("note", f"{path}: {note}"))
+    if not session.tasks:
+        send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz)
     try:
@@ -94,6 +105,27 @@ def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
                                 done=done, options=options))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+def _unloadable_records(path: str, plan: RunPlan, trial: int, error: str,
+                        done: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """task_error records for the tasks a session file lists when the session itself cannot
+    be loaded (so reports count them as failed); none when not even its tasks can be read."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return []
+    if not isinstance(data, dict) or not isinstance(data.get("id"), str):
+        return []
+    tasks = [t for t in data.get("tasks") or [] if isinstance(t, dict)
+             and isinstance(t.get("id"), str)][:plan.task_limit]
+    bases = [base_record(session_id=data["id"], family=str(data.get("family", "")),
+                         level=str(data.get("level", "")), task_id=task["id"],
+                         template=str(task.get("template", "")),
+                         category=str(task.get("category", "")), agent=plan.agent, trial=trial)
+             for task in tasks]
+    return [error_record(base, f"the session cannot be loaded: {error}")
+            for base in bases if base["key"] not in done]
 
 
 def _worker(units: Any, results: Any, plan: RunPlan) -> None:
@@ -159,6 +191,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         elif kind == "error":
             outcome.errors.append(payload)
             progress(f"error: {payload}")
+        elif kind == "note":
+            progress(f"note: {payload}")
 
     try:
         if plan.workers == 1:

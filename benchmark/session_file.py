@@ -38,6 +38,7 @@ __all__ = [
     "TaskSpec",
     "dump_session",
     "load_session",
+    "read_session_json",
     "session_from_dict",
     "task_from_dict",
 ]
@@ -191,19 +192,24 @@ def session_from_dict(data: Any, *, source: str = "<dict>") -> Session:
                    scenario.task_type, scenario, tasks, data)
 
 
-def load_session(path: str | Path) -> Session:
-    """Read a session file; raises SessionFileError naming the file and the field."""
+def read_session_json(path: str | Path) -> Any:
+    """The parsed JSON of a session file; raises SessionFileError naming the file."""
     source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as error:
         raise SessionFileError(f"{source}: cannot read: {error}") from None
     try:
-        data = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as error:
         raise SessionFileError(f"{source}: not valid JSON (truncated or corrupt?): "
                                f"{error}") from None
-    return session_from_dict(data, source=source)
+
+
+def load_session(path: str | Path) -> Session:
+    """Read a mavswarm session file; raises SessionFileError naming the file and the field
+    (`benchmark.importer.load_any_session` also takes MultiUAV-Plat files)."""
+    return session_from_dict(read_session_json(path), source=str(path))
 
 
 def dump_session(data: Mapping[str, Any]) -> str:

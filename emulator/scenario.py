@@ -20,6 +20,7 @@ import numpy as np
 import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
+from emulator.reference_mapping import capacity_mah, home_altitude_m, moving_target_note
 from emulator.world import CALM, OBSTACLE_KINDS, TARGET_KINDS, Obstacle, Target, Wind, World
 
 __all__ = [
@@ -90,6 +91,8 @@ class Scenario:
     world: World
     vehicles: tuple[VehicleSpec, ...]
     source: str
+    notes: tuple[str, ...] = ()
+    """What was read differently from the file (emulator.reference_mapping)."""
 
 
 def _show(value: object) -> str:
@@ -193,7 +196,7 @@ def _rounded_mean(points: list[Point3]) -> Point3:
     return float(round(xy[:, 0].mean())), float(round(xy[:, 1].mean())), points[0][2]
 
 
-def _drone(e: _Entity, index: int) -> VehicleSpec:
+def _drone(e: _Entity, index: int, notes: list[str]) -> VehicleSpec:
     ident = e.identifier(f"d{index + 1}")
     name = e.text("name")
     model = e.text("model", DEFAULT_MODEL)
@@ -206,6 +209,10 @@ def _drone(e: _Entity, index: int) -> VehicleSpec:
         if not 0.0 <= point[2] <= max_altitude:
             e.fail(f"{field}.z", f"must be between 0 and max_altitude ({max_altitude:g}), "
                    f"got {point[2]:g}")
+    home_z, home_note = home_altitude_m(home[2], e.label)
+    home = (home[0], home[1], home_z)
+    capacity_flown, capacity_note = capacity_mah(capacity, e.label)
+    notes.extend(n for n in (capacity_note, home_note) if n)
     if e.data.get("battery_volume") is not None:
         volume = min(max(e.number("battery_volume"), 0.0), capacity)
         battery_pct = 100.0 * volume / capacity
@@ -217,11 +224,11 @@ def _drone(e: _Entity, index: int) -> VehicleSpec:
         max_speed_m_s=max_speed, max_altitude_m=max_altitude,
         perceived_radius_m=e.number("perceived_radius", DEFAULT_PERCEIVED_RADIUS_M, above=0.0),
         task_radius_m=e.number("task_radius", DEFAULT_TASK_RADIUS_M, above=0.0),
-        battery_pct=battery_pct, battery_capacity_mah=capacity,
+        battery_pct=battery_pct, battery_capacity_mah=capacity_flown,
     )
 
 
-def _target(e: _Entity, index: int) -> tuple[Target, Point3]:
+def _target(e: _Entity, index: int, notes: list[str]) -> tuple[Target, Point3]:
     """The target and the point the reference tests for placement (the given position)."""
     ident, name = e.identifier(f"t{index + 1}"), e.text("name")
     kind = e.choice("type", TARGET_KINDS)
@@ -238,6 +245,8 @@ def _target(e: _Entity, index: int) -> tuple[Target, Point3]:
             amount = e.number("charge_amount", DEFAULT_CHARGE_AMOUNT_PCT, above=0.0)
             rate = amount / CHARGE_AMOUNT_PERIOD_S
         target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate)
+        if kind == "moving":
+            notes.append(moving_target_note(e.label))
     if given[2] < 0.0:
         e.fail("position.z", f"must be >= 0, got {given[2]:g}")
     return target, given
@@ -330,17 +339,18 @@ def scenario_from_dict(data: Mapping[str, object], *, source: str = "<dict>") ->
     obstacle_entities = _entities(source, top, "obstacles", False)
     obstacles = [_obstacle(e, k) for k, e in enumerate(obstacle_entities)]
     _check_unique(obstacle_entities, [o.id for o in obstacles])
-    placed = [_target(e, k) for k, e in enumerate(target_entities)]
+    notes: list[str] = []
+    placed = [_target(e, k, notes) for k, e in enumerate(target_entities)]
     targets = [t for t, _ in placed]
     _check_unique(target_entities, [t.id for t in targets])
-    vehicles = [_drone(e, k) for k, e in enumerate(drone_entities)]
+    vehicles = [_drone(e, k, notes) for k, e in enumerate(drone_entities)]
     _check_unique(drone_entities, [v.id for v in vehicles])
     world = World(obstacles=obstacles, targets=targets, wind=wind, origin=origin,
                   safety_margin_m=margin)
     _check_placement(world, target_entities, [p for _, p in placed], "position")
     _check_placement(world, drone_entities, [v.position_m for v in vehicles], "position")
     _check_placement(world, drone_entities, [v.home_m for v in vehicles], "home_position")
-    return Scenario(name, task_type, world, tuple(vehicles), source)
+    return Scenario(name, task_type, world, tuple(vehicles), source, tuple(notes))
 
 
 def load_scenario(path: str | Path) -> Scenario:

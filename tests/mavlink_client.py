@@ -320,6 +320,16 @@ class LoopErrors:
         return "; ".join(f"{c.get('message')}: {c.get('exception')!r}" for c in self.errors)
 
 
+async def send_datagram(sock: socket.socket, data: bytes, address: Address) -> None:
+    """Send one datagram from a non-blocking socket, waiting while its buffer is full."""
+    while True:
+        try:
+            sock.sendto(data, address)
+            return
+        except BlockingIOError:
+            await asyncio.sleep(0.001)
+
+
 def scheduler_alive(swarm: Swarm) -> bool:
     task = swarm._task
     return task is not None and not task.done()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import signal
 import socket
 import subprocess
@@ -13,40 +12,18 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from emulator.truth import TruthRecorder
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import MAVSWARM, read_until, start_up
 from tests.ports import unused_udp_port
-
-
-def _start(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [*MAVSWARM, "up", *args],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-
-
-def _read_until(proc: subprocess.Popen[str], needle: str, timeout_s: float = 20.0) -> str:
-    assert proc.stdout is not None
-    seen = []
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        if not line:
-            break
-        seen.append(line)
-        if needle in line:
-            return "".join(seen)
-    raise AssertionError(f"{needle!r} not printed; got:\n{''.join(seen)}")
 
 
 def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
     api, gcs, bind = unused_udp_port(), unused_udp_port(), unused_udp_port()
     truth = tmp_path / "run.truth.npz"
-    proc = _start("--drones", "3", "--speed", "5", "--bind-host", "127.0.0.1",
+    proc = start_up("--drones", "3", "--speed", "5", "--bind-host", "127.0.0.1",
                   "--bind-port", str(bind), "--api-port", str(api), "--gcs-port", str(gcs),
                   "--truth-out", str(truth))
     try:
-        text = _read_until(proc, "MAVProxy")
+        text = read_until(proc, "MAVProxy")
         assert f"udpin://0.0.0.0:{api}" in text
         assert f"udpout:127.0.0.1:{bind}" in text
         assert "3 vehicles" in text

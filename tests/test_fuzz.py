@@ -34,7 +34,13 @@ from emulator.geo import DEFAULT_ORIGIN
 from emulator.mavlink.codec import DatagramDecoder
 from emulator.mavlink.commands import HANDLERS
 from tests.flight_check import recover_and_fly
-from tests.mavlink_client import mavlink, running_swarm, scheduler_alive, swarm_socket_open
+from tests.mavlink_client import (
+    mavlink,
+    running_swarm,
+    scheduler_alive,
+    send_datagram,
+    swarm_socket_open,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -332,12 +338,7 @@ async def test_fuzzed_swarm_survives_and_flies_a_mission() -> None:
                             break
                         mirror.frames_ok, mirror.frames_bad = counts  # not sent after all
                         replaced += 1
-                    while True:
-                        try:
-                            sock.sendto(data, endpoint.local_address)
-                            break
-                        except BlockingIOError:
-                            await asyncio.sleep(0.001)
+                    await send_datagram(sock, data, endpoint.local_address)
                     frames += n
                     datagrams += 1
                 # let the swarm drain its socket (UDP would drop what overflows it)

@@ -4,7 +4,6 @@ field, echoes at most a short preview, and changes nothing; the server answers a
 
 from __future__ import annotations
 
-import contextlib
 from collections.abc import AsyncIterator
 from typing import Any
 
@@ -12,43 +11,20 @@ import httpx
 import pytest
 from mcp import Client
 
-from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
-from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import session_from_dict
+from benchmark.server import LiveSession
 from emulator.radio import Radio, RadioError
 from emulator.truth import TruthRecorder
 from llm_tools import default_registry
 from llm_tools.input_limits import MAX_BODY_BYTES
 from llm_tools.mcp_server import build_server
-from tests.bench_fixtures import small_session
+from tests.rest_fixtures import KEYS, served
 
 pytestmark = pytest.mark.mavsdk
 
-KEYS = {"agent": "key-agent", "operator": "key-operator", "admin": "key-admin"}
 HUGE = "1" + "0" * 400  # beyond float range
 LONG = "7" * 5000  # beyond Python's integer-string limit
 DEEP = "[" * 100_000
 ECHO_LIMIT = 600  # characters any refusal may take
-
-
-@contextlib.asynccontextmanager
-async def served() -> AsyncIterator[tuple[httpx.AsyncClient, LiveSession]]:
-    data = small_session(["takeoff_hold"])
-    session = session_from_dict(data, source="s.json")
-    task = session.tasks[0]
-    async with swarm_gateway(session) as (swarm, services, gateway):
-        tools = AgentTools(gateway, AgentTask(session.id, task.id, task.text,
-                                              TaskBudget(200, 600.0)))
-        live = LiveSession(session, task, swarm, services, gateway, tools, services.clock_s())
-        hub = Hub()
-        hub.add_session(live)
-        for role, key in KEYS.items():
-            hub.add_key(key, Role(role), session.id if role == "agent" else None)
-        transport = httpx.ASGITransport(app=create_app(hub))
-        async with httpx.AsyncClient(transport=transport, base_url="http://rest",
-                                     headers={"X-API-Key": KEYS["agent"]}) as client:
-            yield client, live
 
 
 def raw_object(**fields: str) -> str:
@@ -75,7 +51,8 @@ def _refused(r: httpx.Response, status: int, *needles: str) -> str:
 
 
 async def test_huge_long_and_deep_numbers_get_422_naming_the_field() -> None:
-    async with served() as (client, live):
+    async with served(role="agent") as s:
+        client, live = s.client, s.live
         sid = live.session.id
         before = _snapshot(live)
         tool = f"/sessions/{sid}/tools/take_off"
@@ -103,7 +80,8 @@ async def test_huge_long_and_deep_numbers_get_422_naming_the_field() -> None:
 
 
 async def test_query_numbers_are_plain_ascii_decimals() -> None:
-    async with served() as (client, live):
+    async with served(role="agent") as s:
+        client, live = s.client, s.live
         drone = next(iter(live.gateway.drones))
         before = _snapshot(live)
         for text in ("1_0", "\u0661\u0660", "0x10", " 1e999", "inf", "nan", "1" * 60):
@@ -114,7 +92,8 @@ async def test_query_numbers_are_plain_ascii_decimals() -> None:
 
 
 async def test_echoes_are_bounded() -> None:
-    async with served() as (client, live):
+    async with served(role="agent") as s:
+        client, live = s.client, s.live
         sid = live.session.id
         drone = next(iter(live.gateway.drones))
         name = "n" * 1_000_000
@@ -136,7 +115,8 @@ async def test_echoes_are_bounded() -> None:
 
 
 async def test_body_over_the_limit_gets_413_and_changes_nothing() -> None:
-    async with served() as (client, live):
+    async with served(role="agent") as s:
+        client, live = s.client, s.live
         sid = live.session.id
         before = _snapshot(live)
         big = b'{"drone_id": "' + b"x" * MAX_BODY_BYTES + b'"}'
@@ -154,7 +134,8 @@ async def test_body_over_the_limit_gets_413_and_changes_nothing() -> None:
 
 
 async def test_unencodable_text_is_refused_and_no_inbox_is_lost() -> None:
-    async with served() as (client, live):
+    async with served(role="agent") as s:
+        client, live = s.client, s.live
         sid = live.session.id
         first, second = list(live.gateway.drones)[:2]
         tools = f"/sessions/{sid}/tools"
@@ -227,7 +208,8 @@ async def test_registry_call_never_raises(arguments: Any) -> None:
 
 
 async def test_mcp_answers_hostile_arguments_with_is_error() -> None:
-    async with served() as (_, live):
+    async with served(role="agent") as s:
+        live = s.live
         before = _snapshot(live)
         async with Client(build_server(default_registry(), lambda: live.tools)) as client:
             drone = next(iter(live.gateway.drones))
@@ -245,7 +227,8 @@ async def test_mcp_answers_hostile_arguments_with_is_error() -> None:
 
 
 async def test_api_description_lists_only_the_callers_routes() -> None:
-    async with served() as (client, _):
+    async with served(role="agent") as s:
+        client = s.client
         public = (await client.get("/openapi.json", headers={"X-API-Key": ""})).json()
         agent = (await client.get("/openapi.json")).json()
         operator = (await client.get("/openapi.json",

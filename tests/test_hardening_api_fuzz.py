@@ -37,7 +37,8 @@ from benchmark.server import LiveSession
 from llm_tools import default_registry
 from llm_tools.input_limits import MAX_BODY_BYTES
 from llm_tools.mcp_server import streamable_http_app
-from tests.test_hardening_api import _snapshot, raw_object, served
+from tests.rest_fixtures import served
+from tests.test_hardening_api import _snapshot, raw_object
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
@@ -101,8 +102,9 @@ def live_loop() -> Iterator[tuple[asyncio.AbstractEventLoop, httpx.AsyncClient, 
     """A swarm served over REST in an event loop of its own, for synchronous property tests
     that run one request at a time with `loop.run_until_complete`."""
     loop = asyncio.new_event_loop()
-    context = served()
-    client, live = loop.run_until_complete(context.__aenter__())
+    context = served(role="agent")
+    ready = loop.run_until_complete(context.__aenter__())
+    client, live = ready.client, ready.live
     try:
         yield loop, client, live
     finally:

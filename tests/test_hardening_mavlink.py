@@ -50,7 +50,7 @@ from tests.flight_check import (
     recover_and_fly,
     wait_truth,
 )
-from tests.mavlink_client import MavClient, mavlink, running_swarm
+from tests.mavlink_client import MavClient, mavlink, running_swarm, send_datagram
 from tests.mavlink_strategies import BASELINES, SYSTEMS, TARGETS, storms, sweep, value_sweep
 
 ACCEPTED, DENIED = 0, 2
@@ -348,12 +348,7 @@ async def test_storm_of_absurd_frames_leaves_every_vehicle_able_to_fly() -> None
                 for m in burst:
                     data = m.pack(mav)
                     mav.seq = (mav.seq + 1) & 0xFF
-                    while True:
-                        try:
-                            sock.sendto(data, endpoint.local_address)
-                            break
-                        except BlockingIOError:
-                            await asyncio.sleep(0.001)
+                    await send_datagram(sock, data, endpoint.local_address)
                     frames += 1
                 deadline = asyncio.get_running_loop().time() + 5.0
                 while endpoint.stats.datagrams_in - stats0.datagrams_in < frames:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import httpx
 import pytest
 
-from tests.test_llm_rest import KEYS, served
+from tests.rest_fixtures import KEYS, served
 
 pytestmark = pytest.mark.mavsdk
 
@@ -31,7 +31,8 @@ class PlatClient:
 
 
 async def test_a_reference_style_client_flies_a_task_to_a_pass() -> None:
-    async with served() as (http, hub, data):
+    async with served() as s:
+        http, hub, data = s.client, s.hub, s.data
         agent = PlatClient(http, KEYS["agent"])
         task = await agent.get("/sessions/current/tasks/next")
         assert task["content"] == data["tasks"][0]["text"] and set(task) == {"id", "content"}
@@ -54,7 +55,8 @@ async def test_a_reference_style_client_flies_a_task_to_a_pass() -> None:
 
 
 async def test_entities_by_id_only_within_perception_and_generic_commands() -> None:
-    async with served() as (http, _hub, data):
+    async with served() as s:
+        http, data = s.client, s.data
         agent = PlatClient(http, KEYS["agent"])
         drone = data["drones"][0]["id"]
         seen = await agent.get(f"/drones/{drone}/nearby")

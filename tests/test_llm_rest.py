@@ -4,23 +4,15 @@ and nothing hidden reaching an agent."""
 
 from __future__ import annotations
 
-import contextlib
 import json
-from collections.abc import AsyncIterator
-from typing import Any
 
-import httpx
 import pytest
 
-from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
-from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import session_from_dict
-from tests.bench_fixtures import small_session
+from benchmark.server import Hub
+from tests.rest_fixtures import as_role, served
 
 pytestmark = pytest.mark.mavsdk
 
-KEYS = {"agent": "key-agent", "operator": "key-operator", "admin": "key-admin"}
 ALL_OK = {"agent": 200, "operator": 200, "admin": 200}
 ACTORS = {"agent": 200, "operator": 403, "admin": 200}
 
@@ -55,38 +47,16 @@ ROUTES: list[tuple[str, str, dict[str, int]]] = [
 ]
 
 
-@contextlib.asynccontextmanager
-async def served() -> AsyncIterator[tuple[httpx.AsyncClient, Hub, dict[str, Any]]]:
-    data = small_session(["takeoff_hold"])
-    session = session_from_dict(data, source="s.json")
-    task = session.tasks[0]
-    async with swarm_gateway(session) as (swarm, services, gateway):
-        tools = AgentTools(gateway, AgentTask(session.id, task.id, task.text,
-                                              TaskBudget(200, 600.0)))
-        hub = Hub()
-        hub.add_session(LiveSession(session, task, swarm, services, gateway, tools,
-                                    services.clock_s()))
-        hub.add_key(KEYS["agent"], Role.AGENT, session.id)
-        hub.add_key(KEYS["operator"], "operator")
-        hub.add_key(KEYS["admin"], Role.ADMIN)
-        transport = httpx.ASGITransport(app=create_app(hub))
-        async with httpx.AsyncClient(transport=transport, base_url="http://rest") as client:
-            yield client, hub, data
-
-
-def _as(role: str) -> dict[str, str]:
-    return {"X-API-Key": KEYS[role]}
-
-
 async def test_every_route_under_every_role_and_without_a_key() -> None:
-    async with served() as (client, hub, data):
+    async with served() as s:
+        client, hub, data = s.client, s.hub, s.data
         (sid,) = hub.sessions
         drone = data["drones"][0]["id"]
         problems = []
         for method, template, expected in ROUTES:
             path = template.format(s=sid, d=drone)
             for role, status in expected.items():
-                r = await client.request(method, path, headers=_as(role))
+                r = await client.request(method, path, headers=as_role(role))
                 if r.status_code != status:
                     problems.append(f"{method} {path} as {role}: {r.status_code} {r.text[:200]}")
             r = await client.request(method, path)
@@ -99,96 +69,101 @@ async def test_every_route_under_every_role_and_without_a_key() -> None:
 
 
 async def test_auth_errors_say_what_is_wrong() -> None:
-    async with served() as (client, hub, _):
+    async with served() as s:
+        client, hub = s.client, s.hub
         (sid,) = hub.sessions
         r = await client.get(f"/sessions/{sid}", headers={"X-API-Key": "guess"})
         assert r.status_code == 401 and r.json()["detail"] == (
             "unknown API key in the X-API-Key header")
-        r = await client.get("/sessions", headers=_as("agent"))
+        r = await client.get("/sessions", headers=as_role("agent"))
         assert r.status_code == 403
         assert r.json()["detail"] == ("role 'agent' may not use this route; it needs one of: "
                                       "operator, admin")
-        r = await client.get("/sessions/other/task", headers=_as("agent"))
+        r = await client.get("/sessions/other/task", headers=as_role("agent"))
         assert r.status_code == 403 and f"bound to session {sid!r}" in r.json()["detail"]
-        r = await client.post(f"/sessions/{sid}/tools/take_off", headers=_as("operator"))
+        r = await client.post(f"/sessions/{sid}/tools/take_off", headers=as_role("operator"))
         assert r.status_code == 403 and "'operator'" in r.json()["detail"]
 
 
 async def test_views_differ_by_role() -> None:
-    async with served() as (client, hub, data):
+    async with served() as s:
+        client, hub, data = s.client, s.hub, s.data
         (sid,) = hub.sessions
-        agent = (await client.get(f"/sessions/{sid}", headers=_as("agent"))).json()
-        operator = (await client.get(f"/sessions/{sid}", headers=_as("operator"))).json()
-        admin = (await client.get(f"/sessions/{sid}", headers=_as("admin"))).json()
+        agent = (await client.get(f"/sessions/{sid}", headers=as_role("agent"))).json()
+        operator = (await client.get(f"/sessions/{sid}", headers=as_role("operator"))).json()
+        admin = (await client.get(f"/sessions/{sid}", headers=as_role("admin"))).json()
         assert agent["task"] == {"id": "t01", "text": data["tasks"][0]["text"]}
         assert "targets" not in agent and "obstacles" not in agent and "data" not in agent
         assert len(operator["targets"]) == len(data["targets"]) and "checks" not in operator["task"]
         assert admin["task"]["checks"] == data["tasks"][0]["checks"]
         assert admin["task"]["oracle"] == data["tasks"][0]["oracle"]
         assert admin["data"]["targets"] == data["targets"]
-        task = (await client.get(f"/sessions/{sid}/task", headers=_as("agent"))).json()
+        task = (await client.get(f"/sessions/{sid}/task", headers=as_role("agent"))).json()
         assert set(task) == {"id", "text"}
-        listed = (await client.get("/sessions", headers=_as("operator"))).json()
+        listed = (await client.get("/sessions", headers=as_role("operator"))).json()
         assert [s["id"] for s in listed] == [sid]
 
 
 async def test_agent_takes_off_through_the_tools_route() -> None:
-    async with served() as (client, hub, data):
+    async with served() as s:
+        client, hub, data = s.client, s.hub, s.data
         (sid,) = hub.sessions
         op = data["tasks"][0]["oracle"][0][0]
         drone, altitude = op["drone"], op["altitude_m"]
-        r = await client.post(f"/sessions/{sid}/tools/take_off", headers=_as("agent"),
+        r = await client.post(f"/sessions/{sid}/tools/take_off", headers=as_role("agent"),
                               json={"drone_id": drone, "altitude_m": altitude})
         assert r.status_code == 200 and r.json()["status"] == "ok", r.text
         assert abs(r.json()["state"]["altitude_m"] - altitude) < 1.0
-        state = (await client.get(f"/drones/{drone}", headers=_as("agent"))).json()
+        state = (await client.get(f"/drones/{drone}", headers=as_role("agent"))).json()
         assert state["status"] == "hovering" and abs(state["position"]["z"] - altitude) < 1.0
-        bad = await client.post(f"/sessions/{sid}/tools/take_off", headers=_as("agent"),
+        bad = await client.post(f"/sessions/{sid}/tools/take_off", headers=as_role("agent"),
                                 json={"drone_id": drone, "altitude_m": "high"})
         assert bad.json() == {"status": "error",
                               "message": "take_off: altitude_m must be a number, got 'high'"}
-        broken = await client.post(f"/sessions/{sid}/tools/land", headers=_as("agent"),
+        broken = await client.post(f"/sessions/{sid}/tools/land", headers=as_role("agent"),
                                    content=b"{drone_id: ")
         assert "not valid JSON" in broken.json()["message"]
         hub.sessions[sid].tools.finish("done")
-        check = (await client.get(f"/check/sessions/{sid}/task", headers=_as("admin"))).json()
+        check = (await client.get(f"/check/sessions/{sid}/task", headers=as_role("admin"))).json()
         assert check["passed"] is True and check["leaves"], check
         assert hub.sessions[sid].tools.tool_calls == 1  # only the take-off was executed
 
 
 async def test_compat_commands_take_query_parameters() -> None:
-    async with served() as (client, _, data):
+    async with served() as s:
+        client, data = s.client, s.data
         drone = data["drones"][1]["id"]
         r = await client.post(f"/drones/{drone}/command/take_off?altitude=6",
-                              headers=_as("agent"))
+                              headers=as_role("agent"))
         body = r.json()
         assert r.status_code == 200 and body["status"] == "success", body
         assert body["command"] == "take_off" and len(body["command_id"]) == 8
         r = await client.post(f"/drones/{drone}/command/move_towards?distance=5",
-                              headers=_as("agent"))
+                              headers=as_role("agent"))
         assert r.status_code == 400 and "Direction must be specified" in r.json()["detail"]
         r = await client.post(f"/drones/{drone}/command/change_altitude?altitude=lots",
-                              headers=_as("agent"))
+                              headers=as_role("agent"))
         assert r.status_code == 422
         assert r.json()["detail"] == "parameter 'altitude' must be a number, got 'lots'"
-        r = await client.post(f"/drones/{drone}/command/move_along_path", headers=_as("agent"),
+        r = await client.post(f"/drones/{drone}/command/move_along_path", headers=as_role("agent"),
                               content=b"[{x: 1")
         assert r.status_code == 422 and "not valid JSON" in r.json()["detail"]
-        r = await client.post(f"/drones/{drone}/command/land", headers=_as("agent"))
+        r = await client.post(f"/drones/{drone}/command/land", headers=as_role("agent"))
         assert r.json()["status"] == "success", r.json()
-        drones = (await client.get("/drones", headers=_as("operator"))).json()
+        drones = (await client.get("/drones", headers=as_role("operator"))).json()
         assert {d["id"] for d in drones} == {d["id"] for d in data["drones"]}
 
 
 async def test_no_agent_response_reveals_hidden_data() -> None:
-    async with served() as (client, hub, data):
+    async with served() as s:
+        client, hub, data = s.client, s.hub, s.data
         (sid,) = hub.sessions
         texts: list[str] = []
         perceived: set[str] = set()
         for method, template, _ in ROUTES:
             for drone in data["drones"]:
                 path = template.format(s=sid, d=drone["id"])
-                r = await client.request(method, path, headers=_as("agent"))
+                r = await client.request(method, path, headers=as_role("agent"))
                 texts.append(r.text)
                 if "/nearby" in path and r.status_code == 200:
                     seen = r.json()
@@ -205,7 +180,7 @@ async def test_no_agent_response_reveals_hidden_data() -> None:
         for word in ("checks", "oracle", *sorted(hidden)):
             assert word not in everything, word
         # The same scan over an admin's view does find them: the scan can fail.
-        admin = (await client.get(f"/sessions/{sid}", headers=_as("admin"))).text
+        admin = (await client.get(f"/sessions/{sid}", headers=as_role("admin"))).text
         assert "checks" in admin and all(h in admin for h in hidden)
 
 

@@ -17,11 +17,12 @@ import httpx
 import pytest
 from mcp import Client, StdioServerParameters
 
-from benchmark.server import Hub, Role
+from benchmark.server import Hub, Role, create_app
 from benchmark.server.serve import (
     ApiKey,
     _add_keys,
     generated_keys,
+    live_hub,
     parse_api_key,
     serve_mcp,
     serve_rest,
@@ -107,9 +108,6 @@ def test_keys_bind_to_sessions_and_generated_keys_cover_every_role() -> None:
 
 async def test_sessions_without_a_usable_task_are_refused_before_any_swarm(
         tmp_path: Path, session_data: dict[str, Any]) -> None:
-    empty = _write(tmp_path, {**session_data, "tasks": []})
-    with pytest.raises(ValueError, match="no task to serve"):
-        await serve_rest([empty], port=0, keys=["admin=a"])
     broken = {**session_data, "tasks": [{**session_data["tasks"][0], "budget": "lots"}]}
     with pytest.raises(ValueError, match="is not usable"):
         await serve_mcp(_write(tmp_path, broken), transport="http", port=0)
@@ -215,3 +213,21 @@ async def test_mcp_server_over_stdio_in_a_subprocess(tmp_path: Path,
     assert not listed.is_error, listed.content
     ids = [d["drone"] for d in listed.structured_content["drones"]]
     assert sorted(ids) == sorted(d["id"] for d in session_data["drones"])
+
+
+@pytest.mark.mavsdk
+async def test_a_world_without_tasks_is_served_as_free_flight(
+        tmp_path: Path, session_data: dict[str, Any]) -> None:
+    empty = _write(tmp_path, {**session_data, "tasks": []}, "world.json")
+    async with live_hub([empty]) as hub:
+        (live,) = hub.sessions.values()
+        assert live.task.id == "free-flight" and live.task.checks is None
+        drone = session_data["drones"][0]["id"]
+        outcome = await live.tools.take_off(drone, 5.0)
+        assert outcome.ok, outcome.message
+        hub.add_key("k-admin", Role.ADMIN)
+        transport = httpx.ASGITransport(app=create_app(hub))
+        async with httpx.AsyncClient(transport=transport, base_url="http://rest") as client:
+            check = await client.get(f"/check/sessions/{live.id}/task",
+                                     headers={"X-API-Key": "k-admin"})
+    assert check.status_code == 409 and "nothing to check" in check.json()["detail"]

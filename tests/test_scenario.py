@@ -45,10 +45,14 @@ def test_area_search_example_loads() -> None:
     assert len(scenario.world.targets) == 2 and len(scenario.world.obstacles) == 6
     drone = scenario.vehicles[0]
     assert (drone.id, drone.name, drone.model) == ("31e42431", "Drone 1", "Model-D4")
-    assert drone.position_m == (174.0, 189.0, 9.0) and drone.home_m == (674.0, 689.0, 9.0)
+    # the file's home is in the air and its capacity a size label: both mapped, with notes
+    assert drone.position_m == (174.0, 189.0, 9.0) and drone.home_m == (674.0, 689.0, 0.0)
     assert (drone.max_speed_m_s, drone.max_altitude_m) == (12.0, 102.0)
     assert (drone.perceived_radius_m, drone.task_radius_m) == (100.0, 10.0)
-    assert (drone.battery_pct, drone.battery_capacity_mah) == (100.0, 89.0)
+    assert (drone.battery_pct, drone.battery_capacity_mah) == (100.0, 8900.0)
+    assert any("(id 31e42431).home_position.z 9 m" in n for n in scenario.notes)
+    assert any("(id 31e42431).battery_capacity 89 is a MultiUAV-Plat size label" in n
+               for n in scenario.notes)
     polygon = scenario.world.target("42d492ea")
     assert polygon.kind == "polygon" and polygon.is_area and polygon.radius_m == 1.0
     assert polygon.geometry.area == pytest.approx(235.0 * 234.0)
@@ -81,7 +85,7 @@ def test_target_assignment_example_loads() -> None:
     assert {t.kind for t in scenario.world.targets} == {"fixed"}
     assert scenario.world.target("a3032c0b").radius_m == 10.0
     assert scenario.world.target("a3032c0b").position_m == (482.0, 443.0, 0.0)
-    assert all(v.home_m == v.position_m for v in scenario.vehicles)
+    assert all(v.home_m == (*v.position_m[:2], 0.0) for v in scenario.vehicles)  # on the ground
     airborne = {v.name: v.position_m[2] for v in scenario.vehicles if v.position_m[2] > 0.0}
     assert airborne == {"Drone 6": 2.0, "Drone 12": 10.0, "Drone 24": 7.0, "Drone 29": 12.0}
     assert len({v.id for v in scenario.vehicles}) == 30

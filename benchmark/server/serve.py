@@ -24,10 +24,11 @@ from typing import Any, Literal, TextIO
 
 import uvicorn
 
-from agent_contract import AgentTask, AgentTools
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import swarm_gateway
+from benchmark.importer import load_any_session
 from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import Session, TaskSpec, load_session
+from benchmark.session_file import Session, TaskSpec
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
 from mavlink_gateway import Gateway
@@ -113,10 +114,28 @@ def _add_keys(hub: Hub, keys: Sequence[ApiKey]) -> None:
             raise ValueError(f"api key for role {key.role.value!r}: {error}") from None
 
 
+def _load(path: str | Path) -> Session:
+    """A session file of either format; the notes on a converted MultiUAV-Plat file are
+    printed to stderr."""
+    session, notes = load_any_session(path)
+    for note in notes:
+        print(f"mavswarm: note: {path}: {note}", file=sys.stderr)
+    return session
+
+
+FREE_FLIGHT = TaskSpec(
+    id="free-flight", template="", category="free flight", difficulty="",
+    text="No task is set: the drones are yours to fly.", aliases=(),
+    budget=TaskBudget(tool_calls=1_000_000, sim_time_s=30 * 86_400.0), checks=None,
+    oracle=None, error="a world without tasks has nothing to check")
+"""What a session without tasks serves: free flight, with a budget no one will reach."""
+
+
 def _first_task(session: Session) -> TaskSpec:
-    """The session's current task (its first), or ValueError when it has none usable."""
+    """The session's current task: its first, or free flight for a world without tasks;
+    ValueError when the first task is not usable."""
     if not session.tasks:
-        raise ValueError(f"{session.source}: tasks: the session has no task to serve")
+        return FREE_FLIGHT
     task = session.tasks[0]
     if task.budget is None:
         raise ValueError(f"{session.source}: task {task.id!r} is not usable: {task.error}")
@@ -137,7 +156,7 @@ async def live_hub(session_paths: Sequence[str | Path],
     exit. Session ids must be distinct."""
     if not session_paths:
         raise ValueError("session_paths: expected at least one session file, got none")
-    sessions = [load_session(path) for path in session_paths]
+    sessions = [_load(path) for path in session_paths]
     seen: dict[str, str] = {}
     for session in sessions:
         if session.id in seen:
@@ -151,7 +170,7 @@ async def live_hub(session_paths: Sequence[str | Path],
             swarm, services, gateway = await stack.enter_async_context(
                 swarm_gateway(session, physics_hz))
             tools = current_task_tools(session, gateway)
-            hub.add_session(LiveSession(session, session.tasks[0], swarm, services, gateway,
+            hub.add_session(LiveSession(session, _first_task(session), swarm, services, gateway,
                                         tools, services.clock_s()))
         yield hub
 

@@ -1,0 +1,138 @@
+"""MultiUAV-Plat session files load and fly: the values our physics reads differently (battery
+capacity as a size label, homes in the air, moving targets) are mapped in one place with a
+note, and a session that cannot start or load still records each of its tasks as failed."""
+
+from __future__ import annotations
+
+import json
+import signal
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from benchmark.importer import import_session_file
+from benchmark.orchestrator import RunPlan, run_benchmark
+from benchmark.results import read_records
+from emulator.clock import ClockConfig
+from emulator.scenario import load_scenario, scenario_from_dict
+from emulator.swarm import PortPlan, Swarm
+from tests.bench_fixtures import reference_session, small_session, write_json
+from tests.cli_fixtures import ROOT, read_until, start_up
+from tests.ports import unused_udp_port
+
+SHARED_SESSIONS = ROOT.parent / "shared" / "sessions"
+EXAMPLES = sorted(SHARED_SESSIONS.glob("*.json")) if SHARED_SESSIONS.is_dir() else []
+
+
+def _airborne_reference() -> dict[str, Any]:
+    data = reference_session()
+    first, second = data["drones"][:2]
+    first["battery_capacity"] = 74
+    first["position"]["z"] = 9.0  # spawned in the air: home defaults to the same point
+    second["battery_capacity"] = 250_000
+    data["targets"].append({"id": "77aa88bb", "name": "Moving Target 1", "type": "moving",
+                            "position": {"x": 500.0, "y": 500.0, "z": 0.0}, "radius": 5,
+                            "velocity": {"x": 1.0, "y": 0.0, "z": 0.0}})
+    return data
+
+
+def test_reference_values_are_mapped_with_a_note() -> None:
+    scenario = scenario_from_dict(_airborne_reference(), source="ref.json")
+    first, second, third = scenario.vehicles[:3]
+    assert first.battery_capacity_mah == 7400.0 and first.battery_pct == 100.0
+    assert first.position_m[2] == 9.0 and first.home_m == (first.position_m[0],
+                                                           first.position_m[1], 0.0)
+    assert second.battery_capacity_mah == 100_000.0
+    assert third.battery_capacity_mah == 8000.0  # the fixture's label 80
+    notes = "\n".join(scenario.notes)
+    assert "battery_capacity 74 is a MultiUAV-Plat size label; flown as 7400 mAh" in notes
+    assert "battery_capacity 250000 mAh is above 100000" in notes
+    assert "home_position.z 9 m" in notes
+    assert "(id 77aa88bb): a moving target" in notes
+    ours = scenario_from_dict(small_session([]), source="ours.json")
+    assert not ours.notes
+
+
+async def _flies(path: Path) -> None:
+    scenario = load_scenario(path)
+    ports = PortPlan(bind_host="127.0.0.1", bind_port=0, api_port=unused_udp_port(), gcs_port=0)
+    async with Swarm(scenario, clock=ClockConfig(stepped=True), ports=ports) as swarm:
+        assert swarm.n == len(scenario.vehicles)
+        for ap, spec in zip(swarm.fleet.autopilots, scenario.vehicles, strict=True):
+            assert ap.params["BAT_CAPACITY"] == spec.battery_capacity_mah
+            assert ap.home_m[2] == 0.0
+            assert ap.in_air == (spec.position_m[2] > 0.0)
+
+
+@pytest.mark.skipif(not EXAMPLES, reason="needs the reference example files in ../shared")
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+async def test_the_reference_example_files_start_a_swarm(path: Path) -> None:
+    await _flies(path)
+
+
+def test_up_starts_a_reference_file_and_says_what_it_mapped(tmp_path: Path) -> None:
+    path = write_json(tmp_path / "ref.json", _airborne_reference())
+    proc = start_up("--session", str(path), "--stepped", "--bind-host", "127.0.0.1",
+                    "--bind-port", str(unused_udp_port()), "--api-port",
+                    str(unused_udp_port()), "--gcs-port", "0", "--no-truth")
+    try:
+        text = read_until(proc, "MAVProxy")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=20)
+    assert "note: drones[0] (id a1b1c1d1).battery_capacity 74" in text
+    assert "4 vehicles from" in text
+    assert proc.returncode == 0
+
+
+@pytest.mark.mavsdk
+def test_an_imported_reference_file_runs_and_records_every_task(tmp_path: Path) -> None:
+    data = _airborne_reference()
+    drone = data["drones"][2]["id"]
+    data["tasks"] = [{"id": "a1b2c3d4", "name": "Take off", "content": "Take off.",
+                      "execution_check_apis": {"logic": "and", "checks": [
+                          {"endpoint": "/check/drone_has_taken_off",
+                           "parameters": {"drone_id": drone}}]}}]
+    source = write_json(tmp_path / "ref.json", data)
+    taken: set[str] = set()
+    path, notes = import_session_file(source, tmp_path / "in", taken=taken)
+    twin, twin_notes = import_session_file(source, tmp_path / "in", taken=taken)
+    assert path != twin and path.exists() and twin.exists()
+    assert any("was taken by an earlier file" in n for n in twin_notes)
+    assert any("size label" in n for n in notes)
+    plan = RunPlan(sessions=(path,), agent="noop", out_dir=tmp_path / "out")
+    outcome = run_benchmark(plan, progress=lambda _: None)
+    assert outcome.errors == []
+    (record,) = read_records(plan.results_path)
+    assert record["task"] == "a1b2c3d4" and record["finish"] == "finished"
+    assert record["passed"] is False  # noop never takes off
+
+
+@pytest.mark.mavsdk
+def test_sessions_that_cannot_start_or_load_record_each_task(tmp_path: Path) -> None:
+    unflyable = small_session(["takeoff_hold", "checkpoint"])
+    unflyable["id"] = "unflyable"
+    unflyable["drones"][0]["perceived_radius"] = 50_000.0  # beyond SIM_SENS_RAD's range
+    unloadable = small_session(["takeoff_hold"])
+    unloadable["id"] = "unloadable"
+    unloadable["drones"][0]["position"]["z"] = -5.0
+    paths = (write_json(tmp_path / "a.json", unflyable),
+             write_json(tmp_path / "b.json", unloadable))
+    plan = RunPlan(sessions=paths, agent="noop", out_dir=tmp_path / "out")
+    outcome = run_benchmark(plan, progress=lambda _: None)
+    assert outcome.errors == []
+    records = read_records(plan.results_path)
+    by_session: dict[str, list[dict[str, Any]]] = {}
+    for record in records:
+        by_session.setdefault(record["session"], []).append(record)
+    assert [r["task"] for r in by_session["unflyable"]] == ["t01", "t02"]
+    assert [r["task"] for r in by_session["unloadable"]] == ["t01"]
+    for record in records:
+        assert record["finish"] == "task_error" and record["passed"] is False
+    assert "cannot start" in by_session["unflyable"][0]["error"]
+    assert "SIM_SENS_RAD" in by_session["unflyable"][0]["error"]
+    assert "cannot be loaded" in by_session["unloadable"][0]["error"]
+    assert json.loads(json.dumps(records)) == records
+    again = run_benchmark(plan, progress=lambda _: None)  # resumed: nothing left to record
+    assert again.records_written == 0 and len(read_records(plan.results_path)) == 3
