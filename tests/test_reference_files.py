@@ -20,6 +20,7 @@ from emulator.swarm import PortPlan, Swarm
 from tests.bench_fixtures import reference_session, small_session, write_json
 from tests.cli_fixtures import ROOT, read_until, start_up
 from tests.ports import unused_udp_port
+from tests.rest_fixtures import as_role, served
 
 SHARED_SESSIONS = ROOT.parent / "shared" / "sessions"
 EXAMPLES = sorted(SHARED_SESSIONS.glob("*.json")) if SHARED_SESSIONS.is_dir() else []
@@ -136,3 +137,26 @@ def test_sessions_that_cannot_start_or_load_record_each_task(tmp_path: Path) -> 
     assert json.loads(json.dumps(records)) == records
     again = run_benchmark(plan, progress=lambda _: None)  # resumed: nothing left to record
     assert again.records_written == 0 and len(read_records(plan.results_path)) == 3
+
+
+REFERENCE_DRONE_FIELDS = {
+    "id", "name", "model", "status", "position", "heading", "speed", "perceived_radius",
+    "task_radius", "battery_level", "battery_capacity", "max_speed", "max_altitude",
+    "home_position", "created_at", "last_updated"}
+
+
+@pytest.mark.mavsdk
+async def test_compat_drones_have_every_reference_field() -> None:
+    async with served() as s:
+        headers = as_role("agent")
+        drones = (await s.client.get("/drones", headers=headers)).json()
+        first = s.data["drones"][0]
+        assert {d["id"] for d in drones} == {d["id"] for d in s.data["drones"]}
+        for drone in drones:
+            assert set(drone) == REFERENCE_DRONE_FIELDS, set(drone) ^ REFERENCE_DRONE_FIELDS
+            assert set(drone["position"]) == set(drone["home_position"]) == {"x", "y", "z"}
+        by_name = {d["name"]: d["id"] for d in drones}  # a client resolves names to ids
+        assert by_name[first["name"]] == first["id"]
+        one = (await s.client.get(f"/drones/{first['id']}", headers=headers)).json()
+        assert one["battery_capacity"] == first["battery_capacity"]
+        assert one["max_altitude"] == first["max_altitude"] and one["status"] == "idle"

@@ -13,25 +13,16 @@ from typing import Annotated, Any
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.server.auth import live_session, require
+from benchmark.server.compat_entities import compat_drone
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from llm_tools.input_limits import InputError, check_text, parse_json, parse_number, preview
 from llm_tools.registry import ToolRegistry
 from mavlink_gateway import DroneState, Status
 
-__all__ = ["COMMANDS", "Command", "add_compat_routes", "compat_drone", "run_command"]
+__all__ = ["COMMANDS", "Command", "add_compat_routes", "run_command"]
 
 _STATUS = {Status.OK.value: "success", Status.PARTIAL.value: "partial_success"}
-_FLIGHT = {"on_ground": "idle"}
 _REQUIRED = object()
-
-
-def compat_drone(state: DroneState) -> dict[str, Any]:
-    """A drone in the reference entity shape."""
-    return {"id": state.drone, "status": _FLIGHT.get(state.flight_state, state.flight_state),
-            "position": {"x": round(state.x_m, 2), "y": round(state.y_m, 2),
-                         "z": round(state.altitude_m, 2)},
-            "heading": round(state.heading_deg, 1), "battery_level": round(state.battery_pct, 2),
-            "home_position": {"x": round(state.home_x_m, 2), "y": round(state.home_y_m, 2)}}
 
 
 def _num(params: Mapping[str, Any], key: str, default: Any = _REQUIRED) -> float:
@@ -172,12 +163,13 @@ def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     def drones(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                ) -> list[dict[str, Any]]:
         live = resolve_session(hub, caller, session)
-        return [compat_drone(s) for s in live.gateway.list_drones()]
+        return [compat_drone(live, s) for s in live.gateway.list_drones()]
 
     @app.get("/drones/{drone_id}", tags=["multiuav-plat"], summary="One drone")
     def drone(drone_id: str, caller: Annotated[Caller, Depends(anyone)],
               session: str | None = pick) -> dict[str, Any]:
-        return compat_drone(_state(resolve_session(hub, caller, session), drone_id))
+        live = resolve_session(hub, caller, session)
+        return compat_drone(live, _state(live, drone_id))
 
     @app.post("/drones/{drone_id}/command/{name}", tags=["multiuav-plat"],
               summary="A direct command; scalar parameters as query parameters")

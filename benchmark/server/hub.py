@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from enum import StrEnum
 
 from agent_contract import AgentTools
@@ -43,6 +44,7 @@ class LiveSession:
     gateway: Gateway
     tools: AgentTools
     task_start_s: float
+    started_wall_s: float = field(default_factory=time.time)  # the compat routes' created_at
 
     @property
     def id(self) -> str:

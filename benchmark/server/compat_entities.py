@@ -1,0 +1,53 @@
+"""Drones in MultiUAV-Plat's entity shape (spec: entities.md, section 2.1), for the
+compatibility routes: the drone's static fields as its session file gives them (name, model,
+limits, radii, the battery capacity label) and its live state from telemetry."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from benchmark.server.hub import LiveSession
+from mavlink_gateway import DroneState
+
+__all__ = ["compat_drone"]
+
+_FLIGHT = {"on_ground": "idle"}
+
+
+def _file_record(live: LiveSession, drone_id: str) -> Mapping[str, Any]:
+    for record in live.session.data.get("drones", []):
+        if isinstance(record, Mapping) and record.get("id") == drone_id:
+            return record
+    return {}
+
+
+def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
+    """One drone as the reference returns it: every field of its entity record, with
+    position, heading, battery and home from the drone's own telemetry. `speed` is 0.0 as in
+    the reference, whose drones have no kinematics; times are epoch seconds."""
+    spec = next((v for v in live.session.scenario.vehicles if v.id == state.drone), None)
+    record = _file_record(live, state.drone)
+    now = time.time()
+    return {
+        "id": state.drone,
+        "name": spec.name if spec else state.drone,
+        "model": spec.model if spec else "",
+        "status": _FLIGHT.get(state.flight_state, state.flight_state),
+        "position": {"x": round(state.x_m, 2), "y": round(state.y_m, 2),
+                     "z": round(state.altitude_m, 2)},
+        "heading": round(state.heading_deg, 1),
+        "speed": 0.0,
+        "perceived_radius": spec.perceived_radius_m if spec else None,
+        "task_radius": spec.task_radius_m if spec else None,
+        "battery_level": round(state.battery_pct, 2),
+        "battery_capacity": record.get("battery_capacity",
+                                       spec.battery_capacity_mah if spec else None),
+        "max_speed": spec.max_speed_m_s if spec else None,
+        "max_altitude": spec.max_altitude_m if spec else None,
+        "home_position": {"x": round(state.home_x_m, 2), "y": round(state.home_y_m, 2),
+                          "z": 0.0},
+        "created_at": record.get("created_at", live.started_wall_s),
+        "last_updated": now,
+    }
