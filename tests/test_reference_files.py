@@ -14,6 +14,7 @@ import pytest
 from benchmark.importer import import_session_file
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
+from benchmark.server.serve import serve_rest
 from emulator.clock import ClockConfig
 from emulator.scenario import load_scenario, scenario_from_dict
 from emulator.swarm import PortPlan, Swarm
@@ -160,3 +161,25 @@ async def test_compat_drones_have_every_reference_field() -> None:
         one = (await s.client.get(f"/drones/{first['id']}", headers=headers)).json()
         assert one["battery_capacity"] == first["battery_capacity"]
         assert one["max_altitude"] == first["max_altitude"] and one["status"] == "idle"
+
+
+@pytest.mark.mavsdk
+async def test_requests_without_a_key_act_as_the_agent_only_when_open() -> None:
+    async with served() as s:
+        sid = s.live.id
+        assert (await s.client.get("/drones")).status_code == 401
+        s.hub.open_access = True
+        assert (await s.client.get("/drones")).status_code == 200
+        took = await s.client.post(f"/drones/{s.data['drones'][0]['id']}/command/take_off",
+                                   params={"altitude": 5})
+        assert took.status_code == 200 and took.json()["status"] == "success", took.text
+        assert (await s.client.get(f"/check/sessions/{sid}/task")).status_code == 403
+        assert (await s.client.get("/sessions")).status_code == 403
+        wrong = await s.client.get("/drones", headers={"X-API-Key": "wrong"})
+        assert wrong.status_code == 401  # a key that is sent must be valid
+
+
+async def test_open_access_needs_exactly_one_session(tmp_path: Path) -> None:
+    paths = [write_json(tmp_path / f"{k}.json", small_session([])) for k in "ab"]
+    with pytest.raises(ValueError, match="exactly one session"):
+        await serve_rest(paths, port=0, open_access=True)

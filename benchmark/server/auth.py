@@ -24,6 +24,9 @@ def caller_dependency(hub: Hub) -> Callable[..., Caller]:
 
     def caller(key: Annotated[str | None, Security(key_header)]) -> Caller:
         if not key:
+            keyless = hub.keyless_caller()
+            if keyless is not None:
+                return keyless
             raise HTTPException(401, f"missing API key: send it in the {API_KEY_HEADER} header",
                                 headers={"WWW-Authenticate": "APIKey"})
         found = hub.caller(key)

@@ -54,9 +54,12 @@ class LiveSession:
 class Hub:
     """Live sessions by id and API keys by value."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, open_access: bool = False) -> None:
         self.sessions: dict[str, LiveSession] = {}
         self._keys: dict[str, Caller] = {}
+        self.open_access = open_access
+        """Requests without a key act as the agent of the one session served (MultiUAV-Plat
+        clients send no key); off unless the server was started with --open."""
 
     def add_session(self, live: LiveSession) -> None:
         if live.id in self.sessions:
@@ -86,3 +89,10 @@ class Hub:
 
     def caller(self, key: str) -> Caller | None:
         return self._keys.get(key)
+
+    def keyless_caller(self) -> Caller | None:
+        """Who a request without a key is: the agent of the only session when the hub is open,
+        else nobody."""
+        if not self.open_access or len(self.sessions) != 1:
+            return None
+        return Caller(Role.AGENT, next(iter(self.sessions)))

@@ -202,10 +202,14 @@ async def serve_asgi(app: Any, *, host: str, port: int,
 async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT_HOST,
                      port: int = DEFAULT_REST_PORT, keys: Sequence[str | ApiKey] = (),
                      on_ready: Callable[[str], None] | None = None,
-                     out: TextIO | None = None) -> None:
+                     out: TextIO | None = None, open_access: bool = False) -> None:
     """Serve the REST API over live sessions from `session_paths` until cancelled. `keys` are
     `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
-    `out` (stdout by default) with the URL."""
+    `out` (stdout by default) with the URL. `open_access` lets requests without a key act as
+    the agent of the one session served (MultiUAV-Plat clients send none)."""
+    if open_access and len(session_paths) != 1:
+        raise ValueError("--open serves exactly one session: a request without a key must "
+                         "know whose agent it is")
     parsed = [k if isinstance(k, ApiKey) else parse_api_key(k) for k in keys]
     out = out or sys.stdout
     async with live_hub(session_paths) as hub:
@@ -215,6 +219,7 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
             for key in parsed:
                 print(f"  {key.spec()}", file=out)
         _add_keys(hub, parsed)
+        hub.open_access = open_access
         app = create_app(hub)
 
         def ready(url: str) -> None:
@@ -273,6 +278,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rest.add_argument("--key", dest="keys", action="append", default=[],
                       metavar="ROLE[:SESSION]=KEY",
                       help="an API key (repeatable); none: generate and print keys")
+    rest.add_argument("--open", dest="open_access", action="store_true",
+                      help="requests without a key act as the agent of the one session "
+                           "served, as MultiUAV-Plat clients expect (default: 401)")
     rest.set_defaults(run=run_serve)
     mcp = sub.add_parser("mcp", help="serve one session's agent tools over MCP",
                          description="Serve one session's agent tools over MCP.")
@@ -298,7 +306,8 @@ def _guarded(run: Callable[[], None]) -> int:
 def run_serve(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm serve` until interrupted; bad input is printed, exit 2."""
     return _guarded(lambda: asyncio.run(serve_rest(_sessions(args), host=args.host,
-                                                   port=args.port, keys=args.keys)))
+                                                   port=args.port, keys=args.keys,
+                                                   open_access=args.open_access)))
 
 
 def run_mcp(args: argparse.Namespace) -> int:
