@@ -35,10 +35,11 @@ class Served:
 
 
 @contextlib.asynccontextmanager
-async def served(*, role: str | None = None) -> AsyncIterator[Served]:
-    """A session with one take-off task (budget 200 calls, 600 s); `role` makes the client
-    send that role's key by default."""
-    data = small_session(["takeoff_hold"])
+async def served(*, role: str | None = None,
+                 data: dict[str, Any] | None = None) -> AsyncIterator[Served]:
+    """A session with one take-off task (budget 200 calls, 600 s), or `data`; `role` makes
+    the client send that role's key by default."""
+    data = data or small_session(["takeoff_hold"])
     session = session_from_dict(data, source="s.json")
     task = session.tasks[0]
     async with swarm_gateway(session) as (swarm, services, gateway):

@@ -183,3 +183,28 @@ async def test_open_access_needs_exactly_one_session(tmp_path: Path) -> None:
     paths = [write_json(tmp_path / f"{k}.json", small_session([])) for k in "ab"]
     with pytest.raises(ValueError, match="exactly one session"):
         await serve_rest(paths, port=0, open_access=True)
+
+
+@pytest.mark.mavsdk
+async def test_compat_nearby_gives_full_records_of_what_is_perceived_only() -> None:
+    data = small_session(["takeoff_hold"])
+    target = data["targets"][0]
+    near_target = {"x": target["position"]["x"], "y": target["position"]["y"] + 45.0, "z": 0.0}
+    data["drones"][0]["position"] = near_target  # inside its sensor's reach of the target
+    data["drones"][0].pop("home_position", None)
+    async with served(data=data) as s:
+        headers = as_role("agent")
+        files = {kind: {e["id"]: e for e in s.data[kind]} for kind in ("targets", "obstacles")}
+        seen_any = False
+        for drone in s.data["drones"]:
+            near = (await s.client.get(f"/drones/{drone['id']}/nearby", headers=headers)).json()
+            truth = s.live.gateway.nearby(drone["id"]).data or {}
+            for kind in ("drones", "targets", "obstacles"):
+                assert {e["id"] for e in near[kind]} == {e["id"] for e in truth.get(kind, [])}
+            for entity in near["drones"]:
+                assert set(entity) == REFERENCE_DRONE_FIELDS and entity["id"] != drone["id"]
+            for kind in ("targets", "obstacles"):
+                for entity in near[kind]:
+                    assert entity == files[kind][entity["id"]]  # name, type, geometry
+                    seen_any = True
+        assert seen_any, "the first drone perceives the first target"

@@ -13,7 +13,7 @@ from typing import Annotated, Any
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.server.auth import live_session, require
-from benchmark.server.compat_entities import compat_drone
+from benchmark.server.compat_entities import compat_drone, compat_nearby
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from llm_tools.input_limits import InputError, check_text, parse_json, parse_number, preview
 from llm_tools.registry import ToolRegistry
@@ -188,9 +188,7 @@ def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     def _nearby(live: LiveSession, caller: Caller, drone_id: str) -> dict[str, Any]:
         _state(live, drone_id)
         source = live.tools if caller.role is Role.AGENT else live.gateway
-        outcome = source.nearby(drone_id)
-        data = outcome.data or {}
-        return {kind: data.get(kind, []) for kind in ("drones", "targets", "obstacles")}
+        return compat_nearby(live, source.nearby(drone_id).data or {})
 
     @app.get("/drones/{drone_id}/nearby", tags=["multiuav-plat"],
              summary="What the drone senses: {drones, targets, obstacles}")

@@ -1,6 +1,8 @@
-"""Drones in MultiUAV-Plat's entity shape (spec: entities.md, section 2.1), for the
-compatibility routes: the drone's static fields as its session file gives them (name, model,
-limits, radii, the battery capacity label) and its live state from telemetry."""
+"""MultiUAV-Plat's entity shapes for the compatibility routes (spec: entities.md, and
+perception_and_roles.md section 4). A drone: its static fields as its session file gives them
+(name, model, limits, radii, the battery capacity label) and its live state from telemetry. A
+perceived target or obstacle: its full record from the session file; only what the drone
+perceives is ever looked up."""
 
 from __future__ import annotations
 
@@ -11,14 +13,14 @@ from typing import Any
 from benchmark.server.hub import LiveSession
 from mavlink_gateway import DroneState
 
-__all__ = ["compat_drone"]
+__all__ = ["compat_drone", "compat_nearby"]
 
 _FLIGHT = {"on_ground": "idle"}
 
 
-def _file_record(live: LiveSession, drone_id: str) -> Mapping[str, Any]:
-    for record in live.session.data.get("drones", []):
-        if isinstance(record, Mapping) and record.get("id") == drone_id:
+def _file_record(live: LiveSession, kind: str, entity_id: str) -> Mapping[str, Any]:
+    for record in live.session.data.get(kind, []):
+        if isinstance(record, Mapping) and record.get("id") == entity_id:
             return record
     return {}
 
@@ -28,7 +30,7 @@ def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
     position, heading, battery and home from the drone's own telemetry. `speed` is 0.0 as in
     the reference, whose drones have no kinematics; times are epoch seconds."""
     spec = next((v for v in live.session.scenario.vehicles if v.id == state.drone), None)
-    record = _file_record(live, state.drone)
+    record = _file_record(live, "drones", state.drone)
     now = time.time()
     return {
         "id": state.drone,
@@ -51,3 +53,15 @@ def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
         "created_at": record.get("created_at", live.started_wall_s),
         "last_updated": now,
     }
+
+
+def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, Any]:
+    """`{drones, targets, obstacles}` as the reference returns them: the full entity objects
+    of what a drone perceives (`perceived` is the gateway's perception of that drone)."""
+    states = {s.drone: s for s in live.gateway.list_drones()}
+    drones = [compat_drone(live, states[e["id"]]) for e in perceived.get("drones", [])
+              if e.get("id") in states]
+    return {"drones": drones,
+            **{kind: [dict(_file_record(live, kind, e["id"]) or e)
+                      for e in perceived.get(kind, [])]
+               for kind in ("targets", "obstacles")}}
