@@ -30,7 +30,7 @@ from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
 
 __all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "base_record", "error_record", "record_key",
-           "run_session", "run_task",
+           "reset_for_task", "run_session", "run_task",
            "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
@@ -81,7 +81,7 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0
             yield swarm, services, Gateway(fleet.drones, services)
 
 
-async def _reset(swarm: Swarm, services: SwarmServices, gateway: Gateway) -> None:
+async def reset_for_task(swarm: Swarm, services: SwarmServices, gateway: Gateway) -> None:
     """Land all, refill batteries, empty inboxes; wait until telemetry shows it."""
     services.operator_land_all()
     services.operator_reset_batteries(100.0)
@@ -211,7 +211,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     """Reset, run the agent on one task, evaluate its checks; the task's record."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
-    await _reset(swarm, services, gateway)
+    await reset_for_task(swarm, services, gateway)
     reset_s = time.perf_counter() - wall0
     agent_task = AgentTask(session.id, task.id, task.text, task.budget)
     tools = AgentTools(gateway, agent_task)

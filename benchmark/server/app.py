@@ -13,6 +13,7 @@ from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.openapi_roles import add_role_docs
+from benchmark.server.session_control import add_session_control_routes
 from benchmark.server.views import session_view, task_view
 from benchmark.validators import CheckContext, evaluate
 from llm_tools.body_limit import BodyLimit
@@ -149,6 +150,7 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_world_routes(app, hub, registry)  # first: /sessions/current is not a session id
     _add_session_routes(app, hub, registry)
     _add_check_routes(app, hub)
+    add_session_control_routes(app, hub)
     add_compat_routes(app, hub, registry)
     add_role_docs(app, hub)
     return app

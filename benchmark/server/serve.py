@@ -242,11 +242,10 @@ async def serve_mcp(session_path: str | Path, *, transport: Transport = "stdio",
     registry = default_registry()
     async with live_hub([session_path]) as hub:
         (live,) = hub.sessions.values()
-        tools = live.tools
         if transport == "stdio":
-            await serve_stdio(registry, lambda: tools)
+            await serve_stdio(registry, lambda: live.tools)
             return
-        app = streamable_http_app(registry, lambda: tools, path=MCP_PATH, host=host)
+        app = streamable_http_app(registry, lambda: live.tools, path=MCP_PATH, host=host)
 
         def ready(url: str) -> None:
             print(f"mavswarm MCP server for session {live.id!r} on {url}{MCP_PATH}",
