@@ -208,3 +208,25 @@ async def test_compat_nearby_gives_full_records_of_what_is_perceived_only() -> N
                     assert entity == files[kind][entity["id"]]  # name, type, geometry
                     seen_any = True
         assert seen_any, "the first drone perceives the first target"
+
+
+@pytest.mark.mavsdk
+async def test_compat_move_along_path_reports_the_points_reached() -> None:
+    async with served() as s:
+        headers = as_role("agent")
+        first, second = s.data["drones"][:2]
+        x, y = first["position"]["x"], first["position"]["y"]
+        path = [{"x": x + 8.0, "y": y, "z": 6.0}, {"x": x + 8.0, "y": y - 8.0, "z": 6.0}]
+        grounded = await s.client.post(f"/drones/{second['id']}/command/move_along_path",
+                                       headers=headers, json=path)
+        assert grounded.json()["status"] == "error"
+        assert grounded.json()["successful_points"] is None
+        assert grounded.json()["unsuccessful_points_count"] is None
+        took = await s.client.post(f"/drones/{first['id']}/command/take_off", headers=headers,
+                                   params={"altitude": 6})
+        assert took.json()["status"] == "success", took.text
+        flown = (await s.client.post(f"/drones/{first['id']}/command/move_along_path",
+                                     headers=headers, json=path)).json()
+        assert flown["status"] == "success", flown
+        assert flown["successful_points_count"] == 2 and flown["unsuccessful_points"] == []
+        assert flown["successful_points"] == [[p["x"], p["y"], p["z"]] for p in path]

@@ -148,9 +148,24 @@ async def run_command(live: LiveSession, registry: ToolRegistry, drone_id: str, 
     state = _state(live, drone_id)
     arguments = {"drone_id": drone_id, **command.arguments(dict(params), body, state)}
     result = await registry.call(live.tools, command.tool, arguments)
-    return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
-            "status": _STATUS.get(result["status"], "error"), "message": result["message"],
-            "timestamp": time.time()}
+    status = _STATUS.get(result["status"], "error")
+    answer = {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
+              "status": status, "message": result["message"], "timestamp": time.time()}
+    if name == "move_along_path":
+        answer.update(_path_points(arguments["waypoints"], status, result.get("reached", 0)))
+    return answer
+
+
+def _path_points(points: list[list[float]], status: str, reached: int) -> dict[str, Any]:
+    """move_along_path's extra fields: the waypoints reached and not reached (all null on
+    error, as the reference gives them)."""
+    if status == "error":
+        return dict.fromkeys(("successful_points_count", "successful_points",
+                              "unsuccessful_points_count", "unsuccessful_points"))
+    done = len(points) if status == "success" else int(reached)
+    return {"successful_points_count": done, "successful_points": points[:done],
+            "unsuccessful_points_count": len(points) - done,
+            "unsuccessful_points": points[done:]}
 
 
 def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
