@@ -230,3 +230,17 @@ async def test_compat_move_along_path_reports_the_points_reached() -> None:
         assert flown["status"] == "success", flown
         assert flown["successful_points_count"] == 2 and flown["unsuccessful_points"] == []
         assert flown["successful_points"] == [[p["x"], p["y"], p["z"]] for p in path]
+
+
+@pytest.mark.mavsdk
+async def test_compat_current_session_has_the_reference_metadata() -> None:
+    async with served() as s:
+        current = (await s.client.get("/sessions/current", headers=as_role("agent"))).json()
+        for field in ("id", "name", "description", "status", "task_type", "task_description",
+                      "canvas_width", "canvas_height", "created_at", "last_updated"):
+            assert field in current, field
+        assert current["status"] == "active"
+        assert current["task_description"] == s.data["tasks"][0]["text"]
+        assert [current["canvas_width"], current["canvas_height"]] == s.data["map_size_m"]
+        assert "targets" not in current and "obstacles" not in current
+        assert "statistics" not in current and "checks" not in str(current)

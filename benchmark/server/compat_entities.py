@@ -13,7 +13,7 @@ from typing import Any
 from benchmark.server.hub import LiveSession
 from mavlink_gateway import DroneState
 
-__all__ = ["compat_drone", "compat_nearby"]
+__all__ = ["compat_drone", "compat_nearby", "compat_session_fields"]
 
 _FLIGHT = {"on_ground": "idle"}
 
@@ -65,3 +65,17 @@ def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, 
             **{kind: [dict(_file_record(live, kind, e["id"]) or e)
                       for e in perceived.get(kind, [])]
                for kind in ("targets", "obstacles")}}
+
+
+def compat_session_fields(live: LiveSession) -> dict[str, Any]:
+    """The reference's session metadata fields (entities.md section 6.1) for the live session:
+    the one served is the current, active session; its map size is the canvas. Nothing here
+    is more than an agent may read (no entity lists, no statistics)."""
+    data = live.session.data
+    width, height = (data.get("map_size_m") or [data.get("canvas_width", 1024),
+                                                data.get("canvas_height", 768)])[:2]
+    return {"description": data.get("description", ""), "creator": "system",
+            "status": "active", "task_type": live.session.task_type,
+            "task_description": live.task.text, "is_distance_3d": False,
+            "canvas_width": width, "canvas_height": height,
+            "created_at": live.started_wall_s, "last_updated": time.time()}

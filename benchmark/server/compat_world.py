@@ -8,6 +8,7 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.server.auth import require
 from benchmark.server.compat import COMMANDS, resolve_session, run_command
+from benchmark.server.compat_entities import compat_session_fields
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.views import session_view, task_view
 from llm_tools.input_limits import parse_json, preview
@@ -49,7 +50,8 @@ def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> N
     @app.get("/sessions/current", tags=["multiuav-plat"], summary="The caller's session")
     def current(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                 ) -> dict[str, Any]:
-        return session_view(resolve_session(hub, caller, session), caller.role)
+        live = resolve_session(hub, caller, session)
+        return {**session_view(live, caller.role), **compat_session_fields(live)}
 
     @app.get("/sessions/current/tasks", tags=["multiuav-plat"],
              summary="The session's current task (masked for agents)")
