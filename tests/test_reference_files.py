@@ -244,3 +244,30 @@ async def test_compat_current_session_has_the_reference_metadata() -> None:
         assert [current["canvas_width"], current["canvas_height"]] == s.data["map_size_m"]
         assert "targets" not in current and "obstacles" not in current
         assert "statistics" not in current and "checks" not in str(current)
+
+
+@pytest.mark.mavsdk
+async def test_reference_check_endpoints_for_admins_only() -> None:
+    async with served() as s:
+        drone = s.data["drones"][0]["id"]
+        url = "/check/drone_has_taken_off"
+        params = {"drone_id": drone, "min_altitude": "3.0"}
+        before = await s.client.get(url, params=params, headers=as_role("admin"))
+        assert before.status_code == 200 and before.json()["result"] is False, before.text
+        for role in ("agent", "operator"):
+            denied = await s.client.get(url, params=params, headers=as_role(role))
+            assert denied.status_code == 403
+        took = await s.client.post(f"/drones/{drone}/command/take_off", params={"altitude": 6},
+                                   headers=as_role("agent"))
+        assert took.json()["status"] == "success"
+        after = (await s.client.get(url, params=params, headers=as_role("admin"))).json()
+        assert after["result"] is True and after["parameters"]["min_altitude"] == 3.0, after
+        height = (await s.client.get("/check/drone_altitude", headers=as_role("admin"),
+                                     params={"drone_id": drone, "expected_altitude": "6",
+                                             "tolerance": "0.5"})).json()
+        assert height.get("result") is True, height
+        assert height["value"] == pytest.approx(6.0, abs=0.5)
+        unknown = await s.client.get("/check/drone_is_happy", headers=as_role("admin"))
+        assert unknown.status_code == 404
+        bad = await s.client.get(url, params={"drone_id": "zz"}, headers=as_role("admin"))
+        assert bad.status_code == 422 and "zz" in bad.json()["detail"]

@@ -9,13 +9,13 @@ from fastapi.responses import JSONResponse
 
 from agent_contract import BudgetExhausted
 from benchmark.server.auth import live_session, require
+from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.openapi_roles import add_role_docs
 from benchmark.server.session_control import add_session_control_routes
 from benchmark.server.views import session_view, task_view
-from benchmark.validators import CheckContext, evaluate
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import InputError, preview
 from llm_tools.registry import ToolRegistry, default_registry
@@ -113,23 +113,6 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
         return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
 
 
-def _add_check_routes(app: FastAPI, hub: Hub) -> None:
-    admin = require(hub, Role.ADMIN)
-
-    @app.get("/check/sessions/{session_id}/task", tags=["checks"],
-             summary="Evaluate the current task's hidden checks now (admin)")
-    def check_task(session_id: str, caller: Annotated[Caller, Depends(admin)]) -> dict[str, Any]:
-        live = live_session(hub, caller, session_id)
-        if live.task.checks is None:
-            raise HTTPException(409, f"task {live.task.id!r} has no valid checks: "
-                                f"{live.task.error}")
-        t1_s = live.services.clock_s()
-        result = evaluate(live.task.checks, CheckContext(
-            live.swarm.recorder, live.session.scenario, live.task_start_s, t1_s))
-        return {"task": live.task.id, "window_s": [live.task_start_s, t1_s],
-                **result.to_json()}
-
-
 def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     """The REST API over `hub`'s live sessions (keys in the X-API-Key header)."""
     registry = registry or default_registry()
@@ -149,7 +132,7 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
 
     add_compat_world_routes(app, hub, registry)  # first: /sessions/current is not a session id
     _add_session_routes(app, hub, registry)
-    _add_check_routes(app, hub)
+    add_check_routes(app, hub)
     add_session_control_routes(app, hub)
     add_compat_routes(app, hub, registry)
     add_role_docs(app, hub)
