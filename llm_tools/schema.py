@@ -93,9 +93,9 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
     kind = schema.get("type")
     if kind == "string":
         if not isinstance(value, str):
-            problems.append(f"{where} must be a string, got {_show(value)}")
+            problems.append(f"{where} must be a string, got {preview(value)}")
         elif "enum" in schema and value not in schema["enum"]:
-            problems.append(f"{where} must be one of {schema['enum']}, got {_show(value)}")
+            problems.append(f"{where} must be one of {schema['enum']}, got {preview(value)}")
         else:
             try:
                 check_text(value, where)
@@ -104,11 +104,11 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         return value
     if kind == "boolean":
         if not isinstance(value, bool):
-            problems.append(f"{where} must be true or false, got {_show(value)}")
+            problems.append(f"{where} must be true or false, got {preview(value)}")
         return value
     if kind in ("number", "integer"):
         if isinstance(value, bool) or not isinstance(value, int | float):
-            problems.append(f"{where} must be a number, got {_show(value)}")
+            problems.append(f"{where} must be a number, got {preview(value)}")
             return value
         try:
             check_bounds(value, where)
@@ -122,7 +122,7 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         return float(value)
     if kind == "array":
         if not isinstance(value, list):
-            problems.append(f"{where} must be a list, got {_show(value)}")
+            problems.append(f"{where} must be a list, got {preview(value)}")
             return value
         if len(value) > MAX_ITEMS:
             problems.append(f"{where} has {len(value)} items; the limit is {MAX_ITEMS}")
@@ -132,22 +132,18 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
     return value
 
 
-def _show(value: Any) -> str:
-    return preview(value)
-
-
 def validate(arguments: Any, schema: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     """(coerced arguments, problems) for an object schema from `schema_for`. Never raises:
     any value, however large, deep or odd, gives problems a caller can read."""
     if arguments is None:
         arguments = {}
     if not isinstance(arguments, Mapping):
-        return {}, [f"arguments must be a JSON object, got {_show(arguments)}"]
+        return {}, [f"arguments must be a JSON object, got {preview(arguments)}"]
     props = schema["properties"]
     extra = [k for k in arguments if k not in props]
     problems: list[str] = []
     if extra:
-        shown = ", ".join(_show(k) for k in extra[:MAX_LISTED])
+        shown = ", ".join(preview(k) for k in extra[:MAX_LISTED])
         more = f" and {len(extra) - MAX_LISTED} more" if len(extra) > MAX_LISTED else ""
         problems.append(f"unknown argument(s) {shown}{more}; expected "
                         f"{', '.join(props) or 'none'}")

@@ -206,6 +206,8 @@ async def test_compat_nearby_gives_full_records_of_what_is_perceived_only() -> N
             for kind in ("targets", "obstacles"):
                 for entity in near[kind]:
                     assert entity == files[kind][entity["id"]]  # name, type, geometry
+                    by_id = await s.client.get(f"/{kind}/{entity['id']}", headers=headers)
+                    assert by_id.json() == entity
                     seen_any = True
         assert seen_any, "the first drone perceives the first target"
 

@@ -13,45 +13,42 @@ from typing import Any
 from benchmark.server.hub import LiveSession
 from mavlink_gateway import DroneState
 
-__all__ = ["compat_drone", "compat_nearby", "compat_session_fields"]
+__all__ = ["compat_drone", "compat_nearby", "compat_session_fields", "entity_records"]
 
 _FLIGHT = {"on_ground": "idle"}
 
 
-def _file_record(live: LiveSession, kind: str, entity_id: str) -> Mapping[str, Any]:
-    for record in live.session.data.get(kind, []):
-        if isinstance(record, Mapping) and record.get("id") == entity_id:
-            return record
-    return {}
+def entity_records(live: LiveSession, kind: str) -> dict[str, Mapping[str, Any]]:
+    """The session file's records of `kind` ("drones", "targets" or "obstacles") by id."""
+    return {record["id"]: record for record in live.session.data.get(kind, [])
+            if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
 
 
 def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
     """One drone as the reference returns it: every field of its entity record, with
     position, heading, battery and home from the drone's own telemetry. `speed` is 0.0 as in
     the reference, whose drones have no kinematics; times are epoch seconds."""
-    spec = next((v for v in live.session.scenario.vehicles if v.id == state.drone), None)
-    record = _file_record(live, "drones", state.drone)
-    now = time.time()
+    spec = next(v for v in live.session.scenario.vehicles if v.id == state.drone)
+    record = entity_records(live, "drones").get(state.drone, {})
     return {
         "id": state.drone,
-        "name": spec.name if spec else state.drone,
-        "model": spec.model if spec else "",
+        "name": spec.name,
+        "model": spec.model,
         "status": _FLIGHT.get(state.flight_state, state.flight_state),
         "position": {"x": round(state.x_m, 2), "y": round(state.y_m, 2),
                      "z": round(state.altitude_m, 2)},
         "heading": round(state.heading_deg, 1),
         "speed": 0.0,
-        "perceived_radius": spec.perceived_radius_m if spec else None,
-        "task_radius": spec.task_radius_m if spec else None,
+        "perceived_radius": spec.perceived_radius_m,
+        "task_radius": spec.task_radius_m,
         "battery_level": round(state.battery_pct, 2),
-        "battery_capacity": record.get("battery_capacity",
-                                       spec.battery_capacity_mah if spec else None),
-        "max_speed": spec.max_speed_m_s if spec else None,
-        "max_altitude": spec.max_altitude_m if spec else None,
+        "battery_capacity": record.get("battery_capacity", spec.battery_capacity_mah),
+        "max_speed": spec.max_speed_m_s,
+        "max_altitude": spec.max_altitude_m,
         "home_position": {"x": round(state.home_x_m, 2), "y": round(state.home_y_m, 2),
                           "z": 0.0},
         "created_at": record.get("created_at", live.started_wall_s),
-        "last_updated": now,
+        "last_updated": time.time(),
     }
 
 
@@ -61,10 +58,11 @@ def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, 
     states = {s.drone: s for s in live.gateway.list_drones()}
     drones = [compat_drone(live, states[e["id"]]) for e in perceived.get("drones", [])
               if e.get("id") in states]
-    return {"drones": drones,
-            **{kind: [dict(_file_record(live, kind, e["id"]) or e)
-                      for e in perceived.get(kind, [])]
-               for kind in ("targets", "obstacles")}}
+    out: dict[str, Any] = {"drones": drones}
+    for kind in ("targets", "obstacles"):
+        records = entity_records(live, kind)
+        out[kind] = [dict(records.get(e["id"], e)) for e in perceived.get(kind, [])]
+    return out
 
 
 def compat_session_fields(live: LiveSession) -> dict[str, Any]:

@@ -8,7 +8,7 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.server.auth import require
 from benchmark.server.compat import COMMANDS, resolve_session, run_command
-from benchmark.server.compat_entities import compat_session_fields
+from benchmark.server.compat_entities import compat_session_fields, entity_records
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.views import session_view, task_view
 from llm_tools.input_limits import parse_json, preview
@@ -17,29 +17,23 @@ from llm_tools.registry import ToolRegistry
 __all__ = ["add_compat_world_routes"]
 
 
-def _perceived(live: LiveSession, kind: str) -> dict[str, dict[str, Any]]:
-    """Entities of `kind` ("targets" or "obstacles") the session's drones sense now, by id.
+def _perceived(live: LiveSession, kind: str) -> set[str]:
+    """Ids of the entities of `kind` ("targets" or "obstacles") the session's drones sense now.
     Reads perception without charging the agent's budget: it is what the drones already
     report."""
-    seen: dict[str, dict[str, Any]] = {}
-    for drone in live.gateway.drones:
-        data = live.gateway.nearby(drone).data or {}
-        for entity in data.get(kind, []):
-            seen.setdefault(entity["id"], entity)
-    return seen
+    return {entity["id"] for drone in live.gateway.drones
+            for entity in (live.gateway.nearby(drone).data or {}).get(kind, [])}
 
 
 def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dict[str, Any]:
-    if caller.role is Role.AGENT:
-        seen = _perceived(live, kind)
-        if entity_id not in seen:
-            raise HTTPException(404, f"no {kind[:-1]} {preview(entity_id)} within your drones' "
-                                "perception")
-        return seen[entity_id]
-    for entity in live.session.data.get(kind, []):
-        if isinstance(entity, dict) and entity.get("id") == entity_id:
-            return entity
-    raise HTTPException(404, f"unknown {kind[:-1]} {preview(entity_id)}")
+    """The entity's full record; for an agent only while its drones perceive it."""
+    if caller.role is Role.AGENT and entity_id not in _perceived(live, kind):
+        raise HTTPException(404, f"no {kind[:-1]} {preview(entity_id)} within your drones' "
+                            "perception")
+    record = entity_records(live, kind).get(entity_id)
+    if record is None:
+        raise HTTPException(404, f"unknown {kind[:-1]} {preview(entity_id)}")
+    return dict(record)
 
 
 def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
