@@ -91,6 +91,12 @@ def _convert_task(k: int, raw: Any, source: str, notes: list[str]) -> dict[str, 
 
 def import_session(data: Any, *, source: str = "<dict>") -> tuple[dict[str, Any], list[str]]:
     """(mavswarm session object, notes) from a parsed MultiUAV-Plat session."""
+    session, _, notes = _convert(data, source)
+    return session, notes
+
+
+def _convert(data: Any, source: str) -> tuple[dict[str, Any], Session, list[str]]:
+    """The mavswarm session object, the Session it loads as, and the notes."""
     if not isinstance(data, Mapping):
         raise SessionImportError(f"{source}: the top level must be a JSON object")
     if data.get("schema") == SCHEMA:
@@ -127,7 +133,7 @@ def import_session(data: Any, *, source: str = "<dict>") -> tuple[dict[str, Any]
     for task in loaded.tasks:
         if task.error:
             notes.append(f"task {task.id} will be recorded as a task error: {task.error}")
-    return session, notes
+    return session, loaded, notes
 
 
 def import_session_file(path: str | Path, out_dir: str | Path, *,
@@ -166,9 +172,9 @@ def load_any_session(path: str | Path) -> tuple[Session, list[str]]:
     data = read_session_json(path)
     if isinstance(data, Mapping) and data.get("schema") is None and "drones" in data:
         try:
-            converted, notes = import_session(data, source=source)
+            _, loaded, notes = _convert(data, source)
         except SessionImportError as error:
             raise SessionFileError(str(error)) from None
-        return session_from_dict(converted, source=source), notes
+        return loaded, notes
     session = session_from_dict(data, source=source)
     return session, list(session.scenario.notes)

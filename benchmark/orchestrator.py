@@ -24,7 +24,7 @@ from benchmark.agents import NoopAgent
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
 from benchmark.results import ResultsLog, read_records
-from benchmark.session_file import Session, SessionFileError
+from benchmark.session_file import Session, SessionFileError, read_session_json
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
 
@@ -112,8 +112,8 @@ def _unloadable_records(path: str, plan: RunPlan, trial: int, error: str,
     """task_error records for the tasks a session file lists when the session itself cannot
     be loaded (so reports count them as failed); none when not even its tasks can be read."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
+        data = read_session_json(path)
+    except SessionFileError:
         return []
     if not isinstance(data, dict) or not isinstance(data.get("id"), str):
         return []
