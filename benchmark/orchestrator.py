@@ -25,6 +25,7 @@ from benchmark.episode import EpisodeOptions, base_record, error_record, run_ses
 from benchmark.importer import load_any_session
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
+from emulator.reference_mapping import notes_to_show
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
 
@@ -94,7 +95,7 @@ def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
             send(("error", str(error)))
         return
     if trial == 0:
-        for note in notes:
+        for note in notes_to_show(notes):
             send(("note", f"{path}: {note}"))
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))

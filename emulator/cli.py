@@ -14,13 +14,13 @@ from dataclasses import replace
 from pathlib import Path
 
 from emulator.clock import ClockConfig
+from emulator.reference_mapping import notes_to_show
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
 __all__ = ["add_parsers", "run_up"]
 
 MAX_VEHICLES_PER_NETWORK = 250
-MAX_NOTES_SHOWN = 5  # notes on how a reference file was read, before a count of the rest
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -58,11 +58,8 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     if args.session is None:
         return default_scenario(args.drones if args.drones is not None else 5)
     scenario = load_scenario(args.session)
-    for note in scenario.notes[:MAX_NOTES_SHOWN]:
+    for note in notes_to_show(scenario.notes):
         print(f"mavswarm: note: {note}", file=sys.stderr)
-    if len(scenario.notes) > MAX_NOTES_SHOWN:
-        print(f"mavswarm: note: ... and {len(scenario.notes) - MAX_NOTES_SHOWN} more such notes "
-              "(emulator/reference_mapping.py)", file=sys.stderr)
     if args.drones is not None:
         if not 1 <= args.drones <= len(scenario.vehicles):
             raise ScenarioError(

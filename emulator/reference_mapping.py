@@ -17,7 +17,7 @@ turned into our terms; each mapping returns a note saying what it did.
 from __future__ import annotations
 
 __all__ = ["MAX_CAPACITY_MAH", "MIN_CAPACITY_MAH", "capacity_mah", "home_altitude_m",
-           "moving_target_note"]
+           "moving_target_note", "notes_to_show"]
 
 MIN_CAPACITY_MAH = 100.0  # the range of PX4's BAT_CAPACITY that the autopilot accepts
 MAX_CAPACITY_MAH = 100_000.0
@@ -49,3 +49,13 @@ def moving_target_note(where: str) -> str:
     """The note for a `moving` target, which stands still here."""
     return (f"{where}: a moving target; it stands at its position (its velocity and path are "
             "not simulated)")
+
+
+def notes_to_show(notes: tuple[str, ...] | list[str], limit: int = 5) -> list[str]:
+    """The first `limit` notes and a count of the rest, for a console (`bench import` lists
+    them all)."""
+    shown = list(notes[:limit])
+    if len(notes) > limit:
+        shown.append(f"... and {len(notes) - limit} more such notes "
+                     "(emulator/reference_mapping.py)")
+    return shown

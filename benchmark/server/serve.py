@@ -1,8 +1,10 @@
 """Serving live sessions to outside agents: the REST API (`serve_rest`) over one or more
 sessions, and one session's tools over MCP (`serve_mcp`, stdio or Streamable HTTP).
 
-Each session gets a stepped swarm and a gateway; its current task is its first task, and the
-agent acts through an `AgentTools` bound to that task's budget. Both servers run until their
+Each session (a mavswarm or MultiUAV-Plat file) gets a stepped swarm and a gateway; its
+current task starts as its first task (free flight for a world without tasks, and an operator
+moves it on: `session_control.py`), and the agent acts through an `AgentTools` bound to that
+task's budget. Both servers run until their
 asyncio task is cancelled (or, under uvicorn, until SIGINT/SIGTERM).
 
 API keys are given as `role[:session]=key` (role agent, operator or admin; only an agent key
@@ -29,6 +31,7 @@ from benchmark.episode import swarm_gateway
 from benchmark.importer import load_any_session
 from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.session_file import Session, TaskSpec
+from emulator.reference_mapping import notes_to_show
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
 from mavlink_gateway import Gateway
@@ -118,7 +121,7 @@ def _load(path: str | Path) -> Session:
     """A session file of either format; the notes on a converted MultiUAV-Plat file are
     printed to stderr."""
     session, notes = load_any_session(path)
-    for note in notes:
+    for note in notes_to_show(notes):
         print(f"mavswarm: note: {path}: {note}", file=sys.stderr)
     return session
 
