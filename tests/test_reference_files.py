@@ -246,6 +246,9 @@ async def test_compat_current_session_has_the_reference_metadata() -> None:
         assert [current["canvas_width"], current["canvas_height"]] == s.data["map_size_m"]
         assert "targets" not in current and "obstacles" not in current
         assert "statistics" not in current and "checks" not in str(current)
+        assert current["description"] == ""  # ours counts the map's targets and obstacles
+        staff = (await s.client.get("/sessions/current", headers=as_role("operator"))).json()
+        assert staff["description"] == s.data["description"]
 
 
 @pytest.mark.mavsdk

@@ -45,7 +45,7 @@ def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> N
     def current(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                 ) -> dict[str, Any]:
         live = resolve_session(hub, caller, session)
-        return {**session_view(live, caller.role), **compat_session_fields(live)}
+        return {**session_view(live, caller.role), **compat_session_fields(live, caller.role)}
 
     @app.get("/sessions/current/tasks", tags=["multiuav-plat"],
              summary="The session's current task (masked for agents)")
