@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Awaitable, Callable
+from typing import Any
 
 from agent_contract.protocol import AgentTask, BudgetExhausted
 from mavlink_gateway import Gateway, Outcome, Status
+from mavlink_gateway.pacing import run_concurrently
 
 __all__ = ["BudgetedTools"]
 
@@ -76,6 +78,13 @@ class BudgetedTools:
         finally:
             if task.done():
                 self._in_flight.discard(task)
+
+    async def concurrently(self, *calls: Awaitable[Any]) -> list[Any]:
+        """Await tool calls side by side (one thread of control each, for instance one per
+        drone); their results, or the exceptions they raised, in order. Use this rather than
+        asyncio.gather: with a lockstep clock, time then stops for each thread from the moment
+        its outcome comes until it calls its next tool, as it does for a single thread."""
+        return await run_concurrently(self._gw.services, calls)
 
     def _sync(self, name: str, call: Callable[[], Outcome]) -> Outcome:
         refused = self._charge(name)

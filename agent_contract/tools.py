@@ -223,6 +223,17 @@ class AgentTools(BudgetedTools):
         return self._sync("read_messages", lambda: self._gw.read_messages(drone_id))
 
     @agent_tool
+    async def wait(self, drone_id: str, duration_s: float) -> Outcome:
+        """Let simulated time pass (every drone keeps doing what it does) until a message for
+        this drone arrives or duration_s has passed, whichever comes first.
+
+        Args:
+            drone_id: The drone whose messages end the wait.
+            duration_s: The longest wait, in seconds.
+        """
+        return await self._call("wait", lambda: self._gw.wait(drone_id, duration_s))
+
+    @agent_tool
     def finish(self, summary: str = "") -> Outcome:
         """Declare the task finished. Call it once, when everything asked is done. Scoring
         happens afterwards, out of the agent's sight.

@@ -28,8 +28,10 @@ from emulator.clock import ClockConfig
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
+from mavlink_gateway.pacing import Thinker, run_as
 
-__all__ = ["BENCH_TELEMETRY_HZ", "EpisodeOptions", "base_record", "error_record", "record_key",
+__all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
+           "record_key",
            "reset_for_task", "run_session", "run_task",
            "swarm_gateway"]
 
@@ -45,11 +47,23 @@ PLAY_OUT_WALL_S = 120.0
 SETTLE_S = 1.0
 
 
+# How simulated time passes while agents think (see emulator.clock): "lockstep" (the default)
+# runs it only while every thread of the agent waits on the world, so results do not depend on
+# model latency or machine load; "stepped" runs it whenever a drone executes a goal, so one
+# drone's flight goes on while the agent thinks about another.
+CLOCKS = ("lockstep", "stepped")
+
+
 @dataclass(frozen=True)
 class EpisodeOptions:
     trial: int = 0
     physics_hz: float = 50.0
     agent_wall_timeout_s: float = 900.0  # a hung agent ends as an agent error
+    clock: str = "lockstep"
+
+    def __post_init__(self) -> None:
+        if self.clock not in CLOCKS:
+            raise ValueError(f"unknown clock {self.clock!r} (known: {', '.join(CLOCKS)})")
 
 
 def record_key(session_id: str, task_id: str, agent: str, trial: int) -> str:
@@ -63,13 +77,14 @@ def _free_udp_port() -> int:
 
 
 @contextlib.asynccontextmanager
-async def swarm_gateway(session: Session, physics_hz: float = 50.0
+async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep: bool = False
                         ) -> AsyncIterator[tuple[Swarm, SwarmServices, Gateway]]:
-    """A stepped swarm for the session on 127.0.0.1 and a gateway connected over MAVLink."""
+    """A stepped (`lockstep`: lockstep) swarm for the session on 127.0.0.1 and a gateway
+    connected over MAVLink."""
     scenario = session.scenario
     port = _free_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
-    clock = ClockConfig(physics_hz=physics_hz, stepped=True)
+    clock = ClockConfig(physics_hz=physics_hz, stepped=True, lockstep=lockstep)
     rates = dict(BENCH_TELEMETRY_HZ)
     rates["GLOBAL_POSITION_INT"] = min(rates["GLOBAL_POSITION_INT"],
                                        max(5.0, POSITION_MSGS_PER_S / len(scenario.vehicles)))
@@ -153,9 +168,12 @@ def task_error_record(session: Session, task: TaskSpec, agent: str, trial: int,
 
 
 async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
-                     options: EpisodeOptions) -> tuple[str, str | None]:
+                     options: EpisodeOptions, services: SwarmServices
+                     ) -> tuple[str, str | None]:
+    thinker = Thinker(services)  # the agent thinks first: the clock waits for it
     try:
-        await asyncio.wait_for(agent.run(task, tools), options.agent_wall_timeout_s)
+        await asyncio.wait_for(run_as(thinker, agent.run(task, tools)),
+                               options.agent_wall_timeout_s)
     except BudgetExhausted as spent:
         return spent.reason, str(spent)
     except TimeoutError:
@@ -164,6 +182,8 @@ async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
         where = traceback.extract_tb(error.__traceback__)[-1]
         return "agent_error", (f"{type(error).__name__}: {error} "
                                f"({where.filename.rsplit('/', 1)[-1]}:{where.lineno})")
+    finally:
+        thinker.close()
     if tools.spent is not None:
         return tools.spent.reason, str(tools.spent)
     return "finished", None
@@ -181,7 +201,7 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
     stack = contextlib.AsyncExitStack()
     try:
         swarm, services, gateway = await stack.enter_async_context(
-            swarm_gateway(session, options.physics_hz))
+            swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep"))
     except ValueError as error:  # the world cannot fly (a vehicle parameter out of range...)
         await stack.aclose()
         for task, key in zip(session.tasks, keys, strict=True):
@@ -217,7 +237,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     tools = AgentTools(gateway, agent_task)
     t0_s = services.clock_s()
     wall_agent = time.perf_counter()
-    finish, error = await _run_agent(agent, agent_task, tools, options)
+    finish, error = await _run_agent(agent, agent_task, tools, options, services)
     agent_wall_s = time.perf_counter() - wall_agent
     await tools.close()
     t1_s = await _play_out(swarm, t0_s + task.budget.sim_time_s)
@@ -241,6 +261,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
             "checks_total": leaf_count(task.checks),
             "checks_passed": sum(1 for leaf in result.leaves if leaf.passed),
             "finish": finish, "error": error, "tool_calls": tools.tool_calls,
+            "clock": options.clock,
             "sim_time_s": round(t1_s - t0_s, 3), "wall_time_s": round(agent_wall_s, 3),
             "tokens": tokens,
             "overhead_s": {"reset": round(reset_s, 4), "evaluate": round(eval_s, 4)},

@@ -5,8 +5,11 @@ Simulated time is `steps * dt_s`, so it never drifts. Two pacing modes:
 - real time x speed: steps run as wall time passes, `speed` times faster; if the machine
   cannot keep up, the clock slips (the real-time factor drops) instead of bursting;
 - stepped: simulated time advances only while some vehicle is executing a goal, or while a
-  caller has asked the clock to advance. Results then never depend on how long a client
-  waits between commands.
+  caller has asked the clock to advance. A client's think time costs nothing while the swarm
+  is at rest, but other vehicles' goals run on while it thinks;
+- lockstep (stepped, plus): simulated time advances only while every client waits on the
+  world (see emulator.lockstep); the clock stops wherever a watched vehicle needs its client,
+  so results never depend on how long clients think or how loaded the machine is.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ class ClockConfig:
     physics_hz: float = 50.0
     speed: float = 1.0
     stepped: bool = False
+    lockstep: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.physics_hz) and 5.0 <= self.physics_hz <= 1000.0):
@@ -32,6 +36,8 @@ class ClockConfig:
             raise ValueError(f"speed must be within [0.01, 10000], got {self.speed}")
         if self.stepped and self.speed != 1.0:
             raise ValueError("speed applies to real-time pacing; stepped mode runs flat out")
+        if self.lockstep and not self.stepped:
+            raise ValueError("lockstep pacing is a stepped clock: set stepped too")
 
     @property
     def dt_s(self) -> float:

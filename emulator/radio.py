@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -91,12 +92,19 @@ class Radio:
             self._deliver(Message(sender, recipient, text, t_s, broadcast=True))
         return len(recipients)
 
-    def read(self, drone_id: str) -> list[Message]:
-        """Everything in the drone's inbox, oldest first; the inbox is emptied."""
+    def read(self, drone_id: str, *, sent_before_s: float = math.inf) -> list[Message]:
+        """The drone's inbox, oldest first, emptied of what was read. `sent_before_s`: only
+        messages sent before that time (a lockstep clock delivers a message one physics step
+        after it is sent, so clients thinking at the same instant never race each other)."""
         self._check(drone_id, "reading")
         inbox = self._inboxes[drone_id]
-        messages = list(inbox)
-        inbox.clear()
+        messages = [m for m in inbox if m.t_s < sent_before_s]
+        if len(messages) == len(inbox):
+            inbox.clear()
+        else:
+            kept = [m for m in inbox if m.t_s >= sent_before_s]
+            inbox.clear()
+            inbox.extend(kept)
         if messages:
             self._recorder.record_event(self._clock(), drone_id, "messages_read",
                                         count=len(messages))

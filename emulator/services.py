@@ -9,11 +9,13 @@ benchmark tasks, which are marked `operator_*` and recorded as such in the groun
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Iterator, Mapping
 from typing import Any
 
 from emulator.flight.battery import MESSAGE_COST_PCT
 from emulator.flight.operator import place_on_ground, set_battery
+from emulator.lockstep import Watch
 from emulator.perception import Perception
 from emulator.radio import Message, Radio
 from emulator.swarm import Swarm
@@ -38,6 +40,25 @@ class SwarmServices:
         """Simulated time now."""
         return self._fleet.now_s
 
+    # -------------------------------------------------------------- lockstep
+    @property
+    def lockstep(self) -> bool:
+        """Simulated time runs only while every client waits on the world."""
+        return self._swarm.clock.lockstep
+
+    def pin(self) -> object:
+        """Stop the clock here (a client is thinking) until `unpin(token)`."""
+        return self._swarm.pin()
+
+    def unpin(self, token: object) -> None:
+        self._swarm.release_clock(token)
+
+    def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
+              advance: bool = False, message_for: str | None = None) -> Watch:
+        """Wait on the world (see emulator.lockstep.Watch)."""
+        return self._swarm.watch(drone_id, until_s=until_s, advance=advance,
+                                 message_for=message_for)
+
     def _autopilot(self, drone_id: str):
         index = self._fleet.index_by_id.get(drone_id)
         if index is None:
@@ -55,14 +76,24 @@ class SwarmServices:
     def send_message(self, sender: str, recipient: str, text: str) -> Message:
         message = self.radio.send(sender, recipient, text)
         self._fleet.bat.spend(self._fleet.index_by_id[sender], MESSAGE_COST_PCT)
+        self._announce([recipient])
         return message
 
     def broadcast(self, sender: str, text: str) -> int:
         count = self.radio.broadcast(sender, text)
         self._fleet.bat.spend(self._fleet.index_by_id[sender], MESSAGE_COST_PCT)
+        self._announce([d for d in self.drone_ids if d != sender])
         return count
 
+    def _announce(self, recipients: list[str]) -> None:
+        if self.lockstep:  # readable one physics step after it was sent
+            ready_s = self._fleet.now_s + self._fleet.dt_s
+            for recipient in recipients:
+                self._swarm.watches.message_ready(recipient, ready_s)
+
     def read_messages(self, drone_id: str) -> list[Message]:
+        if self.lockstep:
+            return self.radio.read(drone_id, sent_before_s=self._fleet.now_s - 1e-9)
         return self.radio.read(drone_id)
 
     # --------------------------------------------------------------- operator

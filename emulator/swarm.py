@@ -13,6 +13,7 @@ from pathlib import Path
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
+from emulator.lockstep import Watch, WatchBoard
 from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
@@ -120,6 +121,9 @@ class Swarm:
         self._sim_start_s = 0.0
         self._telemetry_errors = 0
         self._clock_holds: dict[object, float] = {}
+        self.watches = WatchBoard(self.fleet, self.hold_clock_at, self.release_clock,
+                                  self._request_burst)
+        self._bursts: dict[int, int] = {}
 
     # -------------------------------------------------------------- lifecycle
     async def __aenter__(self) -> Swarm:
@@ -254,6 +258,39 @@ class Swarm:
         if self._clock_holds.pop(token, None) is not None:
             self._wake.set()
 
+    def pin(self) -> object:
+        """Stepped mode: stop the clock where it is until `release_clock(token)`."""
+        return self.hold_clock_at(self.fleet.now_s)
+
+    def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
+              advance: bool = False, message_for: str | None = None) -> Watch:
+        """Lockstep: wait on the world (see emulator.lockstep). `drone_id`: halt when its goal
+        ends; `until_s`: halt there at the latest (`advance`: run the clock up to it even if
+        every vehicle is at rest); `message_for`: halt once a radio message for that drone
+        can be read."""
+        k = None if drone_id is None else self.fleet.index_by_id[drone_id]
+        watch = self.watches.open(k, until_s, advance=advance, message_for=message_for)
+        self._wake.set()
+        return watch
+
+    def _request_burst(self, k: int) -> None:
+        """Send vehicle k's whole telemetry now and once more on the next loop turn, so a
+        client sees the state at a halt within milliseconds."""
+        self._bursts[k] = 2
+        self._wake.set()
+
+    def _send_bursts(self) -> None:
+        bursts, self._bursts = self._bursts, {}
+        for k, count in bursts.items():
+            for msg_id in self.streams.enabled(k):
+                try:
+                    self.links[k].send_stream(msg_id)
+                except Exception:  # the I/O edge: log, count, keep the swarm alive
+                    self._telemetry_errors += 1
+                    log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
+            if count > 1:
+                self._bursts[k] = count - 1
+
     def _held_at(self) -> float:
         return min(self._clock_holds.values()) if self._clock_holds else math.inf
 
@@ -263,6 +300,7 @@ class Swarm:
         now, dt = self.fleet.now_s, self.fleet.dt_s
         limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
         targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
+        targets += self.watches.advance_targets()
         ahead = [t for t in targets if t > now + 1e-9]
         if ahead:
             to_target = math.ceil((min(ahead) - now) / dt - 1e-9)
@@ -276,7 +314,9 @@ class Swarm:
         now = self.fleet.now_s
         if now + 1e-9 >= self._held_at():
             return False
-        return self.fleet.any_busy or now + 1e-9 < self._advance_to_s
+        if self.fleet.any_busy or now + 1e-9 < self._advance_to_s:
+            return True
+        return any(now + 1e-9 < t for t in self.watches.advance_targets())
 
     async def _run(self) -> None:
         fleet = self.fleet
@@ -288,6 +328,7 @@ class Swarm:
                 while self._should_step() and time.monotonic() < deadline:
                     fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
                     self._release_waiters()
+                    self.watches.check()
             else:
                 assert self._pacer is not None
                 for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
@@ -295,6 +336,8 @@ class Swarm:
                 self._release_waiters()
             wall = time.monotonic()
             self._send_telemetry(wall)
+            if self._bursts:
+                self._send_bursts()
             if wall >= next_link_tick:
                 next_link_tick = wall + LINK_TICK_S
                 for link in self.links:

@@ -11,6 +11,13 @@ from typing import Any
 
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import Services
+from mavlink_gateway.lockstep_wait import (
+    ARRIVED_SPEED_M_S,
+    FAILSAFE_TEXTS,
+    OBSTACLE_TEXT,
+    wait_instant,
+    wait_lockstep,
+)
 from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["GatewayCore", "Refusal"]
@@ -19,14 +26,8 @@ POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry 
 STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
 WALL_MARGIN_S = 60.0
 LANDED_Z_M = 0.3  # the ground is z = 0 of the local frame everywhere
-OBSTACLE_TEXT = "Obstacle"
 FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.5 Hz)
-FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost")
 
-
-# The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
-# cm/s per axis, which can read a little higher. A stepped clock stops right then.
-ARRIVED_SPEED_M_S = 0.5
 
 class Refusal(Exception):
     """A precondition failed: the primitive is refused and nothing is sent."""
@@ -135,9 +136,17 @@ class GatewayCore:
     async def _wait(self, link: DroneLink, budget_s: float, what: str,
                     done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
                     watch_obstacles: bool = True, texts_from: int | None = None,
-                    ) -> Outcome:
+                    instant: bool = False) -> Outcome:
         """Wait for an outcome (see `_wait_for_outcome`); a stepped clock is held at the
-        budget's end, so a time-out happens at exactly `budget_s` of simulated time."""
+        budget's end, so a time-out happens at exactly `budget_s` of simulated time. With a
+        lockstep clock, the outcome is judged where the clock stops (see
+        mavlink_gateway.lockstep_wait). `instant`: the outcome needs no simulated time."""
+        if self.services.lockstep:
+            if instant:
+                return await wait_instant(link, what, done, budget_s)
+            texts = len(link.status_texts) if texts_from is None else texts_from
+            return await wait_lockstep(self.services, link, budget_s, what, done, self._hold,
+                                       watch_obstacles=watch_obstacles, texts=texts)
         with self.services.clock_limit(self.services.clock_s() + budget_s):
             return await self._wait_for_outcome(link, budget_s, what, done,
                                                 watch_obstacles=watch_obstacles,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import enum
 import math
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
@@ -34,6 +35,15 @@ LANDED_STATE_HZ = 10.0
 # `DroneLink.seen` tell a wait whether every cached value was refreshed since some moment.
 PERIODIC = ("position", "velocity", "heading", "battery", "in_air", "landed_state", "armed",
             "flight_mode")
+
+
+def _value_key(value: Any) -> Any:
+    """A comparable form of a telemetry value (MAVSDK's types compare by identity; NaN
+    fields compare equal here)."""
+    fields = None if isinstance(value, enum.Enum) else getattr(value, "__dict__", None)
+    if fields is None:
+        return repr(value)
+    return tuple((k, _value_key(v)) for k, v in sorted(fields.items()))
 
 
 def _release(waiter: asyncio.Future[None]) -> None:
@@ -80,6 +90,9 @@ class DroneLink:
         self.captures: list[Any] = []
         self.updates = 0  # telemetry messages seen; lets waits know fresh data arrived
         self.seen: dict[str, int] = {}  # telemetry messages seen per stream
+        # per stream: how many messages in a row brought the same value as the one before
+        self.repeats: dict[str, int] = {}
+        self._last: dict[str, Any] = {}
         self._tasks: list[asyncio.Task[None]] = []
         self._update_waiters: list[asyncio.Future[None]] = []
 
@@ -121,6 +134,10 @@ class DroneLink:
                 apply(value)
                 self.updates += 1
                 self.seen[name] = self.seen.get(name, 0) + 1
+                value_key = _value_key(value)
+                same = self._last.get(name) == value_key
+                self.repeats[name] = self.repeats.get(name, 0) + 1 if same else 0
+                self._last[name] = value_key
                 if self._update_waiters:
                     self._wake_waiters()
 
@@ -131,6 +148,14 @@ class DroneLink:
         """True once each of `streams` brought `count` messages after `mark` (a copy of
         `seen` taken earlier)."""
         return all(self.seen.get(k, 0) >= mark.get(k, 0) + count for k in streams)
+
+    def settled_since(self, mark: dict[str, int], streams: tuple[str, ...] = PERIODIC,
+                      count: int = 2) -> bool:
+        """True once each of `streams` brought `count` messages after `mark` and its last two
+        messages agree: with the clock stopped, the cache then holds the state at the stop
+        (a message sent before the stop but read after `mark` would differ from the next)."""
+        return self.refreshed_since(mark, streams, count) and \
+            all(self.repeats.get(k, 0) >= 1 for k in streams)
 
     def _wake_waiters(self) -> None:
         waiters, self._update_waiters = self._update_waiters, []

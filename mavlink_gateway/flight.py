@@ -187,7 +187,8 @@ class FlightPrimitives(GatewayCore):
                                    link.state())
                 return None
 
-            return await self._wait(link, 5.0, "set_home", done, watch_obstacles=False)
+            return await self._wait(link, 5.0, "set_home", done, watch_obstacles=False,
+                                    instant=True)
 
         return await self._run("set_home", drone, body)
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from mavlink_gateway.core import Refusal
+from mavlink_gateway.core import Refusal, _number
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.flight import FlightPrimitives
 from mavlink_gateway.interfaces import Sensed, SensedWorld
+from mavlink_gateway.lockstep_wait import wait_world
 from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["PayloadPrimitives", "perception_dict"]
@@ -15,6 +16,7 @@ __all__ = ["PayloadPrimitives", "perception_dict"]
 CAMERA_ID = 100
 CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targets
 FULL_PCT = 99.5
+MAX_WAIT_S = 3600.0
 
 
 def _entity(e: Sensed) -> dict[str, Any]:
@@ -48,7 +50,8 @@ class PayloadPrimitives(FlightPrimitives):
                                    f"({x:.1f}, {y:.1f})", link.state(), {"photo": info.index})
                 return None
 
-            return await self._wait(link, 10.0, "take_photo", done, watch_obstacles=False)
+            return await self._wait(link, 10.0, "take_photo", done, watch_obstacles=False,
+                                    instant=True)
 
         return await self._run("take_photo", drone, body)
 
@@ -122,6 +125,24 @@ class PayloadPrimitives(FlightPrimitives):
                            link.state(), data)
 
         return self._radio("read_messages", drone, call)
+
+    async def wait(self, drone: str, duration_s: float) -> Outcome:
+        """Let simulated time pass for the caller (its drones keep doing what they do), up to
+        duration_s, ending early once a radio message for this drone can be read."""
+        try:
+            link = self._link(drone)
+            duration = _number("duration_s", duration_s)
+            if not 0.0 < duration <= MAX_WAIT_S:
+                raise Refusal(f"duration_s must be within (0, {MAX_WAIT_S:g}], "
+                              f"got {duration:g}")
+        except Refusal as refusal:
+            return Outcome(Status.REJECTED, f"wait refused: {refusal}")
+        waited_s, message = await wait_world(self.services, link.drone_id, duration)
+        data = {"waited_s": round(waited_s, 3), "message": message}
+        if message:
+            return Outcome(Status.OK, f"a message for {link.drone_id} arrived after "
+                           f"{waited_s:.1f} s: read it with read_messages", link.state(), data)
+        return Outcome(Status.OK, f"waited {waited_s:.1f} s", link.state(), data)
 
     # --------------------------------------------------------- perception
     def nearby(self, drone: str) -> Outcome:

@@ -75,7 +75,7 @@ async def test_lists_every_tool_with_strict_input_and_shared_output_schema() -> 
     async with Client(build_server(registry, lambda: None)) as client:
         listed = (await client.list_tools()).tools
     assert [t.name for t in listed] == [s.name for s in registry.specs()]
-    assert len(listed) == 19
+    assert len(listed) == 20
     for tool in listed:
         assert tool.input_schema["additionalProperties"] is False, tool.name
         spec = registry.get(tool.name)
@@ -116,7 +116,7 @@ async def test_stdio_server_in_a_subprocess() -> None:
     async with Client(params) as client:
         listed = (await client.list_tools()).tools
         idle = await client.call_tool("take_off", {"drone_id": "d1", "altitude_m": 5.0})
-    assert len(listed) == 19 and listed[0].output_schema == OUTPUT_SCHEMA
+    assert len(listed) == 20 and listed[0].output_schema == OUTPUT_SCHEMA
     assert idle.is_error and "no task is running" in _payload(idle)["message"]
 
 
@@ -167,7 +167,7 @@ async def test_streamable_http_client_flies_a_real_swarm_and_sees_a_spent_budget
         app = streamable_http_app(default_registry(), lambda: current[0])
         async with _http_url(app) as url, Client(url) as client:
             listed = (await client.list_tools()).tools
-            assert len(listed) == 19
+            assert len(listed) == 20
             assert all(t.input_schema["additionalProperties"] is False for t in listed)
 
             bad = await client.call_tool("take_off", {"drone_id": drone, "altitude_m": True})

@@ -19,7 +19,7 @@ from tests.scripted_llm import call, scripted_llm
 def test_tool_definitions_are_strict() -> None:
     tools = openai_tools(default_registry())
     names = [t["function"]["name"] for t in tools]
-    assert len(names) == len(set(names)) == 19 and "finish" in names
+    assert len(names) == len(set(names)) == 20 and "finish" in names and "wait" in names
     for t in tools:
         params = t["function"]["parameters"]
         assert params["additionalProperties"] is False

@@ -3,7 +3,6 @@ operations) through `AgentTools`, planning obstacle-free paths over the world it
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 from collections.abc import Mapping, Sequence
@@ -66,9 +65,8 @@ class OracleAgent:
             for op in phase:
                 for drone, drone_op in self._expand(op):
                     queues.setdefault(drone, []).append(drone_op)
-            results = await asyncio.gather(
-                *(self._run_queue(tools, drone, ops) for drone, ops in queues.items()),
-                return_exceptions=True)
+            results = await tools.concurrently(
+                *(self._run_queue(tools, drone, ops) for drone, ops in queues.items()))
             for result in results:
                 if isinstance(result, OracleError):
                     self.failures.append(str(result))

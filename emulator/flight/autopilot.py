@@ -131,6 +131,8 @@ class Autopilot:
 
     def _event(self, kind: str, **data: object) -> None:
         self.fleet.recorder.record_event(self.now_s, self.vehicle_id, kind, **data)
+        if kind == "failsafe":
+            self.fleet.mark_ended(self.k)
 
     def _say(self, severity: int, text: str) -> None:
         self.listener.on_statustext(severity, text)

@@ -50,6 +50,10 @@ class Fleet:
         self.armed = np.zeros(n, dtype=bool)
         self.airborne = np.zeros(n, dtype=bool)
         self.busy = np.zeros(n, dtype=bool)
+        # Vehicles whose goal ended (busy -> idle) or that a failsafe struck since the flags
+        # were last cleared; `run` stops at the first such step of a vehicle in `stop_on`.
+        self.ended = np.zeros(n, dtype=bool)
+        self.stop_on = np.zeros(n, dtype=bool)
         self.timer_s = np.full(n, math.inf)
         self.recorder = TruthRecorder([s.id for s in specs])
         self.guard = ClearanceGuard(self.world, n)
@@ -114,14 +118,20 @@ class Fleet:
         return float(dyn.airspeed_max_m_s[k] + np.hypot(*dyn.wind_m_s)
                      + max(dyn.climb_m_s[k], dyn.descent_m_s[k]))
 
+    def mark_ended(self, k: int) -> None:
+        """Vehicle k's goal was cut short by its autopilot (a failsafe took over)."""
+        self.ended[k] = True
+
     def run(self, max_steps: int, *, fast_forward: bool = True) -> int:
         """Advance up to max_steps, fast-forwarding through steady flight; returns steps run.
 
-        Stops early after any step in which no vehicle is busy any more, so a caller in
-        stepped mode never runs past the moment the swarm comes to rest.
+        Stops early after any step in which no vehicle is busy any more, or in which a
+        vehicle of `stop_on` ended its goal, so a caller in stepped mode never runs past the
+        moment the swarm comes to rest or a watched vehicle needs its client's attention.
         """
         done = 0
         while done < max_steps:
+            was_busy = self.busy.copy()
             leap = 0
             if fast_forward and self._leap_retry_step <= self.step_count:
                 leap = steady_steps(self, max_steps - done)
@@ -133,7 +143,8 @@ class Fleet:
             else:
                 self.step()
                 done += 1
-            if not _any(self.busy):
+            self.ended |= was_busy & ~self.busy
+            if not _any(self.busy) or _any(self.ended & self.stop_on):
                 break
         return done
 

@@ -91,5 +91,9 @@ class StreamSchedule:
         col = self.column.get(msg_id)
         return None if col is None else float(self.period_s[k, col])
 
+    def enabled(self, k: int) -> list[int]:
+        """The message ids of vehicle k's streams that are on."""
+        return [self.streams[c].msg_id for c in np.flatnonzero(np.isfinite(self.period_s[k]))]
+
     def next_wakeup_s(self) -> float:
         return float(self.next_due_s.min())

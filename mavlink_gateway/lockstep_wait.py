@@ -1,0 +1,143 @@
+"""Waiting for an outcome under a lockstep clock.
+
+The swarm stops its clock at the physics step in which the watched drone's goal ends (or a
+failsafe takes it over, or the budget runs out) and sends that drone's whole telemetry at once.
+The wait then judges the outcome on telemetry that shows the stopped state, so the outcome,
+and the simulated time at which the caller goes on, are the same on every run whatever the
+wall-clock delays. The calling thread's pin on the clock is let go for the wait and taken back
+at its end (see mavlink_gateway.pacing).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+from collections.abc import Awaitable, Callable
+
+from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.interfaces import Services
+from mavlink_gateway.outcomes import Outcome, Status
+from mavlink_gateway.pacing import current_thinker
+
+__all__ = ["judge_stop", "settle_telemetry", "wait_instant", "wait_lockstep", "wait_world"]
+
+SETTLE_WALL_S = 5.0  # a link that shows no settled state by then is judged as it is
+TEXT_GRACE_S = 0.2  # a halt that explains nothing: time for a STATUSTEXT still on its way
+POLL_S = 0.01
+OBSTACLE_TEXT = "Obstacle"
+FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost")
+# The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
+# cm/s per axis, which can read a little higher. A stepped clock stops right then.
+ARRIVED_SPEED_M_S = 0.5
+
+Done = Callable[[], Outcome | Awaitable[Outcome | None] | None]
+
+
+async def settle_telemetry(link: DroneLink) -> None:
+    """Wait until every periodic stream of `link` shows the state of the stopped clock."""
+    mark = dict(link.seen)
+    deadline = time.monotonic() + SETTLE_WALL_S
+    while not link.settled_since(mark) and time.monotonic() < deadline:
+        await link.wait_update(link.updates, POLL_S)
+
+
+async def _done(done: Done) -> Outcome | None:
+    outcome = done()
+    if inspect.isawaitable(outcome):
+        outcome = await outcome
+    return outcome
+
+
+def judge_stop(link: DroneLink, what: str, texts: int, watch_obstacles: bool
+               ) -> Outcome | None:
+    """A failsafe or an obstacle stop seen in settled telemetry, else None."""
+    new_texts = link.status_texts[texts:]
+    for text in new_texts:
+        if text.startswith(FAILSAFE_TEXTS):
+            return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())
+    obstacle = next((t for t in new_texts if t.startswith(OBSTACLE_TEXT)), None)
+    if watch_obstacles and obstacle is not None and link.speed_m_s < ARRIVED_SPEED_M_S \
+            and link.mode == "HOLD":
+        x, y, z = link.position_m or (math.nan,) * 3
+        return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
+                       f"{obstacle.lower()}", link.state())
+    return None
+
+
+async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, what: str,
+                        done: Done, hold: Callable[[DroneLink], Awaitable[bool]], *,
+                        watch_obstacles: bool, texts: int) -> Outcome:
+    """Wait for the outcome of the goal `link`'s drone is executing, halt by halt."""
+    watch = services.watch(link.drone_id, until_s=services.clock_s() + budget_s)
+    thinker = current_thinker()
+    if thinker is not None:
+        thinker.wait()
+    try:
+        while True:
+            await watch.halted()
+            await settle_telemetry(link)
+            outcome = await _done(done) or judge_stop(link, what, texts, watch_obstacles)
+            if outcome is None and not watch.at_deadline:
+                await _text_grace(link)
+                outcome = judge_stop(link, what, texts, watch_obstacles)
+            if outcome is not None:
+                return outcome
+            if watch.at_deadline:
+                held = await hold(link)  # the clock stands still: HOLD acts at the deadline
+                await settle_telemetry(link)
+                outcome = await _done(done)
+                if outcome is not None:
+                    return outcome
+                return Outcome(Status.TIMEOUT, f"{what} did not finish within {budget_s:.0f} s "
+                               f"of simulated time{'; holding' if held else ''}", link.state())
+            watch.resume()
+    finally:
+        if thinker is not None:
+            thinker.think()  # at the halt's time, before the watch lets the clock go
+        watch.close()
+
+
+async def _text_grace(link: DroneLink) -> None:
+    deadline = time.monotonic() + TEXT_GRACE_S
+    count = len(link.status_texts)
+    while len(link.status_texts) == count and time.monotonic() < deadline:
+        await link.wait_update(link.updates, POLL_S)
+
+
+async def wait_instant(link: DroneLink, what: str, done: Done, wall_s: float) -> Outcome:
+    """Wait for an outcome that needs no simulated time (a photo, a new home): the clock
+    stays where it is, pinned by the caller, while the answer travels."""
+    deadline = time.monotonic() + wall_s
+    while True:
+        seen = link.updates
+        outcome = await _done(done)
+        if outcome is not None:
+            return outcome
+        if time.monotonic() > deadline:
+            return Outcome(Status.TIMEOUT, f"{what}: no answer from the drone within "
+                           f"{wall_s:g} s", link.state())
+        await link.wait_update(seen, POLL_S)
+
+
+async def wait_world(services: Services, drone_id: str, duration_s: float) -> tuple[float, bool]:
+    """Let up to `duration_s` of simulated time pass for the caller, ending early once a radio
+    message for `drone_id` can be read; (simulated seconds waited, whether a message came)."""
+    start_s = services.clock_s()
+    if not services.lockstep:
+        await services.advance(duration_s)
+        return services.clock_s() - start_s, False
+    watch = services.watch(None, until_s=start_s + duration_s, advance=True,
+                           message_for=drone_id)
+    thinker = current_thinker()
+    if thinker is not None:
+        thinker.wait()
+    try:
+        halted_s = await watch.halted()
+        return halted_s - start_s, halted_s < start_s + duration_s - 1e-9
+    finally:
+        if thinker is not None:
+            thinker.think()
+        watch.close()
+
+
