@@ -139,9 +139,16 @@ class TruthHistory(ABC):
             raise KeyError(f"unknown vehicle {vehicle_id!r}; known vehicles: {known}") from None
 
     def _add_event(self, event: TruthEvent) -> None:
+        """Events are kept in (time, vehicle) order: events of different vehicles at the same
+        instant (clients acting side by side) read the same whatever order they came in."""
         index = self._vehicle_index(event.vehicle_id)
         self._events_by_vehicle[index].append(event)
-        self._events.append(event)
+        events = self._events
+        at = len(events)
+        while at > 0 and events[at - 1].t_s == event.t_s and \
+                self._vehicle_index(events[at - 1].vehicle_id) > index:
+            at -= 1
+        events.insert(at, event)
 
     def trajectory(
         self, vehicle_id: str, t0_s: float | None = None, t1_s: float | None = None

@@ -1,0 +1,184 @@
+"""The lockstep clock: results that think time and machine load cannot change.
+
+Agents that wait a random time before each tool call (seeded differently per run), alone or
+one per drone talking over the radio, leave the same ground truth and the same records; the
+oracle's records are identical across runs and worker counts.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import json
+import random
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from agent_contract import AgentTask, AgentTools
+from agent_contract.per_drone import PerDroneTeam
+from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
+from benchmark.oracle import OracleAgent
+from benchmark.session_file import load_session
+from mavlink_gateway import Status
+from tests.cli_fixtures import MAVSWARM, ROOT
+
+pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
+
+SESSION = ROOT / "benchmark" / "sessions" / "target_assignment-easy-1.json"
+WALL_FIELDS = ("wall_time_s", "overhead_s")
+MAX_THINK_S = 0.3
+
+
+class Thinking:
+    """An agent's tools, with a random think time before every tool that acts on the world."""
+
+    def __init__(self, tools: AgentTools, rng: random.Random) -> None:
+        self._tools = tools
+        self._rng = rng
+
+    def __getattr__(self, name: str) -> Any:
+        member = getattr(self._tools, name)
+        if name == "concurrently" or not asyncio.iscoroutinefunction(member):
+            return member
+
+        async def call(*args: Any, **kwargs: Any) -> Any:
+            await asyncio.sleep(self._rng.uniform(0.0, MAX_THINK_S))
+            return await member(*args, **kwargs)
+        return call
+
+
+class SlowOracle:
+    """The oracle, thinking before each tool call."""
+
+    name = "oracle"
+
+    def __init__(self, oracle: OracleAgent, seed: int) -> None:
+        self._oracle = oracle
+        self._rng = random.Random(seed)
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        await self._oracle.run(task, Thinking(tools, self._rng))  # type: ignore[arg-type]
+
+
+class RadioDrone:
+    """One drone's scripted agent: d1 scouts and reports by radio, the others wait for its
+    report and then fly; each thinks a random time before every call."""
+
+    name = "radio"
+
+    def __init__(self, drone_id: str, seed: int) -> None:
+        self.drone_id = drone_id
+        self.rng = random.Random(f"{seed}/{drone_id}")
+        self.log: list[tuple[str, Any]] = []
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        t = Thinking(tools, self.rng)
+        me = self.drone_id
+        index = int(me[1:])
+        state = tools.drone_state(me).state
+        assert state is not None
+        x, y = state.x_m, state.y_m
+        takeoff = await t.take_off(me, 8.0 + 2.0 * index)
+        self.log.append(("take_off", takeoff.status))
+        if me == "d1":
+            self.log.append(("move", (await t.move_to(me, x + 30.0, y, 10.0)).status))
+            self.log.append(("broadcast", tools.broadcast(me, "area clear, go").status))
+        else:
+            heard = await t.wait(me, 300.0)
+            self.log.append(("heard", heard.data))
+            messages = tools.read_messages(me)
+            self.log.append(("read", [m["text"] for m in (messages.data or {})["messages"]]))
+            self.log.append(("move", (await t.move_to(me, x, y + 20.0 * index, 12.0)).status))
+        self.log.append(("land", (await t.land(me)).status))
+        tools.finish(f"{me} done")
+
+
+def _truth_digest(swarm: Any, t0_s: float, t1_s: float) -> str:
+    recorder = swarm.recorder
+    digest = hashlib.sha256()
+    for vehicle in recorder.vehicle_ids:
+        digest.update(np.ascontiguousarray(recorder.trajectory(vehicle, t0_s, t1_s)).tobytes())
+    for event in recorder.events(t0_s=t0_s, t1_s=t1_s):
+        digest.update(json.dumps([event.t_s, event.vehicle_id, event.kind, event.data],
+                                 sort_keys=True, default=str).encode())
+    return digest.hexdigest()
+
+
+def _stable(record: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in record.items() if k not in WALL_FIELDS}
+
+
+async def _fly(make_agent: Any, task_ids: list[str]) -> list[tuple[dict[str, Any], str]]:
+    session = load_session(SESSION)
+    tasks = [t for t in session.tasks if t.id in task_ids]
+    results = []
+    async with swarm_gateway(session, lockstep=True) as (swarm, services, gateway):
+        for task in tasks:
+            t0_s = services.clock_s()
+            record = await run_task(session, task, make_agent(session), swarm, services,
+                                    gateway, EpisodeOptions())
+            results.append((_stable(record), _truth_digest(swarm, t0_s, services.clock_s())))
+    return results
+
+
+async def test_think_time_does_not_change_oracle_results() -> None:
+    def oracle(seed: int):
+        def make(session):
+            plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
+            return SlowOracle(OracleAgent(session.scenario, plans), seed)
+        return make
+
+    tasks = ["t05", "t06"]  # three drones launched together; two drones cross-checking
+    first = await _fly(oracle(1), tasks)
+    second = await _fly(oracle(2), tasks)
+    assert [r["passed"] for r, _ in first] == [True, True]
+    assert first == second
+
+
+async def test_one_agent_per_drone_over_the_radio_is_deterministic() -> None:
+    runs = []
+    for seed in (11, 12):
+        members: dict[str, RadioDrone] = {}
+
+        def make(session, seed=seed, members=members):
+            def member(drone_id: str) -> RadioDrone:
+                members[drone_id] = RadioDrone(drone_id, seed)
+                return members[drone_id]
+            return PerDroneTeam("radio-team", member)
+
+        results = await _fly(make, ["t05"])
+        runs.append((results, {d: m.log for d, m in members.items()}))
+    (first, logs1), (second, logs2) = runs
+    assert first == second and logs1 == logs2
+    assert logs1["d1"][-1] == ("land", Status.OK)
+    for drone, log in logs1.items():
+        if drone == "d1":
+            continue
+        heard = dict(log)["heard"]
+        assert heard["message"] is True and heard["waited_s"] > 0.0
+        assert dict(log)["read"] == ["area clear, go"]
+        assert dict(log)["move"] is Status.OK
+
+
+def _records(path: Path) -> dict[str, dict[str, Any]]:
+    rows = [json.loads(line) for line in path.read_text().splitlines()]
+    return {r["key"]: _stable(r) for r in rows}
+
+
+def test_oracle_smoke_records_are_identical_across_runs_and_workers(tmp_path: Path) -> None:
+    runs = []
+    for name, count in (("a", 1), ("b", 3)):
+        out = tmp_path / name
+        done = subprocess.run([*MAVSWARM, "bench", "run", "--agent", "oracle", "--suite",
+                               "smoke", "--workers", str(count), "--out", str(out)],
+                              capture_output=True, text=True, timeout=600, cwd=ROOT)
+        assert done.returncode == 0, done.stderr[-2000:]
+        runs.append(_records(out / "results.jsonl"))
+    first, second = runs
+    assert len(first) == 18 and all(r["passed"] for r in first.values())
+    assert first == second
+    assert {r["clock"] for r in first.values()} == {"lockstep"}
