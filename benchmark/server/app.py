@@ -11,10 +11,15 @@ from agent_contract import BudgetExhausted
 from benchmark.server.auth import live_session, require
 from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
+from benchmark.server.compat_collision import add_compat_collision_routes
+from benchmark.server.compat_health import add_health_routes
+from benchmark.server.compat_lists import add_compat_list_routes
+from benchmark.server.compat_session_data import add_compat_session_data_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.openapi_roles import add_role_docs
 from benchmark.server.session_control import add_session_control_routes
+from benchmark.server.session_loading import add_session_loading_routes
 from benchmark.server.views import session_view, task_view
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import InputError, preview
@@ -130,10 +135,15 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     async def bad_input(_: Request, error: InputError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=error.http_status)
 
+    add_health_routes(app)
     add_compat_world_routes(app, hub, registry)  # first: /sessions/current is not a session id
+    add_compat_session_data_routes(app, hub)
+    add_session_loading_routes(app, hub)
     _add_session_routes(app, hub, registry)
     add_check_routes(app, hub)
     add_session_control_routes(app, hub)
     add_compat_routes(app, hub, registry)
+    add_compat_list_routes(app, hub)
+    add_compat_collision_routes(app, hub)
     add_role_docs(app, hub)
     return app

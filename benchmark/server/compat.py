@@ -19,7 +19,8 @@ from llm_tools.input_limits import InputError, check_text, parse_json, parse_num
 from llm_tools.registry import ToolRegistry
 from mavlink_gateway import DroneState, Status
 
-__all__ = ["COMMANDS", "Command", "add_compat_routes", "run_command"]
+__all__ = ["COMMANDS", "UNSUPPORTED", "Command", "add_compat_routes", "resolve_session",
+           "run_command"]
 
 _STATUS = {Status.OK.value: "success", Status.PARTIAL.value: "partial_success"}
 _REQUIRED = object()
@@ -116,16 +117,28 @@ COMMANDS: dict[str, Command] = {
 }
 
 
+UNSUPPORTED: dict[str, str] = {
+    "calibrate": "the emulated autopilots have no sensors to calibrate: a drone on the ground "
+                 "is ready to take off as it is",
+    "connect": "every drone is connected over MAVLink from the start",
+    "disconnect": "a drone cannot be taken off its MAVLink link here",
+    "emergency": "an emergency stop would drop the drone where it is; use land or "
+                 "return_home",
+}
+"""MultiUAV-Plat commands that do not apply to flight over MAVLink, with the reason. They are
+answered like a refused command (HTTP 200, status "error") and change nothing."""
+
+
 def resolve_session(hub: Hub, caller: Caller, session: str | None) -> LiveSession:
-    """The caller's session: an agent's own, else the one named (or the only one)."""
+    """The caller's session: an agent's own, else the one named (or the current one)."""
     if caller.role is Role.AGENT:
         assert caller.session_id is not None
         return live_session(hub, caller, session or caller.session_id)
     if session is None:
-        if len(hub.sessions) != 1:
-            raise HTTPException(400, "several sessions are live: name one with ?session=<id> "
-                                f"({', '.join(hub.sessions)})")
-        session = next(iter(hub.sessions))
+        session = hub.current()
+        if session is None:
+            raise HTTPException(400, "several sessions are live and none is current: name one "
+                                f"with ?session=<id> ({', '.join(hub.sessions)})")
     return live_session(hub, caller, session)
 
 
@@ -142,10 +155,14 @@ async def run_command(live: LiveSession, registry: ToolRegistry, drone_id: str, 
     """Run a MultiUAV-Plat command through its agent tool; the answer in the reference's
     shape."""
     command = COMMANDS.get(name)
-    if command is None:
+    if command is None and name not in UNSUPPORTED:
         raise HTTPException(404, f"unknown command {preview(name)}; commands: "
                             f"{', '.join(COMMANDS)}")
     state = _state(live, drone_id)
+    if command is None:
+        return {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
+                "status": "error", "message": f"{name} is not supported: {UNSUPPORTED[name]}; "
+                "nothing was done", "timestamp": time.time()}
     arguments = {"drone_id": drone_id, **command.arguments(dict(params), body, state)}
     result = await registry.call(live.tools, command.tool, arguments)
     status = _STATUS.get(result["status"], "error")

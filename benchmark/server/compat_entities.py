@@ -65,17 +65,19 @@ def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, 
     return out
 
 
-def compat_session_fields(live: LiveSession, role: Role) -> dict[str, Any]:
+def compat_session_fields(live: LiveSession, role: Role, *, active: bool = True
+                          ) -> dict[str, Any]:
     """The reference's session metadata fields (entities.md section 6.1) for the live session:
-    the one served is the current, active session; its map size is the canvas. Nothing here
-    is more than `role` may read: no entity lists or statistics, and for an agent no session
-    description (ours counts the targets and obstacles of the whole map)."""
+    `active` for the current session, else `inactive`; its map size is the canvas. Nothing
+    here is more than `role` may read: no entity lists or statistics, and for an agent no
+    session description (ours counts the targets and obstacles of the whole map)."""
     data = live.session.data
     width, height = (data.get("map_size_m") or [data.get("canvas_width", 1024),
                                                 data.get("canvas_height", 768)])[:2]
     description = "" if role is Role.AGENT else data.get("description", "")
     return {"description": description, "creator": "system",
-            "status": "active", "task_type": live.session.task_type,
+            "status": "active" if active else "inactive",
+            "task_type": live.session.task_type,
             "task_description": live.task.text, "is_distance_3d": False,
             "canvas_width": width, "canvas_height": height,
             "created_at": live.started_wall_s, "last_updated": time.time()}

@@ -9,15 +9,19 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request
 from benchmark.server.auth import require
 from benchmark.server.compat import COMMANDS, resolve_session, run_command
 from benchmark.server.compat_entities import compat_session_fields, entity_records
+from benchmark.server.compat_statistics import statistics_block
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.views import session_view, task_view
 from llm_tools.input_limits import parse_json, preview
 from llm_tools.registry import ToolRegistry
 
-__all__ = ["add_compat_world_routes"]
+__all__ = ["add_compat_world_routes", "perceived_ids"]
+
+_LIST_WORDS = frozenset({"type", "types", "waypoint", "waypoints", "fixed", "moving", "circle",
+                         "polygon", "point", "ellipse", "all"})
 
 
-def _perceived(live: LiveSession, kind: str) -> set[str]:
+def perceived_ids(live: LiveSession, kind: str) -> set[str]:
     """Ids of the entities of `kind` ("targets" or "obstacles") the session's drones sense now.
     Reads perception without charging the agent's budget: it is what the drones already
     report."""
@@ -27,7 +31,10 @@ def _perceived(live: LiveSession, kind: str) -> set[str]:
 
 def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dict[str, Any]:
     """The entity's full record; for an agent only while its drones perceive it."""
-    if caller.role is Role.AGENT and entity_id not in _perceived(live, kind):
+    if entity_id in _LIST_WORDS:
+        raise HTTPException(404, f"{preview(entity_id)} is not a {kind[:-1]} id; "
+                            f"{kind} by type are at /{kind}/type/<type>")
+    if caller.role is Role.AGENT and entity_id not in perceived_ids(live, kind):
         raise HTTPException(404, f"no {kind[:-1]} {preview(entity_id)} within your drones' "
                             "perception")
     record = entity_records(live, kind).get(entity_id)
@@ -45,7 +52,11 @@ def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> N
     def current(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                 ) -> dict[str, Any]:
         live = resolve_session(hub, caller, session)
-        return {**session_view(live, caller.role), **compat_session_fields(live, caller.role)}
+        fields = compat_session_fields(live, caller.role, active=hub.current() == live.id)
+        view = {**session_view(live, caller.role), **fields}
+        if caller.role is not Role.AGENT:  # counts of the whole map
+            view["statistics"] = statistics_block(live)
+        return view
 
     @app.get("/sessions/current/tasks", tags=["multiuav-plat"],
              summary="The session's current task (masked for agents)")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -58,13 +59,26 @@ class Hub:
         self.sessions: dict[str, LiveSession] = {}
         self._keys: dict[str, Caller] = {}
         self.open_access = open_access
-        """Requests without a key act as the agent of the one session served (MultiUAV-Plat
+        """Requests without a key act as the agent of the current session (MultiUAV-Plat
         clients send no key); off unless the server was started with --open."""
+        self.current_id: str | None = None
+        """The session an operator made current (by loading it or picking it); see
+        `current`."""
+        self.starter: Callable[[Session], Awaitable[LiveSession]] | None = None
+        """Starts a live session (swarm and gateway) for a loaded session file; None where
+        the server cannot load sessions while it runs."""
 
     def add_session(self, live: LiveSession) -> None:
         if live.id in self.sessions:
             raise ValueError(f"session id {live.id!r} is already in the hub")
         self.sessions[live.id] = live
+
+    def current(self) -> str | None:
+        """The current session: the one an operator made current, else the only one served;
+        None when several are served and none was picked."""
+        if self.current_id in self.sessions:
+            return self.current_id
+        return next(iter(self.sessions)) if len(self.sessions) == 1 else None
 
     def add_key(self, key: str, role: Role | str, session_id: str | None = None) -> None:
         """Register an API key. An agent key must name a session in the hub; other roles
@@ -91,8 +105,9 @@ class Hub:
         return self._keys.get(key)
 
     def keyless_caller(self) -> Caller | None:
-        """Who a request without a key is: the agent of the only session when the hub is open,
-        else nobody."""
-        if not self.open_access or len(self.sessions) != 1:
+        """Who a request without a key is: the agent of the current session when the hub is
+        open, else nobody."""
+        current = self.current()
+        if not self.open_access or current is None:
             return None
-        return Caller(Role.AGENT, next(iter(self.sessions)))
+        return Caller(Role.AGENT, current)

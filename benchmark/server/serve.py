@@ -26,17 +26,21 @@ from typing import Any, Literal, TextIO
 
 import uvicorn
 
-from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
 from benchmark.importer import load_any_session
-from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import Session, TaskSpec
+from benchmark.server import Hub, Role, create_app
+from benchmark.server.session_runner import (
+    FREE_FLIGHT,
+    SessionRunner,
+    current_task_tools,
+    first_task,
+)
+from benchmark.session_file import Session
 from emulator.reference_mapping import notes_to_show
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
-from mavlink_gateway import Gateway
 
 __all__ = [
+    "FREE_FLIGHT",
     "ApiKey",
     "add_parsers",
     "current_task_tools",
@@ -126,37 +130,12 @@ def _load(path: str | Path) -> Session:
     return session
 
 
-FREE_FLIGHT = TaskSpec(
-    id="free-flight", template="", category="free flight", difficulty="",
-    text="No task is set: the drones are yours to fly.", aliases=(),
-    budget=TaskBudget(tool_calls=1_000_000, sim_time_s=30 * 86_400.0), checks=None,
-    oracle=None, error="a world without tasks has nothing to check")
-"""What a session without tasks serves: free flight, with a budget no one will reach."""
-
-
-def _first_task(session: Session) -> TaskSpec:
-    """The session's current task: its first, or free flight for a world without tasks;
-    ValueError when the first task is not usable."""
-    if not session.tasks:
-        return FREE_FLIGHT
-    task = session.tasks[0]
-    if task.budget is None:
-        raise ValueError(f"{session.source}: task {task.id!r} is not usable: {task.error}")
-    return task
-
-
-def current_task_tools(session: Session, gateway: Gateway) -> AgentTools:
-    """The agent's tools for the session's current (first) task, under its budget."""
-    task = _first_task(session)
-    assert task.budget is not None
-    return AgentTools(gateway, AgentTask(session.id, task.id, task.text, task.budget))
-
-
 @contextlib.asynccontextmanager
 async def live_hub(session_paths: Sequence[str | Path],
                    physics_hz: float = 50.0) -> AsyncIterator[Hub]:
     """A Hub with one live session per file (a stepped swarm and gateway each), closed on
-    exit. Session ids must be distinct."""
+    exit; sessions an operator loads while it runs are closed with them. Session ids must be
+    distinct."""
     if not session_paths:
         raise ValueError("session_paths: expected at least one session file, got none")
     sessions = [_load(path) for path in session_paths]
@@ -166,15 +145,12 @@ async def live_hub(session_paths: Sequence[str | Path],
             raise ValueError(f"session id {session.id!r} is in both {seen[session.id]} and "
                              f"{session.source}")
         seen[session.id] = session.source
-        _first_task(session)
+        first_task(session)
     hub = Hub()
-    async with contextlib.AsyncExitStack() as stack:
+    async with SessionRunner(physics_hz) as runner:
         for session in sessions:
-            swarm, services, gateway = await stack.enter_async_context(
-                swarm_gateway(session, physics_hz))
-            tools = current_task_tools(session, gateway)
-            hub.add_session(LiveSession(session, _first_task(session), swarm, services, gateway,
-                                        tools, services.clock_s()))
+            hub.add_session(await runner.start(session))
+        hub.starter = runner.start
         yield hub
 
 
