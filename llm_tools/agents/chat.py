@@ -1,4 +1,6 @@
-"""A small client for OpenAI-compatible chat completions (tools included)."""
+"""A client for OpenAI-compatible chat completions (tools included), on the official OpenAI SDK:
+any server that speaks the chat-completions API (OpenAI, a hosted gateway, llama.cpp, vLLM,
+Ollama...) at a base URL."""
 
 from __future__ import annotations
 
@@ -8,9 +10,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import httpx
+import openai
 
 __all__ = ["ChatClient", "ModelConfig", "ModelError"]
+
+# Statuses the SDK retries itself before giving up (request timeout, conflict, rate limit,
+# server errors); any other error status is final at once.
+_RETRIED_STATUSES = frozenset({408, 409, 429})
 
 
 class ModelError(RuntimeError):
@@ -30,18 +36,26 @@ class ModelConfig:
     retries: int = 2
     price_in_usd_per_mtok: float = 0.0  # per million prompt tokens (else MAVSWARM_PRICE_IN)
     price_out_usd_per_mtok: float = 0.0  # per million completion tokens (MAVSWARM_PRICE_OUT)
+    max_completion_tokens: int | None = None  # per answer; None leaves it to the server
 
     def resolved(self) -> ModelConfig:
         base = self.base_url or os.environ.get("OPENAI_BASE_URL", "https://api.openai.com/v1")
         model = self.model or os.environ.get("OPENAI_MODEL", "")
         if not model:
             raise ValueError("no model: pass --model or set OPENAI_MODEL")
+        if self.retries < 0:
+            raise ValueError(f"retries must be 0 or more, got {self.retries!r}")
+        if not self.timeout_s > 0:
+            raise ValueError(f"timeout_s must be positive, got {self.timeout_s!r}")
+        if self.max_completion_tokens is not None and self.max_completion_tokens < 1:
+            raise ValueError("max_completion_tokens must be at least 1, got "
+                             f"{self.max_completion_tokens!r}")
         key = self.api_key or os.environ.get("OPENAI_API_KEY", "")
         price_in = self.price_in_usd_per_mtok or float(os.environ.get("MAVSWARM_PRICE_IN", 0))
         price_out = self.price_out_usd_per_mtok or float(
             os.environ.get("MAVSWARM_PRICE_OUT", 0))
         return ModelConfig(base.rstrip("/"), model, key, self.temperature, self.timeout_s,
-                           self.retries, price_in, price_out)
+                           self.retries, price_in, price_out, self.max_completion_tokens)
 
     def cost_usd(self, usage: Mapping[str, int]) -> float:
         """The price of one answer's token use."""
@@ -50,48 +64,88 @@ class ModelConfig:
 
 
 class ChatClient:
-    """POSTs to {base_url}/chat/completions; returns (assistant message, usage)."""
+    """Asks {base_url}/chat/completions; returns (assistant message, usage).
+
+    The SDK retries transport failures, time-outs, rate limits and server errors
+    (`config.retries` times, with back-off); an answer that is not a usable completion is asked
+    again as many times. The message comes back as the server sent it (a dict), malformed tool
+    calls included: reading them is the agent's business."""
 
     def __init__(self, config: ModelConfig) -> None:
         self.config = config.resolved()
-        headers = {"Authorization": f"Bearer {self.config.api_key}"} if self.config.api_key \
-            else {}
-        self._http = httpx.AsyncClient(base_url=self.config.base_url, headers=headers,
-                                       timeout=self.config.timeout_s)
+        # Without a key no Authorization header is sent (local servers need none); the SDK
+        # insists on a key, so it gets a stand-in that the omitted header never carries.
+        self._headers: dict[str, Any] = ({} if self.config.api_key
+                                         else {"Authorization": openai.omit})
+        self._client = openai.AsyncOpenAI(
+            base_url=self.config.base_url, api_key=self.config.api_key or "unused",
+            timeout=self.config.timeout_s, max_retries=self.config.retries)
 
     async def close(self) -> None:
-        await self._http.aclose()
+        await self._client.close()
 
     async def complete(self, messages: Sequence[Mapping[str, Any]],
                        tools: Sequence[Mapping[str, Any]]
                        ) -> tuple[dict[str, Any], dict[str, int]]:
-        body: dict[str, Any] = {"model": self.config.model, "messages": list(messages),
-                                "temperature": self.config.temperature}
+        request: dict[str, Any] = {"model": self.config.model, "messages": list(messages),
+                                   "temperature": self.config.temperature,
+                                   "extra_headers": self._headers}
         if tools:
-            body["tools"] = list(tools)
+            request["tools"] = list(tools)
+        if self.config.max_completion_tokens is not None:
+            # `max_tokens` is the name every OpenAI-compatible server understands.
+            request["max_tokens"] = self.config.max_completion_tokens
+        attempts = self.config.retries + 1
         problem = "no attempt"
-        for attempt in range(self.config.retries + 1):
+        for attempt in range(attempts):
             if attempt:
                 await asyncio.sleep(min(0.2 * 2 ** attempt, 5.0))
             try:
-                response = await self._http.post("/chat/completions", json=body)
-            except httpx.HTTPError as error:
-                problem = f"{type(error).__name__}: {error}"
+                completion = await self._client.chat.completions.create(**request)
+            except openai.APIStatusError as error:
+                detail = f"HTTP {error.status_code}: {error.response.text[:300]}"
+                if error.status_code >= 500 or error.status_code in _RETRIED_STATUSES:
+                    raise ModelError(_failed(attempts, detail)) from error
+                raise ModelError(detail) from error
+            except (openai.APITimeoutError, openai.APIConnectionError) as error:
+                raise ModelError(_failed(attempts, f"{type(error).__name__}: {error}")) from error
+            except (openai.APIResponseValidationError, ValueError) as error:
+                problem = f"unusable response ({type(error).__name__}: {error})"
                 continue
-            if response.status_code >= 500 or response.status_code == 429:
-                problem = f"HTTP {response.status_code}: {response.text[:200]}"
+            answer = _answer(completion)
+            if isinstance(answer, str):
+                problem = answer
                 continue
-            if response.status_code >= 400:
-                raise ModelError(f"HTTP {response.status_code}: {response.text[:300]}")
-            try:
-                data = response.json()
-                message = data["choices"][0]["message"]
-                if not isinstance(message, dict):
-                    raise TypeError("message is not an object")
-            except (ValueError, KeyError, IndexError, TypeError) as error:
-                problem = f"unusable response ({error}): {response.text[:200]}"
-                continue
-            usage = data.get("usage") or {}
-            return message, {"prompt": int(usage.get("prompt_tokens") or 0),
-                             "completion": int(usage.get("completion_tokens") or 0)}
-        raise ModelError(f"the model backend failed {self.config.retries + 1} times: {problem}")
+            return answer
+        raise ModelError(_failed(attempts, problem))
+
+
+def _failed(attempts: int, problem: str) -> str:
+    times = "once" if attempts == 1 else f"{attempts} times"
+    return f"the model backend failed {times}: {problem}"
+
+
+def _answer(completion: Any) -> tuple[dict[str, Any], dict[str, int]] | str:
+    """The assistant message and token use of a completion, or what makes it unusable."""
+    if not isinstance(completion, openai.BaseModel):
+        return f"unusable response (not a completion): {str(completion)[:200]}"
+    data = completion.to_dict(mode="json", warnings=False)
+    try:
+        message = data["choices"][0]["message"]  # type: ignore[index]
+        if not isinstance(message, dict):
+            raise TypeError("message is not an object")
+    except (KeyError, IndexError, TypeError) as error:
+        return f"unusable response ({error}): {str(data)[:200]}"
+    usage = data.get("usage")
+    if not isinstance(usage, dict):
+        usage = {}
+    return message, {"prompt": _count(usage.get("prompt_tokens")),
+                     "completion": _count(usage.get("completion_tokens"))}
+
+
+def _count(value: Any) -> int:
+    """A token count as reported; anything that is not a count is 0."""
+    try:
+        return max(int(value or 0), 0)
+    except (TypeError, ValueError):
+        return 0

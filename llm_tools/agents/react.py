@@ -8,10 +8,10 @@ from typing import Any
 
 from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.chat import ChatClient, ModelConfig
-from llm_tools.openai_adapter import openai_tools, parse_tool_calls
+from llm_tools.openai_adapter import ToolCall, openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
-__all__ = ["SYSTEM_PROMPT", "ReactAgent"]
+__all__ = ["SYSTEM_PROMPT", "ReactAgent", "assistant_message"]
 
 SYSTEM_PROMPT = """You command a swarm of real quadrotor drones through tools.
 Coordinates are local metres: x east, y north; z is altitude above home. Headings are compass
@@ -50,34 +50,48 @@ class ReactAgent:
                                         f"{', '.join(tools.drone_ids)}."},
         ]
         nudges = 0
+        stop = f"stopped: the budget of {self.max_steps} model turns is spent"
         for _ in range(self.max_steps):
             message, usage = await client.complete(messages, schema)
             tools.add_tokens(usage["prompt"], usage["completion"],
                              client.config.cost_usd(usage))
-            messages.append(_assistant(message))
             calls = parse_tool_calls(message)
-            if not calls:
-                if nudges >= MAX_NUDGES:
-                    break
+            messages.append(assistant_message(message, calls))
+            if calls:
+                for call in calls:
+                    result = await self.registry.call(tools, call.name, call.arguments)
+                    messages.append({"role": "tool", "tool_call_id": call.id,
+                                     "content": json.dumps(result, separators=(",", ":"))})
+                if tools.finished:
+                    return
+            elif nudges >= MAX_NUDGES:
+                stop = (f"stopped: the model answered without a tool call {nudges + 1} times "
+                        "(text instead of tool calls)")
+                break
+            else:
                 nudges += 1
                 messages.append({"role": "user", "content": "Act with the tools; call finish "
                                  "when the whole task is done."})
-                continue
-            for call in calls:
-                result = await self.registry.call(tools, call.name, call.arguments)
-                messages.append({"role": "tool", "tool_call_id": call.id,
-                                 "content": json.dumps(result, separators=(",", ":"))})
-            if tools.finished:
-                return
             if tools.prompt_tokens + tools.completion_tokens >= self.max_tokens:
+                stop = f"stopped: the budget of {self.max_tokens} tokens is spent"
                 break
         if not tools.finished:
-            tools.finish("stopped: step or token budget reached")
+            tools.finish(stop)
 
 
-def _assistant(message: dict[str, Any]) -> dict[str, Any]:
-    """The assistant message as it goes back into the conversation."""
-    out: dict[str, Any] = {"role": "assistant", "content": message.get("content") or ""}
-    if message.get("tool_calls"):
-        out["tool_calls"] = message["tool_calls"]
+def assistant_message(message: dict[str, Any], calls: list[ToolCall]) -> dict[str, Any]:
+    """The assistant message as it goes back into the conversation: text content and
+    well-formed tool calls whose ids are the ones the tool results answer, however malformed
+    the model's own message was (a strict server refuses a conversation that is not)."""
+    content = message.get("content")
+    if not isinstance(content, str):
+        content = "" if content is None else json.dumps(content)
+    out: dict[str, Any] = {"role": "assistant", "content": content}
+    if calls:
+        out["tool_calls"] = [
+            {"id": call.id, "type": "function",
+             "function": {"name": call.name or "unnamed",
+                          "arguments": call.arguments if isinstance(call.arguments, str)
+                          else json.dumps(call.arguments)}}
+            for call in calls]
     return out

@@ -18,6 +18,7 @@ from typing import Any
 from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.blackboard import Blackboard, StepRecord
 from llm_tools.agents.chat import ChatClient, ModelConfig
+from llm_tools.agents.react import assistant_message
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
@@ -178,6 +179,7 @@ class WorkflowAgent:
         board = self.blackboard
         await self._observe(tools)
         feedback = ""
+        stop = f"stopped: {self.max_rounds} round(s) did not complete the task"
         for round_index in range(self.max_rounds):
             first_step = len(board.steps)
             plan = await self._plan(client, task, tools, feedback)
@@ -197,12 +199,21 @@ class WorkflowAgent:
                 break
             board.add_note(f"round {round_index + 1} incomplete: {verdict.reason}")
             feedback = _feedback(verdict, failures)
+            stop = (f"stopped: {self.max_rounds} round(s) did not complete the task (last "
+                    f"verdict: {(verdict.reason or 'not complete')[:200]})")
         if not tools.finished:
-            tools.finish("stopped: round, step or token budget reached")
+            tools.finish(self._budget_reason(tools) or stop)
 
     def _out_of_budget(self, tools: AgentTools) -> bool:
-        return (self._steps_used >= self.max_steps
-                or tools.prompt_tokens + tools.completion_tokens >= self.max_tokens)
+        return self._budget_reason(tools) is not None
+
+    def _budget_reason(self, tools: AgentTools) -> str | None:
+        """Why the agent must stop now, or None while its budgets last."""
+        if self._steps_used >= self.max_steps:
+            return f"stopped: the budget of {self.max_steps} planned tool calls is spent"
+        if tools.prompt_tokens + tools.completion_tokens >= self.max_tokens:
+            return f"stopped: the budget of {self.max_tokens} tokens is spent"
+        return None
 
     async def _call(self, tools: AgentTools, name: str,
                     arguments: Mapping[str, Any] | str | None) -> StepRecord:
@@ -311,10 +322,7 @@ class WorkflowAgent:
         for _ in range(REACT_TURNS_PER_ROUND):
             message = await self._ask(client, tools, messages, schema)
             calls = parse_tool_calls(message)
-            out: dict[str, Any] = {"role": "assistant", "content": message.get("content") or ""}
-            if message.get("tool_calls"):
-                out["tool_calls"] = message["tool_calls"]
-            messages.append(out)
+            messages.append(assistant_message(message, calls))
             if not calls:
                 return
             for call in calls:
