@@ -1,14 +1,19 @@
 """A scripted OpenAI-compatible chat-completions server on real HTTP, for agent tests.
 
 Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
-calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded.
+calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded. With
+`by_drone`, each drone's agent (named in its first user message, "You are the agent of drone
+X") gets the replies of its own script. `delay_s` (a callable) makes each answer wait, like a
+model thinking.
 """
 
 from __future__ import annotations
 
 import json
+import re
 import threading
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
@@ -23,19 +28,42 @@ def call(name: str, arguments: Any, call_id: str | None = None) -> dict[str, Any
             "function": {"name": name, "arguments": args}}
 
 
+_AGENT_OF = re.compile(r"You are the agent of drone (\S+?) only")
+
+
 class ScriptedLLM:
-    def __init__(self, replies: list[Any]) -> None:
+    def __init__(self, replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
+                 delay_s: Callable[[], float] | None = None) -> None:
         self.replies = list(replies)
+        self.by_drone = {d: list(r) for d, r in (by_drone or {}).items()}
+        self.delay_s = delay_s
         self.requests: list[dict[str, Any]] = []
         self.base_url = ""
+        self._lock = threading.Lock()
+
+    def _script(self, request: dict[str, Any]) -> list[Any]:
+        for message in request.get("messages", []):
+            found = _AGENT_OF.search(str(message.get("content") or ""))
+            if found and found.group(1) in self.by_drone:
+                return self.by_drone[found.group(1)]
+        return self.replies
 
     def next_reply(self, request: dict[str, Any]) -> tuple[int, str]:
+        with self._lock:
+            delay = self.delay_s() if self.delay_s is not None else 0.0
+        if delay > 0.0:
+            time.sleep(delay)
+        with self._lock:
+            return self._reply(request)
+
+    def _reply(self, request: dict[str, Any]) -> tuple[int, str]:
         self.requests.append(request)
-        if not self.replies:
+        replies = self._script(request)
+        if not replies:
             message: Any = {"role": "assistant", "content": "",
                             "tool_calls": [call("finish", {"summary": "script ended"})]}
         else:
-            message = self.replies.pop(0)
+            message = replies.pop(0)
         if isinstance(message, tuple):  # (status, raw body)
             return message
         if isinstance(message, list):  # a bare list of tool calls
@@ -47,8 +75,9 @@ class ScriptedLLM:
 
 
 @contextmanager
-def scripted_llm(replies: list[Any]) -> Iterator[ScriptedLLM]:
-    llm = ScriptedLLM(replies)
+def scripted_llm(replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
+                 delay_s: Callable[[], float] | None = None) -> Iterator[ScriptedLLM]:
+    llm = ScriptedLLM(replies, by_drone=by_drone, delay_s=delay_s)
 
     class Handler(BaseHTTPRequestHandler):
         def do_POST(self) -> None:

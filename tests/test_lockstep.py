@@ -23,8 +23,10 @@ from agent_contract.per_drone import PerDroneTeam
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.oracle import OracleAgent
 from benchmark.session_file import load_session
+from llm_tools.agents import ModelConfig, ReactAgent
 from mavlink_gateway import Status
 from tests.cli_fixtures import MAVSWARM, ROOT
+from tests.scripted_llm import call, scripted_llm
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
@@ -182,3 +184,56 @@ def test_oracle_smoke_records_are_identical_across_runs_and_workers(tmp_path: Pa
     assert len(first) == 18 and all(r["passed"] for r in first.values())
     assert first == second
     assert {r["clock"] for r in first.values()} == {"lockstep"}
+
+
+TEAM_SCRIPT = [
+    [call("take_off", {"drone_id": d, "altitude_m": a}, f"t{d}")
+     for d, a in (("d1", 10), ("d2", 12), ("d3", 14))],
+    [call("move_towards", {"drone_id": "d1", "heading_deg": 90, "distance_m": 40}, "m1"),
+     call("move_towards", {"drone_id": "d2", "heading_deg": 0, "distance_m": 30}, "m2"),
+     call("hover", {"drone_id": "d3", "duration_s": 5}, "h3")],
+    [call("land", {"drone_id": d}, f"l{d}") for d in ("d1", "d2", "d3")],
+    [call("finish", {"summary": "done"})],
+]
+PER_DRONE_SCRIPTS = {
+    "d1": [[call("take_off", {"drone_id": "d1", "altitude_m": 10})],
+           [call("move_towards", {"drone_id": "d1", "heading_deg": 90, "distance_m": 40})],
+           [call("broadcast", {"drone_id": "d1", "text": "go"})],
+           [call("land", {"drone_id": "d1"})], [call("finish", {"summary": "d1"})]],
+    "d2": [[call("take_off", {"drone_id": "d2", "altitude_m": 12})],
+           [call("wait", {"drone_id": "d2", "duration_s": 300})],
+           [call("read_messages", {"drone_id": "d2"})],
+           [call("move_towards", {"drone_id": "d2", "heading_deg": 0, "distance_m": 30})],
+           [call("land", {"drone_id": "d2"})], [call("finish", {"summary": "d2"})]],
+    "d3": [[call("take_off", {"drone_id": "d3", "altitude_m": 14})],
+           [call("wait", {"drone_id": "d3", "duration_s": 300})],
+           [call("land", {"drone_id": "d3"})], [call("finish", {"summary": "d3"})]],
+}
+
+
+@pytest.mark.parametrize("per_drone", [False, True], ids=["team", "per-drone"])
+async def test_react_agents_with_random_model_latency_are_deterministic(per_drone: bool) -> None:
+    runs = []
+    for seed in (21, 22):
+        rng = random.Random(seed)
+        script = [] if per_drone else list(TEAM_SCRIPT)
+        scripts = {d: list(r) for d, r in PER_DRONE_SCRIPTS.items()} if per_drone else None
+        with scripted_llm(script, by_drone=scripts,
+                          delay_s=lambda rng=rng: rng.uniform(0.0, MAX_THINK_S)) as llm:
+            config = ModelConfig(base_url=llm.base_url, model="scripted", api_key="k")
+
+            def make(session, config=config):
+                if per_drone:
+                    return PerDroneTeam("react:per-drone", lambda d: ReactAgent(config))
+                return ReactAgent(config)
+
+            results = await _fly(make, ["t05"])
+            outcomes = {m["tool_call_id"]: json.loads(m["content"])
+                        for request in llm.requests for m in request["messages"]
+                        if m["role"] == "tool"}
+        runs.append(results)
+        record = results[0][0]
+        assert record["finish"] == "finished" and record["tokens"]["prompt"] > 0
+        assert record["tool_calls"] == (12 if per_drone else 9)  # finish is free
+        assert outcomes and all(o["status"] == "ok" for o in outcomes.values()), outcomes
+    assert runs[0] == runs[1]

@@ -58,8 +58,14 @@ class ReactAgent:
             calls = parse_tool_calls(message)
             messages.append(assistant_message(message, calls))
             if calls:
-                for call in calls:
-                    result = await self.registry.call(tools, call.name, call.arguments)
+                # Several calls in one answer run side by side (one thread each: drones fly
+                # together); a call to a drone still busy with another is refused.
+                results = await tools.concurrently(
+                    *(self.registry.call(tools, c.name, c.arguments) for c in calls))
+                for result in results:
+                    if isinstance(result, BaseException):
+                        raise result
+                for call, result in zip(calls, results, strict=True):
                     messages.append({"role": "tool", "tool_call_id": call.id,
                                      "content": json.dumps(result, separators=(",", ":"))})
                 if tools.finished:

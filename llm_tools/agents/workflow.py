@@ -9,7 +9,6 @@ the model learns comes from tool results gathered on a `Blackboard`.
 
 from __future__ import annotations
 
-import asyncio
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -283,8 +282,8 @@ class WorkflowAgent:
                 elif self._steps_used < self.max_steps:
                     self._steps_used += 1
                     runnable.append(step)
-            records = await asyncio.gather(
-                *(self._call(tools, s.tool, s.arguments) for s in runnable))
+            records = _raise_first(await tools.concurrently(
+                *(self._call(tools, s.tool, s.arguments) for s in runnable)))
             for step, record in zip(runnable, records, strict=True):
                 if not record.ok and step.drone_id is not None:
                     failed.add(step.drone_id)
@@ -350,3 +349,11 @@ def _feedback(verdict: Verdict, failures: list[StepRecord]) -> str:
         lines.append("Failed steps:")
         lines.extend(f"- {f.describe()}" for f in failures[-10:])
     return "\n".join(lines)
+
+
+def _raise_first(results: list[Any]) -> list[Any]:
+    """Results of `tools.concurrently`: the first exception one of them raised, raised."""
+    for result in results:
+        if isinstance(result, BaseException):
+            raise result
+    return results
