@@ -28,6 +28,7 @@ from emulator.clock import ClockConfig
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
+from mavlink_gateway.drone_link import LANDED_STATE_HZ
 from mavlink_gateway.pacing import Thinker, run_as
 
 __all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
@@ -41,6 +42,12 @@ BENCH_TELEMETRY_HZ = {"HEARTBEAT": 5.0, "EXTENDED_SYS_STATE": 5.0, "SYS_STATUS":
                       "BATTERY_STATUS": 5.0, "HOME_POSITION": 1.0,
                       "GLOBAL_POSITION_INT": 20.0, "LOCAL_POSITION_NED": 1.0,
                       "ATTITUDE": 2.0, "GPS_RAW_INT": 0.5, "VFR_HUD": 1.0}
+# Lockstep: outcomes are judged where the clock stops, on telemetry the swarm sends at once
+# there, so the periodic streams only keep the links alive and the caches roughly current.
+LOCKSTEP_TELEMETRY_HZ = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATUS": 1.0,
+                         "BATTERY_STATUS": 1.0, "HOME_POSITION": 0.5,
+                         "GLOBAL_POSITION_INT": 2.0, "LOCAL_POSITION_NED": 0.5,
+                         "ATTITUDE": 0.5, "GPS_RAW_INT": 0.5, "VFR_HUD": 0.5}
 POSITION_MSGS_PER_S = 300.0  # all drones together: what the gateway's MAVSDK keeps up with
 RESET_SYNC_TIMEOUT_S = 20.0
 PLAY_OUT_WALL_S = 120.0
@@ -85,13 +92,14 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
     port = _free_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
     clock = ClockConfig(physics_hz=physics_hz, stepped=True, lockstep=lockstep)
-    rates = dict(BENCH_TELEMETRY_HZ)
+    rates = dict(LOCKSTEP_TELEMETRY_HZ if lockstep else BENCH_TELEMETRY_HZ)
     rates["GLOBAL_POSITION_INT"] = min(rates["GLOBAL_POSITION_INT"],
                                        max(5.0, POSITION_MSGS_PER_S / len(scenario.vehicles)))
     async with Swarm(scenario, clock=clock, ports=ports, telemetry_hz=rates) as swarm:
         services = SwarmServices(swarm)
         async with await FleetConnection.connect(
-            f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin
+            f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin,
+            landed_state_hz=None if lockstep else LANDED_STATE_HZ,
         ) as fleet:
             yield swarm, services, Gateway(fleet.drones, services)
 

@@ -53,6 +53,11 @@ class SwarmServices:
     def unpin(self, token: object) -> None:
         self._swarm.release_clock(token)
 
+    def refresh_telemetry(self, drone_id: str) -> None:
+        """Send every telemetry stream of drone_id at once (the clock is stopped and the
+        client wants the state it stopped in, whatever the stream rates)."""
+        self._swarm.send_telemetry_of(drone_id)
+
     def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
               advance: bool = False, message_for: str | None = None) -> Watch:
         """Wait on the world (see emulator.lockstep.Watch)."""
@@ -102,11 +107,13 @@ class SwarmServices:
         for ap in self._fleet.autopilots:
             x, y, _ = ap.position_m
             place_on_ground(ap, x, y)
+        self._swarm.send_all_telemetry()
 
     def operator_reset_batteries(self, pct: float = 100.0) -> None:
         """Operator reset: every battery set to pct."""
         for ap in self._fleet.autopilots:
             set_battery(ap, pct)
+        self._swarm.send_all_telemetry()
 
     def operator_reset_to_start(self) -> None:
         """Operator reset: every drone back at its scenario start, on the ground, full."""
@@ -117,6 +124,7 @@ class SwarmServices:
             ap.listener.on_home_changed()  # HOME_POSITION now, not at its next 0.5 Hz slot
             set_battery(ap, ap.spec.battery_pct)
         self.radio.clear()
+        self._swarm.send_all_telemetry()
 
     def operator_clear_messages(self) -> None:
         """Operator reset: every drone's inbox emptied."""
@@ -141,6 +149,7 @@ class SwarmServices:
             hx, hy, hz = (float(v) for v in spot["home_m"])
             ap.home_m = (hx, hy, hz)
             ap.listener.on_home_changed()
+        self._swarm.send_all_telemetry()
 
     @contextlib.contextmanager
     def clock_limit(self, t_s: float) -> Iterator[None]:

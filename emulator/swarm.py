@@ -274,9 +274,23 @@ class Swarm:
         return watch
 
     def _request_burst(self, k: int) -> None:
-        """Send vehicle k's whole telemetry now and once more on the next loop turn, so a
-        client sees the state at a halt within milliseconds."""
+        """Lockstep halt of vehicle k: its whole telemetry now and once more on the next loop
+        turn, every other vehicle's once, so a client sees the stopped state within
+        milliseconds whatever the stream rates."""
+        for other in range(self.fleet.n):
+            self._bursts.setdefault(other, 1)
         self._bursts[k] = 2
+        self._wake.set()
+
+    def send_telemetry_of(self, drone_id: str) -> None:
+        """One vehicle's whole telemetry now and once more on the next loop turn."""
+        self._bursts[self.fleet.index_by_id[drone_id]] = 2
+        self._wake.set()
+
+    def send_all_telemetry(self) -> None:
+        """Every vehicle's whole telemetry on the next loop turn (after an operator reset)."""
+        for k in range(self.fleet.n):
+            self._bursts.setdefault(k, 1)
         self._wake.set()
 
     def _send_bursts(self) -> None:

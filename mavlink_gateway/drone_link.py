@@ -67,8 +67,10 @@ class DroneProfile:
 class DroneLink:
     """MAVSDK plugins of one system plus its live telemetry."""
 
-    def __init__(self, profile: DroneProfile, system: Any, origin: GeoFrame) -> None:
+    def __init__(self, profile: DroneProfile, system: Any, origin: GeoFrame, *,
+                 landed_state_hz: float | None = LANDED_STATE_HZ) -> None:
         self.profile = profile
+        self._landed_state_hz = landed_state_hz
         self.system = system
         self.origin = origin
         self.action = ActionAsync(system)
@@ -124,8 +126,10 @@ class DroneLink:
                                                name=f"telemetry-rates-{self.drone_id}"))
 
     async def _request_rates(self) -> None:
+        if self._landed_state_hz is None:
+            return
         with contextlib.suppress(Exception):  # best effort: the default rate still works
-            await self.telemetry.set_rate_landed_state(LANDED_STATE_HZ)
+            await self.telemetry.set_rate_landed_state(self._landed_state_hz)
 
     def _follow(self, name: str, stream: AsyncIterator[Any], apply: Callable[[Any], None]
                 ) -> None:

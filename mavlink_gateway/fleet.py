@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
-from mavlink_gateway.drone_link import DroneLink, DroneProfile
+from mavlink_gateway.drone_link import LANDED_STATE_HZ, DroneLink, DroneProfile
 from mavlink_gateway.interfaces import GeoFrame
 
 __all__ = ["FleetConnection", "FleetError"]
@@ -33,8 +33,11 @@ class FleetConnection:
 
     @classmethod
     async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoFrame, *,
-                      timeout_s: float = DISCOVERY_TIMEOUT_S) -> FleetConnection:
-        """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles."""
+                      timeout_s: float = DISCOVERY_TIMEOUT_S,
+                      landed_state_hz: float | None = LANDED_STATE_HZ) -> FleetConnection:
+        """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles.
+        `landed_state_hz`: the EXTENDED_SYS_STATE rate asked of every drone (None: its
+        own)."""
         loop = asyncio.get_running_loop()
         # MAVSDK runs each blocking call on the default executor: size it for the fleet.
         loop.set_default_executor(
@@ -58,7 +61,9 @@ class FleetConnection:
                     missing = sorted(set(by_system) - set(found))
                     raise FleetError(f"no autopilot answered on {url} for systems {missing}")
                 await asyncio.sleep(0.05)
-            drones = {p.drone_id: DroneLink(p, found[p.system_id], origin) for p in profiles}
+            drones = {p.drone_id: DroneLink(p, found[p.system_id], origin,
+                                            landed_state_hz=landed_state_hz)
+                      for p in profiles}
             for link in drones.values():
                 link.start()
             deadline = time.monotonic() + timeout_s

@@ -85,6 +85,7 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
                 return outcome
             if watch.at_deadline:
                 held = await hold(link)  # the clock stands still: HOLD acts at the deadline
+                services.refresh_telemetry(link.drone_id)
                 await settle_telemetry(link)
                 outcome = await _done(done)
                 if outcome is not None:
