@@ -1,9 +1,11 @@
 """`mavswarm bench`: generate, run, report and import the benchmark.
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
+                          [--backend local|ray [--ray-address ADDR]]
   mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
                      [--suite smoke|full | --sessions FILE ...]
-                     [--workers N] [--trials K] [--out DIR]
+                     [--workers N] [--trials K] [--clock lockstep|stepped] [--out DIR]
+                     [--backend local|ray [--ray-address ADDR]]
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
@@ -14,6 +16,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from benchmark.backends import BACKENDS
+from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
 from benchmark.suite import SUITES, suite_paths
 
@@ -34,7 +38,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="session ids to generate (e.g. area_search-easy-1)")
     gen.add_argument("--no-verify", action="store_true",
                      help="skip proving each task with the oracle (faster; not for release)")
-    gen.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    gen.add_argument("--workers", type=int, default=1, help="sessions generated at once")
+    _add_backend_arguments(gen)
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
     run.add_argument("--agent", choices=AGENTS, default="oracle")
@@ -51,11 +56,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        help="smoke: 3 easy sessions, 6 tasks each; full: 75 sessions, 1500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
-    run.add_argument("--workers", type=int, default=1, help="parallel worker processes")
+    run.add_argument("--workers", type=int, default=1, help="sessions run at once")
     run.add_argument("--trials", type=int, default=1, help="repeats of every task (pass^k)")
+    run.add_argument("--clock", choices=CLOCKS, default="lockstep",
+                     help="lockstep (default): simulated time runs only while the agent waits "
+                          "on the world, so results do not depend on think time; stepped: it "
+                          "runs whenever a drone executes a goal, thinking included")
     run.add_argument("--out", type=Path, default=None,
                      help="results folder (default runs/bench-<agent>-<suite>); re-running "
                           "with the same folder resumes")
+    _add_backend_arguments(run)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -67,10 +77,21 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     imp.add_argument("--out", type=Path, required=True)
 
 
+def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--backend", choices=BACKENDS, default="local",
+                        help="where sessions run: local worker processes (default) or Ray "
+                             "tasks on a Ray cluster (pip install 'mavswarm[ray]')")
+    parser.add_argument("--ray-address", default="", metavar="ADDR",
+                        help="--backend ray: the cluster to join (HEAD_IP:PORT or auto; "
+                             "default: RAY_ADDRESS, a cluster started here, else a one-node "
+                             "instance for this run)")
+
+
 def _generate(args: argparse.Namespace) -> int:
     from benchmark.suite import generate_suite
     written = generate_suite(args.out, only=args.only, verify=not args.no_verify,
-                             workers=args.workers)
+                             workers=args.workers, backend=args.backend,
+                             ray_address=args.ray_address)
     print(f"wrote {len(written)} session files to {args.out}")
     return 0
 
@@ -88,10 +109,14 @@ def _run(args: argparse.Namespace) -> int:
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
-                   price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out)
+                   price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
+                   clock=args.clock, backend=args.backend, ray_address=args.ray_address)
+    where = ""
+    if args.backend == "ray":
+        where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
-          f"{args.workers} worker(s); results in {plan.results_path}")
+          f"{args.workers} worker(s){where}; results in {plan.results_path}")
     outcome = run_benchmark(plan)
     records = read_records(plan.results_path)
     md, js = write_report(records, out)

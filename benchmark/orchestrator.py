@@ -1,18 +1,18 @@
-"""Runs an agent over benchmark sessions, in parallel worker processes, into a resumable
-JSON Lines results file.
+"""Runs an agent over benchmark sessions into a resumable JSON Lines results file.
 
-Each (session, trial) is one unit of work, run by a worker process with its own swarm and
-ports. Workers send each task's record to the parent as the task ends; the parent alone
-appends to the results file, one whole line at a time. Re-running the same command skips
-every task already recorded and restores the layout the last one left.
+Each (session, trial) is one unit of work, run by `run_unit` with its own swarm and ports,
+wherever the backend puts it (`benchmark/backends.py`: this process, local worker processes,
+or Ray tasks on a cluster). Units send each task's record back as the task ends; this process
+alone appends to the results file, one whole line at a time, and never a key twice.
+Re-running the same command skips every task already recorded and restores the layout the
+last one left.
 """
 
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
-import multiprocessing
-import queue as queue_module
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -21,16 +21,19 @@ from typing import Any
 
 from agent_contract import Agent
 from benchmark.agents import NoopAgent
+from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
 
-__all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark"]
+__all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark", "run_unit"]
 
-AGENTS = ("oracle", "noop", "react", "workflow")
-LLM_AGENTS = ("react", "workflow")
+# NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone)
+AGENTS = ("oracle", "noop", "react", "workflow", "react:per-drone", "workflow:per-drone")
+LLM_AGENTS = ("react", "workflow", "react:per-drone", "workflow:per-drone")
+PER_DRONE = ":per-drone"
 
 
 @dataclass(frozen=True)
@@ -42,10 +45,13 @@ class RunPlan:
     out_dir: Path = Path("runs/bench")
     task_limit: int | None = None  # only the first N tasks of each session (smoke runs)
     physics_hz: float = 50.0
+    clock: str = "lockstep"  # see benchmark.episode.CLOCKS
     model: str = ""  # LLM agents: model name and OpenAI-compatible base URL (else from the
     base_url: str = ""  # environment: OPENAI_MODEL, OPENAI_BASE_URL; key: OPENAI_API_KEY)
     price_in_usd_per_mtok: float = 0.0  # token prices for the cost per task (else from
     price_out_usd_per_mtok: float = 0.0  # MAVSWARM_PRICE_IN / MAVSWARM_PRICE_OUT)
+    backend: str = "local"  # where units run: "local" (processes here) or "ray" (a cluster)
+    ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
 
     @property
     def results_path(self) -> Path:
@@ -62,6 +68,10 @@ class RunOutcome:
 
 def make_agent(name: str, session: Session, plan: RunPlan | None = None) -> Agent:
     """The named agent for one session."""
+    if name.endswith(PER_DRONE):
+        from agent_contract.per_drone import PerDroneTeam
+        single = name.removesuffix(PER_DRONE)
+        return PerDroneTeam(name, lambda drone_id: make_agent(single, session, plan))
     if name == "noop":
         return NoopAgent()
     if name in LLM_AGENTS:
@@ -82,8 +92,10 @@ def _limited(session: Session, limit: int | None) -> Session:
     return session if limit is None else replace(session, tasks=session.tasks[:limit])
 
 
-def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
-              send: Callable[[tuple[str, Any]], None]) -> None:
+def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
+    """Run one session file for one trial, skipping the tasks `unit.done` holds; each message
+    is sent as it happens. Every backend calls this, on whatever machine runs the unit."""
+    path, trial, done = unit.path, unit.trial, unit.done
     try:
         loaded, notes = load_any_session(path)
         session = _limited(loaded, plan.task_limit)
@@ -100,7 +112,7 @@ def _run_unit(path: str, trial: int, plan: RunPlan, done: Mapping[str, Any],
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
-    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz)
+    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock)
     try:
         asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
                                 done=done, options=options))
@@ -127,16 +139,6 @@ def _unloadable_records(path: str, plan: RunPlan, trial: int, error: str,
              for task in tasks]
     return [error_record(base, f"the session cannot be loaded: {error}")
             for base in bases if base["key"] not in done]
-
-
-def _worker(units: Any, results: Any, plan: RunPlan) -> None:
-    while True:
-        unit = units.get()
-        if unit is None:
-            return
-        path, trial, done = unit
-        _run_unit(path, trial, plan, done, results.put)
-        results.put(("unit_done", (path, trial)))
 
 
 def _done_by_unit(records: Sequence[Mapping[str, Any]]
@@ -169,6 +171,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:
         raise ValueError("workers and trials must be >= 1")
+    backend = make_backend(plan.backend, workers=plan.workers, ray_address=plan.ray_address)
     started = time.perf_counter()
     outcome = RunOutcome()
     log = ResultsLog(plan.results_path)
@@ -177,8 +180,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         progress(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
     done = _done_by_unit(read_records(plan.results_path)) if keys else {}
     ids = {p: _session_id(p) for p in plan.sessions} if done else {}
-    units: list[tuple[str, int, Mapping[str, Any]]] = [
-        (str(p), trial, done.get((ids.get(p) or "", trial), {}))
+    units = [Unit(str(p), trial, done.get((ids.get(p) or "", trial), {}))
              for trial in range(plan.trials) for p in plan.sessions]
 
     def handle(message: tuple[str, Any]) -> None:
@@ -196,48 +198,11 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
             progress(f"note: {payload}")
 
     try:
-        if plan.workers == 1:
-            for path, trial, unit_done in units:
-                _run_unit(path, trial, plan, unit_done, handle)
-        else:
-            _run_parallel(plan, units, handle)
+        backend.run(functools.partial(run_unit, plan), units, handle)
     finally:
         log.close()
     outcome.wall_s = time.perf_counter() - started
     return outcome
-
-
-def _run_parallel(plan: RunPlan, units: list[tuple[str, int, Any]],
-                  handle: Callable[[tuple[str, Any]], None]) -> None:
-    ctx = multiprocessing.get_context("spawn")
-    unit_q, result_q = ctx.Queue(), ctx.Queue()
-    for unit in units:
-        unit_q.put(unit)
-    workers = [ctx.Process(target=_worker, args=(unit_q, result_q, plan), daemon=True,
-                           name=f"bench-worker-{k}") for k in range(min(plan.workers, len(units)))]
-    for w in workers:
-        unit_q.put(None)
-        w.start()
-    remaining = len(units)
-    try:
-        while remaining:
-            try:
-                message = result_q.get(timeout=1.0)
-            except queue_module.Empty:
-                if not any(w.is_alive() for w in workers):
-                    handle(("error", f"worker processes ended with {remaining} unit(s) "
-                                     "unfinished; re-run the same command to resume"))
-                    return
-                continue
-            if message[0] == "unit_done":
-                remaining -= 1
-            else:
-                handle(message)
-    finally:
-        for w in workers:
-            w.join(timeout=5.0)
-            if w.is_alive():
-                w.terminate()
 
 
 def _progress_line(record: Mapping[str, Any], n: int) -> str:

@@ -44,8 +44,10 @@ def _generate_one(key: tuple[str, str, int], out_dir: Path, verify: bool) -> Pat
 
 
 def generate_suite(out_dir: Path, *, only: Sequence[str] | None = None, verify: bool = True,
-                   workers: int = 1) -> list[Path]:
-    """Generate the suite's session files (all 75, or the ids in `only`) into out_dir."""
+                   workers: int = 1, backend: str = "local",
+                   ray_address: str = "") -> list[Path]:
+    """Generate the suite's session files (all 75, or the ids in `only`) into out_dir, in
+    `workers` local processes or, with backend "ray", as Ray tasks (benchmark/backends.py)."""
     keys = list(all_session_keys())
     if only:
         wanted = set(only)
@@ -53,6 +55,12 @@ def generate_suite(out_dir: Path, *, only: Sequence[str] | None = None, verify: 
         if unknown:
             raise ValueError(f"unknown session ids: {', '.join(sorted(unknown))}")
         keys = [k for k in keys if session_id(*k) in wanted]
+    if backend != "local" or ray_address:
+        from benchmark.backends import make_backend
+        make_backend(backend, workers=workers, ray_address=ray_address)  # says what is wrong
+        from benchmark.ray_backend import generate_on_ray
+        return generate_on_ray(keys, out_dir, verify=verify, workers=workers,
+                               address=ray_address)
     if workers <= 1:
         written = []
         for key in keys:

@@ -202,10 +202,13 @@ class FlightPrimitives(GatewayCore):
         total = len(items)
 
         async def done() -> Outcome | None:
+            # A lockstep wait asks only where the clock stopped, so it asks MAVSDK directly;
+            # otherwise the progress stream says when asking is worth it (a progress update
+            # dropped under load then only delays the answer).
             current, reported = link.mission_progress
-            if reported == total and current >= total - 1 and self._arrived(
-                link, goal, ARRIVAL_M
-            ) and await link.mission.is_mission_finished():
+            near_end = self.services.lockstep or (reported == total and current >= total - 1)
+            if near_end and self._arrived(link, goal, ARRIVAL_M) \
+                    and await link.mission.is_mission_finished():
                 return Outcome(Status.OK, "", link.state())
             return None
 

@@ -237,3 +237,14 @@ async def test_react_agents_with_random_model_latency_are_deterministic(per_dron
         assert record["tool_calls"] == (12 if per_drone else 9)  # finish is free
         assert outcomes and all(o["status"] == "ok" for o in outcomes.values()), outcomes
     assert runs[0] == runs[1]
+
+
+def test_per_drone_agents_are_named_on_the_command_line() -> None:
+    from benchmark.orchestrator import AGENTS, RunPlan, make_agent
+
+    session = load_session(SESSION)
+    plan = RunPlan(sessions=(), agent="react:per-drone", model="m", base_url="http://x/v1")
+    agent = make_agent("react:per-drone", session, plan)
+    assert "workflow:per-drone" in AGENTS
+    assert isinstance(agent, PerDroneTeam) and agent.name == "react:per-drone"
+    assert isinstance(agent._make("d2"), ReactAgent)

@@ -1,0 +1,182 @@
+"""The Ray backend on a real Ray cluster of `ray start` nodes on loopback. A run writes the
+records the local backend writes; a node killed mid-run loses and duplicates no record, its
+sessions go on from where they stopped on a node that joins later, and a rerun resumes to
+nothing left; generation on Ray writes the files a local one writes. Without Ray, the local
+backend imports none of it and asking for Ray says how to install it."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from benchmark.backends import BackendUnavailable, make_backend
+from benchmark.orchestrator import RunPlan, run_benchmark
+from benchmark.results import read_records
+from tests.bench_fixtures import small_session, write_json
+from tests.cli_fixtures import MAVSWARM, ROOT
+
+KEYS = ["takeoff_hold", "climb_and_face", "altitude_change", "new_home", "takeoff_hold",
+        "climb_and_face"]
+RUN_TIMEOUT_S = 400.0
+
+
+needs_ray = pytest.mark.skipif(
+    importlib.util.find_spec("ray") is None,
+    reason="ray is not installed (pip install 'mavswarm[ray]'; the dev extra installs it)")
+
+
+@pytest.fixture(scope="module")
+def cluster() -> Iterator[Any]:
+    from tests.ray_cluster import LocalRayCluster
+    # Sessions run on the worker nodes only (the head has no CPU for them): a killed node
+    # takes every running session with it.
+    with LocalRayCluster(head_cpus=0) as local_cluster:
+        local_cluster.add_node(num_cpus=2)
+        yield local_cluster
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, ...]:
+    folder = tmp_path_factory.mktemp("sessions")
+    return tuple(write_json(folder / f"s{k}.json", small_session(KEYS, index=k + 1, seed=k))
+                 for k in range(2))
+
+
+@pytest.fixture(scope="module")
+def local_records(sessions: tuple[Path, ...], tmp_path_factory: pytest.TempPathFactory
+                  ) -> list[dict[str, Any]]:
+    out = tmp_path_factory.mktemp("local")
+    run_benchmark(RunPlan(sessions=sessions, out_dir=out, workers=2), progress=lambda _: None)
+    return read_records(out / "results.jsonl")
+
+
+def _verdicts(records: list[dict[str, Any]]) -> dict[str, tuple[Any, ...]]:
+    return {r["key"]: (r["passed"], r["finish"], r["checks_total"],
+                       tuple(c["passed"] for c in r["checks"])) for r in records}
+
+
+def _bench(cluster: Any, *args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([*MAVSWARM, "bench", *args, "--backend", "ray",
+                             "--ray-address", cluster.address],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, env={**os.environ, **cluster.env})
+
+
+def _finish(proc: subprocess.Popen[str]) -> str:
+    try:
+        output, _ = proc.communicate(timeout=RUN_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        output, _ = proc.communicate()
+        raise AssertionError(f"the run did not end:\n{output[-4000:]}") from None
+    assert proc.returncode == 0, output[-4000:]
+    return output
+
+
+def _lines(path: Path) -> int:
+    try:
+        return path.read_bytes().count(b"\n")
+    except FileNotFoundError:
+        return 0
+
+
+@needs_ray
+@pytest.mark.mavsdk
+@pytest.mark.slow
+def test_a_ray_run_writes_what_the_local_backend_writes(
+        cluster: Any, sessions: tuple[Path, ...], local_records: list[dict[str, Any]],
+        tmp_path: Path) -> None:
+    out = tmp_path / "ray"
+    output = _finish(_bench(cluster, "run", "--agent", "oracle", "--workers", "1",
+                            "--sessions", *map(str, sessions), "--out", str(out)))
+    records = read_records(out / "results.jsonl")
+    assert len(records) == len(sessions) * len(KEYS)
+    assert _verdicts(records) == _verdicts(local_records), output[-4000:]
+    assert all(r["passed"] for r in records)
+    assert "as Ray tasks at " + cluster.address in output
+    # One worker: one session at a time, though the node has a CPU for each.
+    order = [r["session"] for r in records]
+    assert order == sorted(order, key=order.index), order
+
+
+@needs_ray
+@pytest.mark.mavsdk
+@pytest.mark.slow
+def test_a_node_killed_mid_run_loses_and_duplicates_no_record(
+        cluster: Any, sessions: tuple[Path, ...], local_records: list[dict[str, Any]],
+        tmp_path: Path) -> None:
+    node = cluster.nodes[-1]
+    assert node.alive and node is not cluster.nodes[0]
+    out = tmp_path / "ray"
+    args = ("run", "--agent", "oracle", "--workers", "2", "--sessions", *map(str, sessions),
+            "--out", str(out))
+    proc = _bench(cluster, *args)
+    deadline = time.monotonic() + RUN_TIMEOUT_S
+    while _lines(out / "results.jsonl") < 1:  # a first task has ended: both are mid-session
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()[0]
+        time.sleep(0.05)
+    node.kill()
+    assert _lines(out / "results.jsonl") < len(local_records)
+    cluster.add_node(num_cpus=2)  # where the lost sessions go on
+    output = _finish(proc)
+    assert "running it again" in output, output[-4000:]
+    records = read_records(out / "results.jsonl")  # raises on a duplicate key
+    assert _verdicts(records) == _verdicts(local_records), output[-4000:]
+    # The rerun resumes: every task is recorded, nothing is run or written again.
+    again = _finish(_bench(cluster, *args))
+    assert "0 new task records" in again, again[-4000:]
+    assert [r["key"] for r in read_records(out / "results.jsonl")] == [r["key"] for r in records]
+
+
+@needs_ray
+@pytest.mark.slow
+def test_generation_on_ray_writes_the_files_a_local_generation_writes(
+        cluster: Any, tmp_path: Path) -> None:
+    from benchmark.suite import generate_suite
+    only = ["area_search-easy-2", "target_assignment-easy-3"]
+    local = generate_suite(tmp_path / "local", only=only, verify=False)
+    output = _finish(_bench(cluster, "generate", "--only", *only, "--no-verify",
+                            "--workers", "2", "--out", str(tmp_path / "ray")))
+    assert "wrote 2 session files" in output
+    for path in local:
+        assert (tmp_path / "ray" / path.name).read_bytes() == path.read_bytes()
+
+
+def test_asking_for_ray_without_it_says_how_to_install_it(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` now raises ImportError
+    with pytest.raises(BackendUnavailable, match=r"pip install 'mavswarm\[ray\]'"):
+        make_backend("ray", workers=2)
+    plan = RunPlan(sessions=(), out_dir=tmp_path / "out", backend="ray")
+    with pytest.raises(BackendUnavailable):
+        run_benchmark(plan, progress=lambda _: None)
+    assert not (tmp_path / "out").exists()  # refused before anything was written
+
+
+def test_backend_arguments_are_checked() -> None:
+    with pytest.raises(ValueError, match="--backend ray"):
+        make_backend("local", workers=1, ray_address="127.0.0.2:6379")
+    with pytest.raises(ValueError, match="unknown backend"):
+        make_backend("dask", workers=1)
+    with pytest.raises(ValueError, match="workers"):
+        make_backend("local", workers=0)
+
+
+def test_the_local_backend_imports_no_ray() -> None:
+    code = ("import json, sys\n"
+            "import benchmark.cli, benchmark.orchestrator, benchmark.backends, mavswarm.cli\n"
+            "from benchmark.backends import make_backend\n"
+            "make_backend('local', workers=2)\n"
+            "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] == 'ray')))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, check=True, timeout=60)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []
