@@ -10,14 +10,20 @@ turned into our terms; each mapping returns a note saying what it did.
 - **Home altitude.** The reference puts home at the starting position, altitude included, so a
   drone spawned in the air has its home in the air, and `return_home` teleports there. Our
   home is where a vehicle lands: its altitude is the ground (z = 0).
+- **Vehicle limits.** The reference takes any positive `max_speed`, `max_altitude`,
+  `perceived_radius` and `task_radius`; ours become the autopilot parameters `MPC_XY_VEL_MAX`,
+  `GF_MAX_VER_DIST`, `SIM_SENS_RAD` and `SIM_TASK_RAD`, whose ranges are PX4-like. A value
+  outside its parameter's range is flown at the nearest end of the range.
 - **Moving targets** keep their type and position; the reference's velocity and path are read
   but the target stands still until moving targets are simulated.
 """
 
 from __future__ import annotations
 
+from emulator.flight.params import ParamStore
+
 __all__ = ["MAX_CAPACITY_MAH", "MIN_CAPACITY_MAH", "capacity_mah", "home_altitude_m",
-           "moving_target_note", "notes_to_show"]
+           "moving_target_note", "notes_to_show", "within_param"]
 
 MIN_CAPACITY_MAH = 100.0  # the range of PX4's BAT_CAPACITY that the autopilot accepts
 MAX_CAPACITY_MAH = 100_000.0
@@ -35,6 +41,17 @@ def capacity_mah(raw: float, where: str) -> tuple[float, str | None]:
         return MAX_CAPACITY_MAH, (f"{where}.battery_capacity {raw:g} mAh is above "
                                   f"{MAX_CAPACITY_MAH:g}; flown as {MAX_CAPACITY_MAH:g} mAh")
     return raw, None
+
+
+def within_param(raw: float, param: str, field: str, where: str) -> tuple[float, str | None]:
+    """A vehicle limit from the file, inside the range of the parameter that flies it, and a
+    note if it had to move."""
+    definition = ParamStore.definition(param)
+    flown = min(max(raw, definition.minimum), definition.maximum)
+    if flown == raw:
+        return raw, None
+    return flown, (f"{where}.{field} {raw:g} is outside {param}'s range "
+                   f"[{definition.minimum:g}, {definition.maximum:g}]; flown as {flown:g}")
 
 
 def home_altitude_m(raw_z_m: float, where: str) -> tuple[float, str | None]:

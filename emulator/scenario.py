@@ -20,7 +20,12 @@ import numpy as np
 import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
-from emulator.reference_mapping import capacity_mah, home_altitude_m, moving_target_note
+from emulator.reference_mapping import (
+    capacity_mah,
+    home_altitude_m,
+    moving_target_note,
+    within_param,
+)
 from emulator.world import CALM, OBSTACLE_KINDS, TARGET_KINDS, Obstacle, Target, Wind, World
 
 __all__ = [
@@ -213,6 +218,17 @@ def _drone(e: _Entity, index: int, notes: list[str]) -> VehicleSpec:
     home = (home[0], home[1], home_z)
     capacity_flown, capacity_note = capacity_mah(capacity, e.label)
     notes.extend(n for n in (capacity_note, home_note) if n)
+    limits = {}
+    for field, param, raw in (
+            ("max_speed", "MPC_XY_VEL_MAX", max_speed),
+            ("max_altitude", "GF_MAX_VER_DIST", max_altitude),
+            ("perceived_radius", "SIM_SENS_RAD",
+             e.number("perceived_radius", DEFAULT_PERCEIVED_RADIUS_M, above=0.0)),
+            ("task_radius", "SIM_TASK_RAD",
+             e.number("task_radius", DEFAULT_TASK_RADIUS_M, above=0.0))):
+        limits[field], note = within_param(raw, param, field, e.label)
+        if note:
+            notes.append(note)
     if e.data.get("battery_volume") is not None:
         volume = min(max(e.number("battery_volume"), 0.0), capacity)
         battery_pct = 100.0 * volume / capacity
@@ -221,9 +237,8 @@ def _drone(e: _Entity, index: int, notes: list[str]) -> VehicleSpec:
     return VehicleSpec(
         id=ident, name=name, model=model, position_m=position,
         heading_deg=wrap_heading_deg(e.number("heading", 0.0)), home_m=home,
-        max_speed_m_s=max_speed, max_altitude_m=max_altitude,
-        perceived_radius_m=e.number("perceived_radius", DEFAULT_PERCEIVED_RADIUS_M, above=0.0),
-        task_radius_m=e.number("task_radius", DEFAULT_TASK_RADIUS_M, above=0.0),
+        max_speed_m_s=limits["max_speed"], max_altitude_m=limits["max_altitude"],
+        perceived_radius_m=limits["perceived_radius"], task_radius_m=limits["task_radius"],
         battery_pct=battery_pct, battery_capacity_mah=capacity_flown,
     )
 

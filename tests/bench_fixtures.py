@@ -30,6 +30,14 @@ def small_session(keys: list[str], *, family: str = "area_search", index: int = 
     return {**world, "tasks": tasks}
 
 
+def overcrowded(data: dict[str, Any]) -> dict[str, Any]:
+    """The session with 251 drones where its first one stands: it loads, but no swarm can
+    start it (MAVLink system ids end at 250)."""
+    first = data["drones"][0]
+    drones = [{**first, "id": f"crowd{k:03d}", "name": f"Crowd {k}"} for k in range(251)]
+    return {**data, "drones": drones}
+
+
 def write_json(path: Path, data: Any) -> Path:
     path.write_text(dump_session(data) if isinstance(data, dict) else json.dumps(data))
     return path

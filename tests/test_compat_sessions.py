@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.bench_fixtures import reference_session, small_session, write_json
+from tests.bench_fixtures import overcrowded, reference_session, small_session, write_json
 from tests.cli_fixtures import ROOT
 from tests.compat_fixtures import KEYS, PlatClient, plat_server
 from tests.rest_fixtures import served
@@ -61,9 +61,8 @@ async def test_bad_loads_are_refused_and_change_nothing(tmp_path: Path) -> None:
     unloadable = reference_session()
     unloadable["id"] = "unloadable"
     unloadable["drones"][0]["position"]["z"] = -5.0
-    unflyable = reference_session()
+    unflyable = overcrowded(reference_session())
     unflyable["id"] = "unflyable"
-    unflyable["drones"][0]["perceived_radius"] = 50_000.0  # beyond SIM_SENS_RAD's range
     broken = tmp_path / "broken.json"
     broken.write_text('{"drones": [', encoding="utf-8")
     async with plat_server(tmp_path) as s:

@@ -18,7 +18,7 @@ from benchmark.server.serve import serve_rest
 from emulator.clock import ClockConfig
 from emulator.scenario import load_scenario, scenario_from_dict
 from emulator.swarm import PortPlan, Swarm
-from tests.bench_fixtures import reference_session, small_session, write_json
+from tests.bench_fixtures import overcrowded, reference_session, small_session, write_json
 from tests.cli_fixtures import ROOT, read_until, start_up
 from tests.ports import unused_udp_port
 from tests.rest_fixtures import as_role, served
@@ -113,9 +113,8 @@ def test_an_imported_reference_file_runs_and_records_every_task(tmp_path: Path) 
 
 @pytest.mark.mavsdk
 def test_sessions_that_cannot_start_or_load_record_each_task(tmp_path: Path) -> None:
-    unflyable = small_session(["takeoff_hold", "checkpoint"])
+    unflyable = overcrowded(small_session(["takeoff_hold", "checkpoint"]))
     unflyable["id"] = "unflyable"
-    unflyable["drones"][0]["perceived_radius"] = 50_000.0  # beyond SIM_SENS_RAD's range
     unloadable = small_session(["takeoff_hold"])
     unloadable["id"] = "unloadable"
     unloadable["drones"][0]["position"]["z"] = -5.0
@@ -133,7 +132,7 @@ def test_sessions_that_cannot_start_or_load_record_each_task(tmp_path: Path) -> 
     for record in records:
         assert record["finish"] == "task_error" and record["passed"] is False
     assert "cannot start" in by_session["unflyable"][0]["error"]
-    assert "SIM_SENS_RAD" in by_session["unflyable"][0]["error"]
+    assert "1 to 250 vehicles" in by_session["unflyable"][0]["error"]
     assert "cannot be loaded" in by_session["unloadable"][0]["error"]
     assert json.loads(json.dumps(records)) == records
     again = run_benchmark(plan, progress=lambda _: None)  # resumed: nothing left to record
