@@ -106,6 +106,14 @@ def _num(value: Any, decimals: int = 1) -> str:
     return f"{value:,.{decimals}f}" if isinstance(value, int | float) else "n/a"
 
 
+def _duration(seconds: float) -> str:
+    if seconds < 120.0:
+        return f"{seconds:.0f} s"
+    if seconds < 7200.0:
+        return f"{seconds / 60.0:.1f} min"
+    return f"{seconds / 3600.0:.1f} h"
+
+
 def _link(base: str, record: Record) -> str:
     return inspector_link(base, record["session"], record["task"], record.get("trial", 0))
 
@@ -121,7 +129,7 @@ def _cards(overall: Mapping[str, Any], records: Sequence[Record]) -> str:
          f"{overall['passed_checks']} / {overall['total_checks']} checks"),
         ("Total Failed", _pct(overall["total_failed_task_rate"]),
          f"{overall['total_failed_task_count']} / {tasks} tasks pass no check"),
-        ("Simulated time", f"{sum(sim) / 3600:.2f} h",
+        ("Simulated time", _duration(sum(sim)),
          f"mean {_num(overall.get('mean_sim_time_s'))} s per task"),
     ]
     return '<section class="cards">' + "".join(
