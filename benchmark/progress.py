@@ -107,7 +107,8 @@ class ProgressBar(ProgressSink):
             self._lines.advance(line, passed)
             return
         if passed is False:
-            self._progress.console.print(escape(line), style="red", highlight=False)
+            self._progress.console.print(escape(line), style="red", highlight=False,
+                                         no_wrap=True, overflow="ellipsis")
         task = self._progress.tasks[self._task]
         total = task.total if task.total is not None else 0
         self._progress.update(self._task, advance=1, total=max(total, self._done),

@@ -17,7 +17,13 @@ import pytest
 from benchmark.metrics import summarize
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.report import write_report
-from benchmark.report_html import DEFAULT_INSPECTOR_URL, inspector_link
+from benchmark.failed_checks import failed_leaves
+from benchmark.report_html import (
+    DEFAULT_INSPECTOR_URL,
+    check_inspector_url,
+    inspector_link,
+    render_html,
+)
 from benchmark.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.scripted_llm import call, scripted_llm
@@ -198,3 +204,50 @@ def test_chromium_renders_the_charts(results: Path, tmp_path: Path) -> None:
                     html_path.as_uri()], capture_output=True, timeout=120, check=True)
     data = shot.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 60_000  # a blank page is ~10 kB
+
+
+def test_inspector_links_and_url_checks() -> None:
+    assert inspector_link("http://h:1/", "a b/c", "t 1", 2) == \
+        "http://h:1/inspect/a%20b%2Fc/t%201?trial=2"
+    assert check_inspector_url(" https://x.test/base/ ") == "https://x.test/base"
+    for bad in ("ftp://x", "127.0.0.1:8765", "", "http://"):
+        with pytest.raises(ValueError, match="--inspector-url must be an http"):
+            check_inspector_url(bad)
+
+
+def test_failed_leaves_split_subject_measure_and_threshold() -> None:
+    record = {"checks": [
+        {"path": "checks[0]", "endpoint": "drone_has_visited_position", "passed": False,
+         "parameters": {"drone_id": "d1", "x": 121.0, "y": 186.0, "z": 19.0,
+                        "tolerance": 3.0}, "expect": True, "result": False,
+         "value": 391.70612, "error": None},
+        {"path": "checks[1]", "endpoint": "drone_on_ground", "passed": False,
+         "parameters": {"drone_id": "d2", "tolerance": 1.5}, "expect": False,
+         "result": True, "value": 0.0, "error": None},
+        {"path": "checks[2]", "endpoint": "two_drones_distance", "passed": False,
+         "parameters": {"drone_1_id": "d1", "drone_2_id": "d3", "max_distance": 45.0,
+                        "min_distance": None}, "expect": True, "result": None,
+         "value": None, "error": "drone d3 has no track"},
+        {"path": "checks[3]", "endpoint": "drone_altitude", "passed": True,
+         "parameters": {}, "expect": True, "result": True, "value": 1, "error": None},
+    ]}
+    visited, ground, distance = failed_leaves(record)
+    assert (visited.subject, visited.measured, visited.threshold) == (
+        "d1, at (121, 186, 19)", "391.706", "tolerance 3")
+    assert visited.condition.startswith("the flown trajectory passed within tolerance")
+    assert ground.note == "the task wanted this check false; it was true"
+    assert (distance.subject, distance.measured, distance.threshold) == (
+        "d1, d3", "none", "max_distance 45")
+    assert distance.note == "error: drone d3 has no track"
+
+
+def test_names_from_the_records_are_escaped(tmp_path: Path) -> None:
+    record = {"key": "k", "session": "<script>alert(1)</script>", "family": "f<b>",
+              "level": "easy", "task": 't"1', "template": "x", "category": "c",
+              "agent": "a", "trial": 0, "passed": False, "checks": [], "checks_total": 0,
+              "checks_passed": 0, "finish": "task_error", "error": "<img src=x>",
+              "tool_calls": 0, "sim_time_s": 0.0, "wall_time_s": 0.0, "tokens": None}
+    page = render_html([record])
+    tags = set(_parse(page).tags)
+    assert "script" not in tags and "img" not in tags and "b" not in tags
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page and "&lt;img src=x&gt;" in page
