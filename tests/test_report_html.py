@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
+from benchmark.failed_checks import failed_leaves
 from benchmark.metrics import summarize
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.report import write_report
-from benchmark.failed_checks import failed_leaves
 from benchmark.report_html import (
     DEFAULT_INSPECTOR_URL,
     check_inspector_url,
