@@ -155,6 +155,8 @@ def _run(args: argparse.Namespace) -> int:
     print(metrics_table(summarize(records)))
     print(f"\n{outcome.records_written} new task records in {outcome.wall_s:.1f} s; "
           f"{len(records)} in {plan.results_path}; report: {md}, {js}, {html}")
+    print(f"charts: open {html} in a browser; `mavswarm replay {out}` serves the task pages "
+          "it links to")
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
@@ -170,6 +172,8 @@ def _report(args: argparse.Namespace) -> int:
                                 results_dir=args.results[0].parent)
     print(metrics_table(summarize(records)))
     print(f"\nreport: {md}, {js}, {html}")
+    print(f"charts: open {html} in a browser; `mavswarm replay {args.results[0].parent}` "
+          "serves the task pages it links to")
     return 0
 
 

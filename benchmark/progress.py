@@ -77,7 +77,7 @@ class ProgressBar(ProgressSink):
 
     def __enter__(self) -> ProgressBar:
         if self.live:
-            console = Console(file=self.stream)
+            console = Console(file=self.stream, force_terminal=True)
             columns = [TextColumn(f"[bold]{escape(self.unit)}[/]"), BarColumn(),
                        MofNCompleteColumn()]
             if self._show_rate:

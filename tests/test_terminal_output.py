@@ -35,8 +35,11 @@ def _in_terminal(*args: str, timeout_s: float = 180.0) -> tuple[int, str]:
     status and everything it wrote."""
     master, slave = pty.openpty()
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    env = {name: value for name, value in os.environ.items()
+           if name not in ("COLUMNS", "LINES", "NO_COLOR", "FORCE_COLOR", "TTY_COMPATIBLE",
+                           "TTY_INTERACTIVE")}
     proc = subprocess.Popen([*MAVSWARM, *args], cwd=ROOT, stdin=subprocess.DEVNULL,
-                            stdout=slave, stderr=slave)
+                            stdout=slave, stderr=slave, env={**env, "TERM": "xterm-256color"})
     os.close(slave)
     chunks: list[bytes] = []
     deadline = time.monotonic() + timeout_s
