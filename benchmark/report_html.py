@@ -229,7 +229,8 @@ def _times(records: Sequence[Record], base: str) -> str:
                     PASS_COLOR if r["passed"] else FAIL_COLOR,
                     f"{_task_title(r)}; {r['sim_time_s']:g} s simulated, "
                     f"{r['wall_time_s']:g} s wall", _link(base, r))
-              for r in records if isinstance(r.get("sim_time_s"), int | float)
+              for r in records if r["finish"] != "task_error"  # never ran
+              and isinstance(r.get("sim_time_s"), int | float)
               and isinstance(r.get("wall_time_s"), int | float)]
     if not points:
         return ""
@@ -359,10 +360,11 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
             parts.append(_panel("Pass rate by agent",
                                 hbars(bars, label="pass rate by agent", width=1000),
                                 ident="agents"))
+        endpoint_bars = _endpoint_bars(summary["by_endpoint"])
         parts.append(_panel("Check pass rate by endpoint",
-                            hbars(_endpoint_bars(summary["by_endpoint"]),
-                                  label="check pass rate by endpoint", label_width=290,
-                                  width=1000),
+                            hbars(endpoint_bars, label="check pass rate by endpoint",
+                                  label_width=290, width=1000) if endpoint_bars else
+                            '<p class="note">No check was evaluated.</p>',
                             "Leaf checks of each endpoint that passed, weakest first.",
                             ident="endpoints"))
         parts.append(_tokens(rows, base))
