@@ -1,12 +1,13 @@
 """`mavswarm bench`: generate, run, report and import the benchmark.
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
-                          [--backend local|ray [--ray-address ADDR]]
+                          [--backend local|ray [--ray-address ADDR]] [--verbose]
   mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
                      [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--clock lockstep|stepped] [--out DIR]
-                     [--backend local|ray [--ray-address ADDR]]
-  mavswarm bench report RESULTS [RESULTS ...] [--out DIR]
+                     [--backend local|ray [--ray-address ADDR]] [--inspector-url URL]
+                     [--verbose]
+  mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
 
@@ -19,9 +20,10 @@ from pathlib import Path
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
+from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
 
-__all__ = ["add_parsers", "run_bench"]
+__all__ = ["add_parsers", "add_verbose_argument", "run_bench"]
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -40,6 +42,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="skip proving each task with the oracle (faster; not for release)")
     gen.add_argument("--workers", type=int, default=1, help="sessions generated at once")
     _add_backend_arguments(gen)
+    add_verbose_argument(gen)
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
     run.add_argument("--agent", choices=AGENTS, default="oracle")
@@ -66,15 +69,33 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="results folder (default runs/bench-<agent>-<suite>); re-running "
                           "with the same folder resumes")
     _add_backend_arguments(run)
+    _add_inspector_argument(run)
+    add_verbose_argument(run)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
     report.add_argument("--out", type=Path, default=None,
-                        help="folder for report.md and report.json (default: beside the first)")
+                        help="folder for report.md, report.json and report.html (default: "
+                             "beside the first)")
+    _add_inspector_argument(report)
 
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+
+
+def add_verbose_argument(parser: argparse.ArgumentParser) -> None:
+    """`--verbose`: MAVSDK's own log lines and the packages' info logging on the terminal
+    (off by default; the `mavswarm` command applies it)."""
+    parser.add_argument("--verbose", action="store_true",
+                        help="also print MAVSDK's own log lines and info logging")
+
+
+def _add_inspector_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--inspector-url", default=DEFAULT_INSPECTOR_URL, metavar="URL",
+                        help="where report.html links each task: the inspector that "
+                             "`mavswarm replay RESULTS_DIR` serves (default "
+                             f"{DEFAULT_INSPECTOR_URL})")
 
 
 def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
@@ -88,10 +109,15 @@ def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _generate(args: argparse.Namespace) -> int:
+    from benchmark.progress import ProgressBar
     from benchmark.suite import generate_suite
-    written = generate_suite(args.out, only=args.only, verify=not args.no_verify,
-                             workers=args.workers, backend=args.backend,
-                             ray_address=args.ray_address)
+    with ProgressBar("sessions", pass_rate=False) as bar:
+        written = generate_suite(args.out, only=args.only, verify=not args.no_verify,
+                                 workers=args.workers, backend=args.backend,
+                                 ray_address=args.ray_address, mavsdk_log=args.verbose,
+                                 on_start=bar.begin,
+                                 on_generated=lambda path: bar.advance(f"generated {path}"),
+                                 progress=bar.say)
     print(f"wrote {len(written)} session files to {args.out}")
     return 0
 
@@ -99,7 +125,9 @@ def _generate(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
     from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.progress import ProgressBar
     from benchmark.report import metrics_table, write_report
+    from benchmark.report_html import check_inspector_url
     from benchmark.results import read_records
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
@@ -107,23 +135,28 @@ def _run(args: argparse.Namespace) -> int:
         paths, limit = suite_paths(args.suite)
         label = args.suite
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
+    check_inspector_url(args.inspector_url)
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
-                   clock=args.clock, backend=args.backend, ray_address=args.ray_address)
+                   clock=args.clock, backend=args.backend, ray_address=args.ray_address,
+                   mavsdk_log=args.verbose)
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
-    outcome = run_benchmark(plan)
+    with ProgressBar("tasks") as bar:
+        outcome = run_benchmark(plan, sink=bar)
     records = read_records(plan.results_path)
-    md, js = write_report(records, out)
+    md, js, html = write_report(records, out, inspector_url=args.inspector_url)
     print()
     print(metrics_table(summarize(records)))
     print(f"\n{outcome.records_written} new task records in {outcome.wall_s:.1f} s; "
-          f"{len(records)} in {plan.results_path}; report: {md}, {js}")
+          f"{len(records)} in {plan.results_path}; report: {md}, {js}, {html}")
+    print(f"charts: open {html} in a browser; `mavswarm replay {out}` serves the task pages "
+          "it links to")
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
@@ -135,9 +168,12 @@ def _report(args: argparse.Namespace) -> int:
     from benchmark.results import read_all_records
     records = read_all_records(args.results)
     out = args.out or args.results[0].parent
-    md, js = write_report(records, out)
+    md, js, html = write_report(records, out, inspector_url=args.inspector_url,
+                                results_dir=args.results[0].parent)
     print(metrics_table(summarize(records)))
-    print(f"\nreport: {md}, {js}")
+    print(f"\nreport: {md}, {js}, {html}")
+    print(f"charts: open {html} in a browser; `mavswarm replay {args.results[0].parent}` "
+          "serves the task pages it links to")
     return 0
 
 

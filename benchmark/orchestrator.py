@@ -24,9 +24,11 @@ from benchmark.agents import NoopAgent
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
+from benchmark.progress import LineProgress, ProgressSink, task_line
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
+from mavlink_gateway import set_mavsdk_log
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark", "run_unit"]
 
@@ -52,6 +54,7 @@ class RunPlan:
     price_out_usd_per_mtok: float = 0.0  # MAVSWARM_PRICE_IN / MAVSWARM_PRICE_OUT)
     backend: str = "local"  # where units run: "local" (processes here) or "ray" (a cluster)
     ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
+    mavsdk_log: bool = False  # print MAVSDK's own log lines in the units (mavsdk_log.py)
 
     @property
     def results_path(self) -> Path:
@@ -96,6 +99,7 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     """Run one session file for one trial, skipping the tasks `unit.done` holds; each message
     is sent as it happens. Every backend calls this, on whatever machine runs the unit."""
     path, trial, done = unit.path, unit.trial, unit.done
+    set_mavsdk_log(plan.mavsdk_log)
     try:
         loaded, notes = load_any_session(path)
         session = _limited(loaded, plan.task_limit)
@@ -152,18 +156,24 @@ def _done_by_unit(records: Sequence[Mapping[str, Any]]
     return done
 
 
-def _session_id(path: Path) -> str | None:
-    """A session file's id without validating it (an unreadable file: None; the worker
-    reports the problem)."""
+def _session_head(path: Path) -> tuple[str | None, int]:
+    """A session file's id and number of tasks without validating it (an unreadable file:
+    None and 0; the worker reports the problem)."""
     try:
-        ident = json.loads(path.read_text(encoding="utf-8")).get("id")
-    except (OSError, ValueError, AttributeError):
-        return None
-    return ident if isinstance(ident, str) else None
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None, 0
+    if not isinstance(data, dict):
+        return None, 0
+    ident, tasks = data.get("id"), data.get("tasks")
+    return (ident if isinstance(ident, str) else None,
+            len(tasks) if isinstance(tasks, list) else 0)
 
 
-def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> RunOutcome:
-    """Run the plan; returns what was written. Results go to plan.results_path."""
+def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
+                  sink: ProgressSink | None = None) -> RunOutcome:
+    """Run the plan; returns what was written. Results go to plan.results_path. Each task's
+    line and every note or error go to `sink` (default: lines handed to `progress`)."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
@@ -171,17 +181,25 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:
         raise ValueError("workers and trials must be >= 1")
+    out = sink if sink is not None else LineProgress(progress)
     backend = make_backend(plan.backend, workers=plan.workers, ray_address=plan.ray_address)
     started = time.perf_counter()
     outcome = RunOutcome()
     log = ResultsLog(plan.results_path)
     keys = log.open()
     if log.repaired:
-        progress(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
-    done = _done_by_unit(read_records(plan.results_path)) if keys else {}
-    ids = {p: _session_id(p) for p in plan.sessions} if done else {}
-    units = [Unit(str(p), trial, done.get((ids.get(p) or "", trial), {}))
+        out.say(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
+    previous = read_records(plan.results_path) if keys else []
+    done = _done_by_unit(previous)
+    heads = {p: _session_head(p) for p in plan.sessions}
+    units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))
              for trial in range(plan.trials) for p in plan.sessions]
+    limit = plan.task_limit
+    planned = plan.trials * sum(heads[p][1] if limit is None else min(heads[p][1], limit)
+                                for p in plan.sessions)
+    passed = {r["key"]: r.get("passed") is True for r in previous}
+    already = [key for unit in units for key in unit.done]
+    out.begin(planned, len(already), sum(passed.get(key, False) for key in already))
 
     def handle(message: tuple[str, Any]) -> None:
         kind, payload = message
@@ -190,12 +208,12 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
                 return
             log.append(payload)
             outcome.records_written += 1
-            progress(_progress_line(payload, outcome.records_written))
+            out.advance(task_line(payload, outcome.records_written), payload["passed"])
         elif kind == "error":
             outcome.errors.append(payload)
-            progress(f"error: {payload}")
+            out.say(f"error: {payload}")
         elif kind == "note":
-            progress(f"note: {payload}")
+            out.say(f"note: {payload}")
 
     try:
         backend.run(functools.partial(run_unit, plan), units, handle)
@@ -203,12 +221,3 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         log.close()
     outcome.wall_s = time.perf_counter() - started
     return outcome
-
-
-def _progress_line(record: Mapping[str, Any], n: int) -> str:
-    verdict = "PASS" if record["passed"] else "fail"
-    extra = f"  [{record['finish']}]" if record["finish"] != "finished" else ""
-    return (f"{n:5d} {record['session']:<38} {record['task']:<4} {record['template']:<28} "
-            f"{verdict} {record['checks_passed']:>2}/{record['checks_total']:<2} checks "
-            f"{record['tool_calls']:>3} calls {record['sim_time_s']:>7.0f} s sim "
-            f"{record['wall_time_s']:>6.2f} s{extra}")

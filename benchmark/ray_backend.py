@@ -29,7 +29,7 @@ import os
 import queue
 import threading
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -166,7 +166,8 @@ def _generated(key: tuple[str, str, int], verify: bool) -> dict[str, Any]:
 
 
 def generate_on_ray(keys: Sequence[tuple[str, str, int]], out_dir: Path, *, verify: bool,
-                    workers: int, address: str = "") -> list[Path]:
+                    workers: int, address: str = "",
+                    on_generated: Callable[[Path], None] | None = None) -> list[Path]:
     """Generate sessions (family, level, index) as Ray tasks, at most `workers` at once; the
     driver writes each file into out_dir as it arrives. A session depends on its seed alone,
     so Ray may simply run a task again whose worker died."""
@@ -186,7 +187,10 @@ def generate_on_ray(keys: Sequence[tuple[str, str, int]], out_dir: Path, *, veri
                 index = running.pop(ref)
                 path = write_session(ray.get(ref), out_dir)
                 written[index] = path
-                print(f"generated {path}", flush=True)
+                if on_generated is None:
+                    print(f"generated {path}", flush=True)
+                else:
+                    on_generated(path)
         return [written[k] for k in sorted(written)]
     finally:
         if connected:

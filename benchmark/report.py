@@ -1,4 +1,4 @@
-"""Markdown and JSON reports of a benchmark summary (see :func:`benchmark.metrics.summarize`).
+"""Markdown, JSON and HTML reports of a benchmark summary (see :func:`benchmark.metrics.summarize`).
 
 Rates are shown as percentages with one decimal. Tables accept a summary straight from
 :func:`~benchmark.metrics.summarize` or one read back from ``report.json``: rows are put in
@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmark.metrics import finish_sort_key, level_sort_key, summarize
+from benchmark.report_html import DEFAULT_INSPECTOR_URL, render_html
 
 __all__ = ["metrics_table", "render_markdown", "write_report"]
 
@@ -196,16 +197,26 @@ def write_report(
     out_dir: str | Path,
     *,
     title: str = "mavswarm benchmark",
-) -> tuple[Path, Path]:
-    """Write ``report.md`` and ``report.json`` (sorted keys, 2-space indent) into ``out_dir``.
+    inspector_url: str = DEFAULT_INSPECTOR_URL,
+    results_dir: str | Path | None = None,
+) -> tuple[Path, Path, Path]:
+    """Write ``report.md``, ``report.json`` (sorted keys, 2-space indent) and ``report.html``
+    (:mod:`benchmark.report_html`, its task links into the inspector at `inspector_url`, which
+    ``mavswarm replay RESULTS_DIR`` serves for `results_dir`, default `out_dir`) into
+    ``out_dir``.
 
-    Returns the paths of the Markdown and JSON files.
+    Returns the paths of the Markdown, JSON and HTML files.
     """
+    rows = list(records)
     directory = Path(out_dir)
+    summary = summarize(rows)
+    page = render_html(rows, title=title, inspector_url=inspector_url,
+                       results_dir=str(results_dir if results_dir is not None else directory))
     directory.mkdir(parents=True, exist_ok=True)
-    summary = summarize(records)
     md_path = directory / "report.md"
     json_path = directory / "report.json"
+    html_path = directory / "report.html"
     _write_text(json_path, json.dumps(summary, sort_keys=True, indent=2) + "\n")
     _write_text(md_path, render_markdown(summary, title=title))
-    return md_path, json_path
+    _write_text(html_path, page)
+    return md_path, json_path, html_path

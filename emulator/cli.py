@@ -43,6 +43,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     up.add_argument("--truth-out", type=Path,
                     help="ground-truth record written on exit (default: runs/<time>.truth.npz)")
     up.add_argument("--no-truth", action="store_true", help="do not write the ground truth")
+    up.add_argument("--verbose", action="store_true", help="also print info logging")
 
 
 def run_up(args: argparse.Namespace) -> int:

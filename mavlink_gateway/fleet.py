@@ -11,6 +11,7 @@ from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
 from mavlink_gateway.drone_link import LANDED_STATE_HZ, DroneLink, DroneProfile
 from mavlink_gateway.interfaces import GeoFrame
+from mavlink_gateway.mavsdk_log import set_mavsdk_log
 
 __all__ = ["FleetConnection", "FleetError"]
 
@@ -43,6 +44,7 @@ class FleetConnection:
         loop.set_default_executor(
             concurrent.futures.ThreadPoolExecutor(max(32, 2 * len(profiles) + 8))
         )
+        set_mavsdk_log()  # MAVSDK's own log lines: dropped unless this process asked for them
         mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         try:
             await mavsdk.add_any_connection(url)

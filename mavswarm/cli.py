@@ -5,6 +5,9 @@
   mavswarm mcp     one session's agent tools over MCP (benchmark.server)
   mavswarm bench   generate, run, report and import the benchmark (benchmark)
 
+`--verbose` (up, serve, bench run, bench generate) prints MAVSDK's own log lines and the
+packages' info logging; without it MAVSDK is silent.
+
 Each package adds its subcommands with `add_parsers(subparsers)` and names the function that
 runs them (`run`, taking the parsed options, returning the exit status); this module only
 assembles them.
@@ -13,12 +16,14 @@ assembles them.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from collections.abc import Sequence
 
 from benchmark import cli as bench_cli
 from benchmark.server import serve
 from emulator import cli as emulator_cli
+from mavlink_gateway import set_mavsdk_log
 
 __all__ = ["build_parser", "main"]
 
@@ -37,6 +42,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `mavswarm` with `argv` (default: the process's arguments); the exit status."""
     args = build_parser().parse_args(argv)
+    verbose = bool(getattr(args, "verbose", False))
+    set_mavsdk_log(verbose)  # MAVSDK's own log lines: off unless --verbose
+    if verbose:
+        logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     return int(args.run(args))
 
 

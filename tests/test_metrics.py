@@ -267,7 +267,7 @@ def test_markdown_contains_headline_numbers_and_tables() -> None:
 def test_write_report_files(tmp_path: Path) -> None:
     levels = ["extreme", "easy", "hard"]
     records = [_rec(f"k{i}", level=level) for i, level in enumerate(levels)]
-    md_path, json_path = write_report(records, tmp_path / "out")
+    md_path, json_path, html_path = write_report(records, tmp_path / "out")
     assert md_path == tmp_path / "out" / "report.md"
     assert json_path == tmp_path / "out" / "report.json"
     text = json_path.read_text(encoding="utf-8")
@@ -278,4 +278,6 @@ def test_write_report_files(tmp_path: Path) -> None:
     rendered = render_markdown(loaded)
     assert md_path.read_text(encoding="utf-8") == rendered
     assert rendered.index("| easy |") < rendered.index("| hard |") < rendered.index("| extreme |")
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["report.json", "report.md"]
+    assert html_path == tmp_path / "out" / "report.html"
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "report.html", "report.json", "report.md"]

@@ -259,6 +259,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rest.add_argument("--open", dest="open_access", action="store_true",
                       help="requests without a key act as the agent of the one session "
                            "served, as MultiUAV-Plat clients expect (default: 401)")
+    rest.add_argument("--verbose", action="store_true",
+                      help="also print MAVSDK's own log lines and info logging")
     rest.set_defaults(run=run_serve)
     mcp = sub.add_parser("mcp", help="serve one session's agent tools over MCP",
                          description="Serve one session's agent tools over MCP.")
