@@ -4,6 +4,7 @@
   mavswarm serve   live benchmark sessions over the REST API (benchmark.server)
   mavswarm mcp     one session's agent tools over MCP (benchmark.server)
   mavswarm bench   generate, run, report and import the benchmark (benchmark)
+  mavswarm mqtt-bridge  any MAVLink fleet on an MQTT broker (mqtt_bus)
 
 Each package adds its subcommands with `add_parsers(subparsers)` and names the function that
 runs them (`run`, taking the parsed options, returning the exit status); this module only
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from benchmark import cli as bench_cli
 from benchmark.server import serve
 from emulator import cli as emulator_cli
+from mqtt_bus import cli as mqtt_cli
 
 __all__ = ["build_parser", "main"]
 
@@ -29,8 +31,10 @@ def build_parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     emulator_cli.add_parsers(sub)
+    mqtt_cli.extend_up(sub.choices["up"])
     serve.add_parsers(sub)
     bench_cli.add_parsers(sub)
+    mqtt_cli.add_parsers(sub)
     return parser
 
 
