@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
 from benchmark.suite import SUITES, suite_paths
+from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 
 __all__ = ["add_parsers", "run_bench"]
 
@@ -66,6 +68,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="results folder (default runs/bench-<agent>-<suite>); re-running "
                           "with the same folder resumes")
     _add_backend_arguments(run)
+    add_mqtt_arguments(run, session=False)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -107,6 +110,7 @@ def _run(args: argparse.Namespace) -> int:
         paths, limit = suite_paths(args.suite)
         label = args.suite
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
+    url = mqtt_options(args)
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
@@ -117,8 +121,19 @@ def _run(args: argparse.Namespace) -> int:
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
-    outcome = run_benchmark(plan)
-    records = read_records(plan.results_path)
+    if url is None:
+        outcome = run_benchmark(plan)
+        records = read_records(plan.results_path)
+    else:
+        from mqtt_bus import BenchBus
+        run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
+        with BenchBus(url, run_name) as bus:
+            print(f"MQTT: {url.redacted()} topics {bus.topics.base}/tasks, .../progress")
+            outcome = run_benchmark(plan, on_record=bus.record)
+            records = read_records(plan.results_path)
+            bus.finish(len(records))
+        stats = bus.stats
+        print(f"MQTT: {stats.published} messages published, {stats.dropped} dropped")
     md, js = write_report(records, out)
     print()
     print(metrics_table(summarize(records)))

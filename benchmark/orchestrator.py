@@ -162,8 +162,10 @@ def _session_id(path: Path) -> str | None:
     return ident if isinstance(ident, str) else None
 
 
-def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> RunOutcome:
-    """Run the plan; returns what was written. Results go to plan.results_path."""
+def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print,
+                  on_record: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
+    """Run the plan; returns what was written. Results go to plan.results_path;
+    `on_record` hears each record right after it was appended (e.g. the MQTT bus)."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
@@ -190,6 +192,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
                 return
             log.append(payload)
             outcome.records_written += 1
+            if on_record is not None:
+                on_record(payload)
             progress(_progress_line(payload, outcome.records_written))
         elif kind == "error":
             outcome.errors.append(payload)
