@@ -6,7 +6,6 @@ results.jsonl holds in order, `serve --mqtt` refuses commands while a task runs 
 from __future__ import annotations
 
 import asyncio
-import json
 import os
 import signal
 import subprocess
