@@ -55,6 +55,9 @@ def parse_broker_url(text: str) -> BrokerUrl:
         raise ValueError(f"MQTT URL {text!r} names no host")
     if port == 0:
         raise ValueError(f"MQTT URL {text!r}: port 0 is not a broker port")
+    if "#" in text:
+        raise ValueError(f"MQTT URL {text!r}: '#' is a topic wildcard and cannot be an MQTT "
+                         "topic level of the prefix")
     tls = parts.scheme == "mqtts"
     prefix = urllib.parse.unquote(parts.path.strip("/")) or DEFAULT_PREFIX
     check_prefix(prefix)
