@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import logging
 import random
+import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -152,13 +153,18 @@ class BusConnection:
     # ------------------------------------------------------------ the task
     def _client_for(self) -> aiomqtt.Client:
         url = self.url
-        return aiomqtt.Client(
+        client = aiomqtt.Client(
             url.host, url.port, username=url.username, password=url.password,
             identifier=self.client_id, protocol=aiomqtt.ProtocolVersion.V5,
             will=aiomqtt.Will(self.status_topic, self._offline, qos=1, retain=True),
             keepalive=self._keepalive_s, tls_context=url.tls_context(), timeout=10.0,
             max_queued_outgoing_messages=PAHO_QUEUE,
+            # small messages (a command's reply) go out at once, not after Nagle's delay
+            socket_options=[(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)],
         )
+        # a batch of QoS 0 messages is awaited together; that many pending is expected
+        client.pending_calls_threshold = BATCH + 16
+        return client
 
     async def _run(self) -> None:
         delay = self._backoff_s[0]

@@ -48,7 +48,7 @@ class Broker:
             f"user {getpass.getuser()}\n"
             f"listener {self.port} 127.0.0.1\nallow_anonymous false\n"
             f"password_file {passwd}\nacl_file {ACL}\npersistence false\n"
-            "max_queued_messages 100000\n")
+            "max_queued_messages 100000\nset_tcp_nodelay true\n")
         self.log = folder / "mosquitto.log"
 
     def url(self, user: str = "mavswarm", prefix: str = "mavswarm") -> str:
