@@ -28,7 +28,7 @@ __all__ = ["BusConnection", "BusStats"]
 
 log = logging.getLogger("mavswarm.mqtt")
 
-BATCH = 512
+BATCH = 64  # aiomqtt scans its pending calls on every publish: keep batches small
 PAHO_QUEUE = 20_000  # paho's own outgoing queue, bounded too (a full one counts as a drop)
 
 
@@ -119,6 +119,7 @@ class BusConnection:
         self._task = None
 
     async def wait_connected(self, timeout_s: float) -> bool:
+        """True once connected, subscribed and announced online (False after timeout_s)."""
         with contextlib.suppress(TimeoutError):
             async with asyncio.timeout(timeout_s):
                 await self.connected_event.wait()
@@ -162,8 +163,8 @@ class BusConnection:
             # small messages (a command's reply) go out at once, not after Nagle's delay
             socket_options=[(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)],
         )
-        # a batch of QoS 0 messages is awaited together; that many pending is expected
-        client.pending_calls_threshold = BATCH + 16
+        # batches, and the retained messages after a reconnect, are awaited together
+        client.pending_calls_threshold = 1_000_000
         return client
 
     async def _run(self) -> None:
@@ -174,7 +175,6 @@ class BusConnection:
                     self._client = client
                     self.stats.connects += 1
                     self.stats.connected = True
-                    self.connected_event.set()
                     delay = self._backoff_s[0]
                     await self._session(client)
             except aiomqtt.MqttError as error:
@@ -206,14 +206,20 @@ class BusConnection:
         for topic in self._subscriptions:  # before "online": online means listening
             await client.subscribe(topic, qos=1)
         await client.publish(self.status_topic, self._online, qos=1, retain=True)
-        for message in list(self._retained.values()):
-            await client.publish(message.topic, message.payload, qos=message.qos, retain=True)
-            self.stats.published += 1
-        while self._resend:
-            message = self._resend[0]
-            await client.publish(message.topic, message.payload, qos=message.qos)
-            self._resend.pop(0)
-            self.stats.published += 1
+        self.connected_event.set()  # subscribed and online
+        # side by side, not one acknowledgement after another (paho keeps their order)
+        retained = list(self._retained.values())
+        await asyncio.gather(*(client.publish(m.topic, m.payload, qos=m.qos, retain=True)
+                               for m in retained))
+        self.stats.published += len(retained)
+        resend, self._resend = self._resend, []
+        try:
+            await asyncio.gather(*(client.publish(m.topic, m.payload, qos=m.qos)
+                                   for m in resend))
+        except aiomqtt.MqttError:
+            self._resend = resend + self._resend
+            raise
+        self.stats.published += len(resend)
         # The reader also notices a lost connection while nothing is being sent.
         tasks = [asyncio.create_task(self._read(client), name=f"mqtt-read-{self.client_id}"),
                  asyncio.create_task(self._write(client), name=f"mqtt-write-{self.client_id}")]

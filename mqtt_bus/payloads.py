@@ -4,7 +4,6 @@ reports) becomes an `osd` payload and a `state` payload; events are built here t
 from __future__ import annotations
 
 import json
-import math
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -28,7 +27,7 @@ _LINK_FAILSAFE = ("Offboard setpoints lost: holding", "Geofence reached: holding
 
 
 def _r(value: float, digits: int = 2) -> float | None:
-    return round(value, digits) if math.isfinite(value) else None
+    return round(value, digits) if value - value == 0.0 else None  # None: NaN or infinite
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import signal
 import time
 
 import aiomqtt
@@ -104,8 +105,8 @@ async def test_bad_requests_get_clear_errors_and_change_nothing(
     swarm = await swarm_factory(2)
     url = parse_broker_url(broker.url())
     async with listener(broker, "operator", f"{BASE}/+/services_reply") as op, \
-            swarm_session_bus(url, "s1", swarm, osd_hz=2):
-        await asyncio.sleep(0.5)
+            swarm_session_bus(url, "s1", swarm, osd_hz=2) as bus:
+        assert await bus.connection.wait_connected(10.0)
         before = swarm.fleet.dyn.position_m.copy()
         client = op.client
 
@@ -152,6 +153,7 @@ async def test_only_operators_can_command(broker: Broker, swarm_factory: SwarmFa
     async with swarm_session_bus(url, "s1", swarm, osd_hz=2) as bus, \
             listener(broker, "operator", f"{BASE}/+/services_reply") as op, \
             listener(broker, "agent", f"{BASE}/#") as agent:
+        assert await bus.connection.wait_connected(10.0)
         request_body = json.dumps({"id": "agent-1", "tool": "take_off",
                                    "args": {"altitude_m": 5}})
         await agent.client.publish(f"{BASE}/d1/services", request_body, qos=1)
@@ -169,6 +171,7 @@ async def test_a_broker_restart_mid_flight_leaves_the_swarm_flying_and_topics_re
     swarm = await swarm_factory(2, speed=5.0)
     url = parse_broker_url(broker.url())
     async with swarm_session_bus(url, "s1", swarm, osd_hz=10) as bus:
+        assert await bus.connection.wait_connected(10.0)
         async with listener(broker, "operator", f"{BASE}/+/services_reply") as op:
             assert (await request(op, BASE, "d1", "take_off", altitude_m=10.0))["status"] \
                 == "ok"
@@ -198,3 +201,25 @@ async def test_a_broker_restart_mid_flight_leaves_the_swarm_flying_and_topics_re
         stats = bus.connection.stats
         assert stats.connects == 2 and stats.dropped_offline > 0
         assert "1 reconnects" in bus.report()
+
+
+async def test_a_stalled_broker_does_not_slow_the_swarm(broker: Broker,
+                                                        swarm_factory: SwarmFactory) -> None:
+    swarm = await swarm_factory(3, speed=5.0)
+    url = parse_broker_url(broker.url())
+    assert broker.proc is not None
+    async with swarm_session_bus(url, "s1", swarm, osd_hz=50, queue_size=200) as bus:
+        assert await bus.connection.wait_connected(10.0)
+        await asyncio.sleep(0.5)
+        broker.proc.send_signal(signal.SIGSTOP)  # alive, connected, answering nothing
+        try:
+            sim_before, wall_before = swarm.fleet.now_s, time.monotonic()
+            await asyncio.sleep(3.0)
+            rtf = (swarm.fleet.now_s - sim_before) / (time.monotonic() - wall_before) / 5.0
+            ticks = bus.telemetry.ticks
+        finally:
+            broker.proc.send_signal(signal.SIGCONT)
+        assert rtf > 0.8  # the clock kept pace with nobody reading the bus
+        assert ticks > 50  # and the bus kept sampling at 50 Hz
+        async with listener(broker, "agent", f"{BASE}/+/osd") as agent:
+            await agent.wait_for(lambda g: g.payload["time_s"] > sim_before + 5.0)

@@ -96,6 +96,10 @@ async def test_serve_refuses_commands_while_a_task_runs_and_accepts_them_in_free
         text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:
         read_until(proc, "REST API on", timeout_s=120)
+        async with listener(broker, "operator", "mavswarm/+/status") as ready:
+            for name in ("tasked", "free"):  # online: listening for commands
+                await ready.wait_for(lambda g, n=name: g.payload["session"] == n
+                                     and g.payload["status"] == "online")
         async with listener(broker, "operator", "mavswarm/+/+/services_reply") as op:
             drone = world["drones"][0]["id"]
             refused = await request(op, "mavswarm/tasked", drone, "take_off",
