@@ -80,8 +80,7 @@ async def _child_main(conn, n: int, url: str | None, osd_hz: float) -> None:  # 
         async with contextlib.AsyncExitStack() as stack:
             if url is not None:
                 bus = await stack.enter_async_context(
-                    swarm_session_bus(parse_broker_url(url), "bench", swarm, osd_hz=osd_hz,
-                                      queue_size=50_000))
+                    swarm_session_bus(parse_broker_url(url), "bench", swarm, osd_hz=osd_hz))
                 await bus.connection.wait_connected(10.0)
             loop.add_reader(conn.fileno(), answer)
             conn.send("ready")
@@ -109,24 +108,33 @@ class Child:
             self.proc.kill()
 
 
+def _subscriber(port: int, arrivals: list[tuple[float, bytes]]):  # type: ignore[no-untyped-def]
+    """A paho client on its own thread that stamps every osd on arrival (lighter than an
+    asyncio client, so the stamps measure the bus rather than this process)."""
+    import paho.mqtt.client as paho
+
+    client = paho.Client(paho.CallbackAPIVersion.VERSION2, client_id="bench-osd")
+    client.username_pw_set("operator", PASSWORDS["operator"])
+
+    def on_message(_c, _u, m) -> None:  # type: ignore[no-untyped-def]
+        arrivals.append((time.monotonic(), m.payload))
+
+    def on_connect(c, _u, _f, _rc, _p) -> None:  # type: ignore[no-untyped-def]
+        c.subscribe("mavswarm/bench/+/osd")
+
+    client.on_message = on_message
+    client.on_connect = on_connect
+    client.connect("127.0.0.1", port)
+    client.socket().setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    client.loop_start()
+    return client
+
+
 async def _measure(child: Child, window_s: float, broker: Broker | None, n: int
                    ) -> dict[str, object]:
-    import aiomqtt
     arrivals: list[tuple[float, bytes]] = []
     result: dict[str, object] = {}
-
-    async def collect(client: aiomqtt.Client) -> None:
-        async for m in client.messages:
-            arrivals.append((time.monotonic(), m.payload))  # type: ignore[arg-type]
-
-    client = None
-    task = None
-    if broker is not None:
-        client = aiomqtt.Client("127.0.0.1", broker.port, username="operator",
-                                password=PASSWORDS["operator"], max_queued_incoming_messages=0)
-        await client.__aenter__()
-        await client.subscribe("mavswarm/bench/+/osd")
-        task = asyncio.create_task(collect(client))
+    sub = _subscriber(broker.port, arrivals) if broker is not None else None
     await asyncio.sleep(3.0)  # warm up
     a = child.ask("snap")
     mark = len(arrivals)
@@ -136,9 +144,13 @@ async def _measure(child: Child, window_s: float, broker: Broker | None, n: int
     result["cpu_pct"] = 100.0 * (b["cpu"] - a["cpu"]) / wall
     result["rtf"] = (b["sim"] - a["sim"]) / wall
     result["slipped_s"] = b["slipped"] - a["slipped"]
-    if client is not None and task is not None:
-        window = [(t, p) for t, p in arrivals[mark:] if a["wall"] <= t <= b["wall"]]
-        result["osd_per_s_per_drone"] = len(window) / wall / n
+    if sub is not None and broker is not None:
+        await asyncio.sleep(1.0)  # what is still on its way
+        sub.loop_stop()
+        sub.disconnect()
+        window = [(t, p) for t, p in arrivals[mark:]
+                  if a["sim"] <= json.loads(p)["time_s"] <= b["sim"]]
+        result["osd_per_s_per_drone"] = len(window) / (b["sim"] - a["sim"]) / n
         stamps = child.ask("stamps")
         latencies = []
         for t, payload in window:
@@ -146,10 +158,7 @@ async def _measure(child: Child, window_s: float, broker: Broker | None, n: int
             if step_wall is not None:
                 latencies.append((t - step_wall) * 1000.0)
         result["latency_ms"] = latencies
-        task.cancel()
-        assert broker is not None
         result["rtt_ms"] = await _commands(broker.port)
-        await client.__aexit__(None, None, None)
     return result
 
 

@@ -29,7 +29,7 @@ __all__ = ["BusConnection", "BusStats"]
 log = logging.getLogger("mavswarm.mqtt")
 
 BATCH = 64  # aiomqtt scans its pending calls on every publish: keep batches small
-PAHO_QUEUE = 20_000  # paho's own outgoing queue, bounded too (a full one counts as a drop)
+PAHO_QUEUE = 5_000  # paho's own outgoing queue, bounded too (a full one counts as a drop)
 
 
 @dataclass
@@ -247,15 +247,36 @@ class BusConnection:
                 log.exception("MQTT message on %s not handled", message.topic.value)
 
     async def _write(self, client: aiomqtt.Client) -> None:
+        # QoS 0 telemetry is handed to the client's paho core without awaiting each write:
+        # aiomqtt's publish awaits every message's write and scans its pending calls each
+        # time, which at 2,500 messages a second costs more than the swarm's physics. paho's
+        # own queue is bounded (PAHO_QUEUE): beyond it a message is dropped and counted.
+        core = getattr(client, "_client", None)
         while True:
             batch = [await self._queue.get()]
             while len(batch) < BATCH and not self._queue.empty():
                 batch.append(self._queue.get_nowait())
+            acknowledged = []
+            for message in batch:
+                if message.qos == 0 and core is not None:
+                    rc = core.publish(message.topic, message.payload, 0, message.retain).rc
+                    if rc == paho.MQTT_ERR_SUCCESS:
+                        self.stats.published += 1
+                    elif rc == paho.MQTT_ERR_QUEUE_SIZE:
+                        self.stats.dropped_full += 1
+                    else:
+                        self.stats.dropped_offline += 1
+                        raise aiomqtt.MqttCodeError(rc, "Could not publish message")
+                else:
+                    acknowledged.append(message)
+            if not acknowledged:
+                await asyncio.sleep(0)  # let the loop write what paho queued
+                continue
             results = await asyncio.gather(
                 *(client.publish(m.topic, m.payload, qos=m.qos, retain=m.retain)
-                  for m in batch), return_exceptions=True)
+                  for m in acknowledged), return_exceptions=True)
             failure: BaseException | None = None
-            for message, result in zip(batch, results, strict=True):
+            for message, result in zip(acknowledged, results, strict=True):
                 if result is None:
                     self.stats.published += 1
                 elif isinstance(result, aiomqtt.MqttCodeError) and \

@@ -143,16 +143,12 @@ async def test_the_bridge_puts_a_swarm_of_another_process_on_the_bus(broker: Bro
     assert "messages published" in out
 
 
-@pytest.mark.parametrize("url, needle", [
-    ("http://host/x", "scheme must be mqtt:// or mqtts://"),
-    ("mqtt://:1883", "names no host"),
-    ("mqtt://host:99999", "out of range"),
-    ("mqtt://host/a+b", "cannot be an MQTT topic level"),
-])
-def test_bad_mqtt_urls_exit_2_with_the_reason(url: str, needle: str) -> None:
-    out = subprocess.run([*MAVSWARM, "up", "--drones", "1", "--no-truth", "--mqtt", url],
-                         capture_output=True, text=True, timeout=60)
-    assert out.returncode == 2 and needle in out.stderr, out.stderr
+def test_a_bad_mqtt_url_exits_2_with_the_reason() -> None:
+    # every URL rule is in test_mqtt_units; here, that `up` reports one and starts nothing
+    out = subprocess.run([*MAVSWARM, "up", "--drones", "1", "--no-truth", "--mqtt",
+                          "mqtt://host/a+b"], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 2, out.stderr
+    assert "cannot be an MQTT topic level" in out.stderr and "vehicles" not in out.stdout
 
 
 def test_bench_run_with_a_bad_mqtt_url_runs_nothing(tmp_path: Path) -> None:

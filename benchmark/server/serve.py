@@ -29,6 +29,7 @@ import uvicorn
 
 from benchmark.importer import load_any_session
 from benchmark.server import Hub, Role, create_app
+from benchmark.server.hub import LiveSession
 from benchmark.server.session_runner import (
     FREE_FLIGHT,
     SessionRunner,
@@ -41,6 +42,7 @@ from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 from mqtt_bus.swarm_bus import gateway_session_bus
+from mqtt_bus.topics import check_segment
 from mqtt_bus.url import BrokerUrl
 
 __all__ = [
@@ -212,12 +214,25 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
     out = out or sys.stdout
     async with live_hub(session_paths) as hub, contextlib.AsyncExitStack() as buses:
         if mqtt is not None:
-            for live in list(hub.sessions.values()):
+            async def on_bus(live: LiveSession) -> None:
                 bus = await buses.enter_async_context(gateway_session_bus(
                     mqtt, live.id, live.swarm, live.gateway, osd_hz=mqtt_osd_hz,
                     refusal=functools.partial(mqtt_refusal, hub, live.id)))
                 print(f"MQTT: {mqtt.redacted()} topics {bus.topics.base}/...", file=out,
                       flush=True)
+
+            for live in list(hub.sessions.values()):
+                await on_bus(live)
+            start = hub.starter
+            if start is not None:  # sessions an operator loads later go on the bus too
+                async def start_on_bus(session: Session) -> LiveSession:
+                    assert start is not None
+                    check_segment(session.id, "session id")  # before its swarm starts
+                    live = await start(session)
+                    await on_bus(live)
+                    return live
+
+                hub.starter = start_on_bus
         if not parsed:
             parsed = generated_keys(list(hub.sessions))
             print("generated API keys (send one in the X-API-Key header):", file=out)
