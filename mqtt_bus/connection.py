@@ -87,6 +87,8 @@ class BusConnection:
         self._backoff_s = backoff_s
         self._task: asyncio.Task[None] | None = None
         self._client: aiomqtt.Client | None = None
+        self._inflight = 0  # messages the writer took off the queue and awaits
+        self._warned = False
         self.stats = BusStats()
         self.connected_event = asyncio.Event()
 
@@ -106,7 +108,8 @@ class BusConnection:
         if self.stats.connected:
             with contextlib.suppress(TimeoutError):
                 async with asyncio.timeout(flush_timeout_s):
-                    while not self._queue.empty() and self.stats.connected:
+                    while (self._inflight or not self._queue.empty()) \
+                            and self.stats.connected:
                         await asyncio.sleep(0.01)
             client = self._client
             if client is not None and self.stats.connected:
@@ -175,12 +178,14 @@ class BusConnection:
                     self._client = client
                     self.stats.connects += 1
                     self.stats.connected = True
+                    self._warned = False
                     delay = self._backoff_s[0]
                     await self._session(client)
-            except aiomqtt.MqttError as error:
+            except (aiomqtt.MqttError, OSError) as error:
                 self.stats.last_error = str(error)
-                if self.stats.connected or self.stats.connects == 0:
+                if self.stats.connected or not self._warned:  # once per outage
                     log.warning("MQTT broker %s: %s; reconnecting", self.url.redacted(), error)
+                    self._warned = True
             finally:
                 self._client = None
                 self.stats.connected = False
@@ -272,9 +277,13 @@ class BusConnection:
             if not acknowledged:
                 await asyncio.sleep(0)  # let the loop write what paho queued
                 continue
-            results = await asyncio.gather(
-                *(client.publish(m.topic, m.payload, qos=m.qos, retain=m.retain)
-                  for m in acknowledged), return_exceptions=True)
+            self._inflight = len(acknowledged)
+            try:
+                results = await asyncio.gather(
+                    *(client.publish(m.topic, m.payload, qos=m.qos, retain=m.retain)
+                      for m in acknowledged), return_exceptions=True)
+            finally:
+                self._inflight = 0
             failure: BaseException | None = None
             for message, result in zip(acknowledged, results, strict=True):
                 if result is None:

@@ -27,7 +27,8 @@ def mosquitto_binary() -> str | None:
 
 
 class Broker:
-    """`start()`, `stop()` (SIGTERM) and `kill()`; `start()` again reuses the port."""
+    """`start()`, `stop()` (SIGTERM) and `kill()` (SIGKILL); `start()` again reuses the
+    port."""
 
     def __init__(self, folder: Path) -> None:
         binary = mosquitto_binary()
@@ -68,6 +69,14 @@ class Broker:
             except OSError:
                 time.sleep(0.05)
         raise RuntimeError(f"mosquitto did not listen on {self.port}")
+
+    def kill(self) -> None:
+        """SIGKILL: the broker dies without a word (and, without persistence, forgets every
+        retained message)."""
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(timeout=10)
+        self.proc = None
 
     def stop(self) -> None:
         if self.proc is not None and self.proc.poll() is None:

@@ -166,7 +166,7 @@ async def test_only_operators_can_command(broker: Broker, swarm_factory: SwarmFa
         assert swarm.fleet.airborne[0]
 
 
-async def test_a_broker_restart_mid_flight_leaves_the_swarm_flying_and_topics_restored(
+async def test_a_broker_killed_mid_flight_leaves_the_swarm_flying_and_topics_restored(
         broker: Broker, swarm_factory: SwarmFactory) -> None:
     swarm = await swarm_factory(2, speed=5.0)
     url = parse_broker_url(broker.url())
@@ -181,7 +181,7 @@ async def test_a_broker_restart_mid_flight_leaves_the_swarm_flying_and_topics_re
             await asyncio.sleep(0.5)
         sim_before, wall_before = swarm.fleet.now_s, time.monotonic()
         y_before = swarm.fleet.dyn.position_m[0][1]
-        broker.stop()
+        broker.kill()
         await asyncio.sleep(2.0)
         assert bus.connection.stats.connected is False
         rtf = (swarm.fleet.now_s - sim_before) / (time.monotonic() - wall_before) / 5.0
