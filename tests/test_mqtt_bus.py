@@ -56,7 +56,13 @@ async def test_telemetry_events_and_commands_match_the_ground_truth(
         sent = await request(op, BASE, "d1", "send_message", to_drone_id="d2", text="hello d2")
         assert sent["status"] == "ok", sent
         radio = await op.wait_for(lambda g: g.kind == "events" and g.payload["kind"] == "radio")
-        assert (await request(op, BASE, "d1", "land"))["status"] == "ok"
+        # a failsafe: a battery that drops to 4 % in the air lands d1 where it is (set
+        # directly, as a failing cell would: an operator reset would not strike)
+        swarm.fleet.bat.pct[0] = 4.0
+        failsafe = await op.wait_for(lambda g: g.kind == "events"
+                                     and g.payload["kind"] == "failsafe")
+        assert (failsafe.payload["reason"], failsafe.payload["action"]) == \
+            ("battery_emergency", "landing")
         await op.wait_for(lambda g: g.kind == "events" and g.payload.get("text")
                           == "Landing detected")
         await op.wait_for(lambda g: g.kind == "state" and g.payload["drone"] == "d1"
@@ -90,6 +96,8 @@ async def test_telemetry_events_and_commands_match_the_ground_truth(
                              "kind": "radio", "to": "d2", "broadcast": False,
                              "text": "hello d2"}
     (stop,) = truth.events("d1", kinds="obstacle_stop")
+    (truth_failsafe,) = truth.events("d1", kinds="failsafe")
+    assert truth_failsafe.data["reason"] == failsafe.payload["reason"]
     assert stop.data["obstacle"] == "o3"
     # every payload has its schema; the agent saw telemetry but no command or reply
     for got in op.got:
