@@ -12,6 +12,7 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
+from mqtt_bus.session_bus import SessionBus
 from mqtt_bus.topics import check_segment
 from mqtt_bus.url import BrokerUrl, parse_broker_url
 
@@ -78,7 +79,7 @@ def _ok(name: str) -> bool:
 
 @contextlib.asynccontextmanager
 async def _up_bus(url: BrokerUrl, base: str, osd_hz: float, commands: bool, swarm: Any,
-                  network: int | None) -> AsyncIterator[str]:
+                  network: int | None) -> AsyncIterator[SessionBus]:
     from mqtt_bus.swarm_bus import swarm_session_bus
     session = base if network is None else f"{base}-net{network}"
     async with swarm_session_bus(url, session, swarm, osd_hz=osd_hz,
@@ -87,7 +88,7 @@ async def _up_bus(url: BrokerUrl, base: str, osd_hz: float, commands: bool, swar
               f"(osd {osd_hz:g} Hz{', commands on services' if commands else ''})",
               flush=True)
         try:
-            yield bus.report()
+            yield bus
         finally:
             print(bus.report(), flush=True)
 
