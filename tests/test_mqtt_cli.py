@@ -81,6 +81,17 @@ async def test_a_benchmark_run_publishes_every_record_in_order(broker: Broker,
     assert final["tasks"] == len(records) == final["records_in_results"] == 3
     assert final["passed"] == sum(r["passed"] for r in records)
     assert "MQTT: " in stdout.decode() and " 0 dropped" in stdout.decode()
+    # re-running the finished run resumes nothing and publishes the file again, in order
+    async with listener(broker, "operator", "mavswarm/bench/run-a/tasks") as again:
+        proc = await asyncio.create_subprocess_exec(
+            *MAVSWARM, "bench", "run", "--agent", "oracle", "--sessions", str(session),
+            "--out", str(out), "--mqtt", broker.url(),
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT)
+        stdout, _ = await asyncio.wait_for(proc.communicate(), 300)
+        assert proc.returncode == 0, stdout.decode()[-3000:]
+        await again.wait_for(lambda g: g.payload["key"] == records[-1]["key"])
+    assert [g.payload["key"] for g in again.got] == [r["key"] for r in records]
+    assert read_records(out / "results.jsonl") == records
 
 
 async def test_serve_refuses_commands_while_a_task_runs_and_accepts_them_in_free_flight(
