@@ -10,6 +10,7 @@ from mqtt_bus.commands import CommandService, CommandUnavailable, drone_tool_nam
 from mqtt_bus.connection import BusConnection, BusStats
 from mqtt_bus.payloads import DroneSample
 from mqtt_bus.session_bus import SessionBus
+from mqtt_bus.swarm_bus import gateway_session_bus, swarm_session_bus
 from mqtt_bus.telemetry import FleetView, TelemetryPublisher
 from mqtt_bus.topics import DEFAULT_PREFIX, BenchTopics, SessionTopics
 from mqtt_bus.url import BrokerUrl, parse_broker_url
@@ -29,6 +30,8 @@ __all__ = [
     "SessionTopics",
     "TelemetryPublisher",
     "drone_tool_names",
+    "gateway_session_bus",
     "parse_broker_url",
     "public_record",
+    "swarm_session_bus",
 ]
