@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
+from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 
 __all__ = ["add_parsers", "add_verbose_argument", "run_bench"]
 
@@ -71,6 +73,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     _add_backend_arguments(run)
     _add_inspector_argument(run)
     add_verbose_argument(run)
+    add_mqtt_arguments(run, session=False)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -136,6 +139,7 @@ def _run(args: argparse.Namespace) -> int:
         label = args.suite
     out = args.out or Path(f"runs/bench-{args.agent}-{label}")
     check_inspector_url(args.inspector_url)
+    url = mqtt_options(args)
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
@@ -147,9 +151,28 @@ def _run(args: argparse.Namespace) -> int:
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
-    with ProgressBar("tasks") as bar:
-        outcome = run_benchmark(plan, sink=bar)
-    records = read_records(plan.results_path)
+    if url is None:
+        with ProgressBar("tasks") as bar:
+            outcome = run_benchmark(plan, sink=bar)
+        records = read_records(plan.results_path)
+    else:
+        from mqtt_bus import BenchBus
+        run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
+        from benchmark.results import ResultsError
+        try:  # a resumed run first publishes what the file already holds
+            earlier = read_records(plan.results_path) if plan.results_path.exists() else []
+        except ResultsError:  # a torn last line: run_benchmark repairs it; nothing replayed
+            earlier = []
+        with BenchBus(url, run_name) as bus:
+            print(f"MQTT: {url.redacted()} topics {bus.topics.base}/tasks, .../progress")
+            for record in earlier:
+                bus.record(record)
+            with ProgressBar("tasks") as bar:
+                outcome = run_benchmark(plan, sink=bar, on_record=bus.record)
+            records = read_records(plan.results_path)
+            bus.finish(len(records))
+        stats = bus.stats
+        print(f"MQTT: {stats.published} messages published, {stats.dropped} dropped")
     md, js, html = write_report(records, out, inspector_url=args.inspector_url)
     print()
     print(metrics_table(summarize(records)))

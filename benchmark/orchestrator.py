@@ -171,9 +171,11 @@ def _session_head(path: Path) -> tuple[str | None, int]:
 
 
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
-                  sink: ProgressSink | None = None) -> RunOutcome:
+                  sink: ProgressSink | None = None,
+                  on_record: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
     """Run the plan; returns what was written. Results go to plan.results_path. Each task's
-    line and every note or error go to `sink` (default: lines handed to `progress`)."""
+    line and every note or error go to `sink` (default: lines handed to `progress`);
+    `on_record` hears each record right after it was appended (e.g. the MQTT bus)."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
@@ -208,6 +210,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                 return
             log.append(payload)
             outcome.records_written += 1
+            if on_record is not None:
+                on_record(payload)
             out.advance(task_line(payload, outcome.records_written), payload["passed"])
         elif kind == "error":
             outcome.errors.append(payload)

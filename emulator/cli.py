@@ -10,8 +10,10 @@ import multiprocessing
 import signal
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 from emulator.clock import ClockConfig
 from emulator.reference_mapping import notes_to_show
@@ -47,7 +49,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 
 def run_up(args: argparse.Namespace) -> int:
-    """Run the `up` command; errors in the arguments or the session are printed, exit 2."""
+    """Run the `up` command; errors in the arguments or the session are printed, exit 2.
+    `args.attach` (optional, an `Attach`) runs beside each swarm."""
     try:
         return _up(args)
     except (ScenarioError, ValueError, OSError) as error:
@@ -71,8 +74,14 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
+Attach = Callable[[Swarm, "int | None"], contextlib.AbstractAsyncContextManager[Any]]
+"""What a composing command adds beside a running swarm (e.g. the MQTT bus): called with the
+swarm and its network index (None for a single network), entered while the swarm runs."""
+
+
 async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None) -> None:
+                 truth_out: Path | None, attach: Attach | None = None,
+                 network: int | None = None) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -84,7 +93,8 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
               f"physics {clock.physics_hz:g} Hz", flush=True)
         for url in swarm.connection_urls():
             print(f"{label}  {url}", flush=True)
-        await stop.wait()
+        async with attach(swarm, network) if attach else contextlib.nullcontext():
+            await stop.wait()
         stats = swarm.stats()
         print(f"{label}stopping after {stats.sim_time_s:.1f} s simulated in "
               f"{stats.wall_time_s:.1f} s (real-time factor {stats.real_time_factor:.2f}); "
@@ -95,10 +105,10 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
 
 
 def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None) -> None:
+                 truth_out: Path | None, attach: Attach | None, network: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(scenario, clock, ports, label, truth_out))
+        asyncio.run(_serve(scenario, clock, ports, label, truth_out, attach, network))
 
 
 def _truth_path(args: argparse.Namespace) -> Path | None:
@@ -124,7 +134,8 @@ def _up(args: argparse.Namespace) -> int:
     ports = PortPlan(bind_host=args.bind_host, bind_port=bind, api_port=args.api_port,
                      gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(scenario, clock, ports, "", args.truth_out))
+        asyncio.run(_serve(scenario, clock, ports, "", args.truth_out,
+                           getattr(args, "attach", None)))
     return 0
 
 
@@ -142,7 +153,8 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
                          gcs_port=args.gcs_port + j if args.gcs_port else 0)
         truth = args.truth_out.with_suffix(f".net{j}.npz") if args.truth_out else None
         proc = multiprocessing.Process(
-            target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth),
+            target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth,
+                                       getattr(args, "attach", None), j),
             name=f"mavswarm-net{j}",
         )
         proc.start()

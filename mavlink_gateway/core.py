@@ -63,6 +63,10 @@ class GatewayCore:
         self.services = services
         self._busy: dict[str, str] = {}
 
+    def busy_with(self, drone: str) -> str | None:
+        """The primitive running for `drone` now (None: none)."""
+        return self._busy.get(drone)
+
     # --------------------------------------------------------------- lookup
     def _link(self, drone: object) -> DroneLink:
         link = self.drones.get(drone) if isinstance(drone, str) else None

@@ -4,6 +4,7 @@
   mavswarm serve   live benchmark sessions over the REST API (benchmark.server)
   mavswarm mcp     one session's agent tools over MCP (benchmark.server)
   mavswarm bench   generate, run, report and import the benchmark (benchmark)
+  mavswarm mqtt-bridge  any MAVLink fleet on an MQTT broker (mqtt_bus)
 
 `--verbose` (up, serve, bench run, bench generate) prints MAVSDK's own log lines and the
 packages' info logging; without it MAVSDK is silent.
@@ -24,6 +25,7 @@ from benchmark import cli as bench_cli
 from benchmark.server import serve
 from emulator import cli as emulator_cli
 from mavlink_gateway import set_mavsdk_log
+from mqtt_bus import cli as mqtt_cli
 
 __all__ = ["build_parser", "main"]
 
@@ -34,8 +36,10 @@ def build_parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     emulator_cli.add_parsers(sub)
+    mqtt_cli.extend_up(sub.choices["up"])
     serve.add_parsers(sub)
     bench_cli.add_parsers(sub)
+    mqtt_cli.add_parsers(sub)
     return parser
 
 

@@ -2,7 +2,9 @@
 
 Each package may import only the packages listed for it: the emulator and the MAVLink gateway
 nothing of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
-the benchmark all of them, and the composition root (`mavswarm`) whatever it assembles. Every
+the MQTT bus the emulator and the agent side (it reads what vehicles report, never ground
+truth), the benchmark all of them, and the composition root (`mavswarm`) whatever it
+assembles. Every
 import counts wherever it stands: at the top, inside a function, under `TYPE_CHECKING`, or as
 a string passed to `__import__` / `importlib.import_module`.
 """
@@ -21,9 +23,11 @@ LAYERS: dict[str, frozenset[str]] = {
     "mavlink_gateway": frozenset(),
     "agent_contract": frozenset({"mavlink_gateway"}),
     "llm_tools": frozenset({"mavlink_gateway", "agent_contract"}),
-    "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
+    "mqtt_bus": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
+    "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                            "mqtt_bus"}),
     "mavswarm": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                           "benchmark"}),
+                           "mqtt_bus", "benchmark"}),
 }
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import functools
 import secrets
 import sys
 from collections.abc import AsyncIterator, Callable, Sequence
@@ -28,6 +29,7 @@ import uvicorn
 
 from benchmark.importer import load_any_session
 from benchmark.server import Hub, Role, create_app
+from benchmark.server.hub import LiveSession
 from benchmark.server.session_runner import (
     FREE_FLIGHT,
     SessionRunner,
@@ -38,6 +40,10 @@ from benchmark.session_file import Session
 from emulator.reference_mapping import notes_to_show
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import default_registry
+from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
+from mqtt_bus.swarm_bus import gateway_session_bus
+from mqtt_bus.topics import check_segment
+from mqtt_bus.url import BrokerUrl
 
 __all__ = [
     "FREE_FLIGHT",
@@ -178,20 +184,55 @@ async def serve_asgi(app: Any, *, host: str, port: int,
         raise
 
 
+def mqtt_refusal(hub: Hub, session_id: str) -> str | None:
+    """Why an operator's command over MQTT may not run in a served session now: while a
+    benchmark task runs for the session's agent it would change that task's result."""
+    live = hub.sessions.get(session_id)
+    if live is None:
+        return f"session {session_id} is no longer served"
+    if live.task.checks is None:
+        return None
+    return (f"session {session_id} is running benchmark task {live.task.id} for its agent; "
+            "commands over MQTT are refused while a task runs (they would change its "
+            "result): serve a world without tasks to command its drones")
+
+
 async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT_HOST,
                      port: int = DEFAULT_REST_PORT, keys: Sequence[str | ApiKey] = (),
                      on_ready: Callable[[str], None] | None = None,
-                     out: TextIO | None = None, open_access: bool = False) -> None:
+                     out: TextIO | None = None, open_access: bool = False,
+                     mqtt: BrokerUrl | None = None, mqtt_osd_hz: float = 2.0) -> None:
     """Serve the REST API over live sessions from `session_paths` until cancelled. `keys` are
     `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
     `out` (stdout by default) with the URL. `open_access` lets requests without a key act as
-    the agent of the one session served (MultiUAV-Plat clients send none)."""
+    the agent of the one session served (MultiUAV-Plat clients send none). `mqtt`: every
+    session started here also goes on that broker (README "MQTT bus")."""
     if open_access and len(session_paths) != 1:
         raise ValueError("--open serves exactly one session: a request without a key must "
                          "know whose agent it is")
     parsed = [k if isinstance(k, ApiKey) else parse_api_key(k) for k in keys]
     out = out or sys.stdout
-    async with live_hub(session_paths) as hub:
+    async with live_hub(session_paths) as hub, contextlib.AsyncExitStack() as buses:
+        if mqtt is not None:
+            async def on_bus(live: LiveSession) -> None:
+                bus = await buses.enter_async_context(gateway_session_bus(
+                    mqtt, live.id, live.swarm, live.gateway, osd_hz=mqtt_osd_hz,
+                    refusal=functools.partial(mqtt_refusal, hub, live.id)))
+                print(f"MQTT: {mqtt.redacted()} topics {bus.topics.base}/...", file=out,
+                      flush=True)
+
+            for live in list(hub.sessions.values()):
+                await on_bus(live)
+            start = hub.starter
+            if start is not None:  # sessions an operator loads later go on the bus too
+                async def start_on_bus(session: Session) -> LiveSession:
+                    assert start is not None
+                    check_segment(session.id, "session id")  # before its swarm starts
+                    live = await start(session)
+                    await on_bus(live)
+                    return live
+
+                hub.starter = start_on_bus
         if not parsed:
             parsed = generated_keys(list(hub.sessions))
             print("generated API keys (send one in the X-API-Key header):", file=out)
@@ -261,6 +302,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                            "served, as MultiUAV-Plat clients expect (default: 401)")
     rest.add_argument("--verbose", action="store_true",
                       help="also print MAVSDK's own log lines and info logging")
+    add_mqtt_arguments(rest, session=False)
     rest.set_defaults(run=run_serve)
     mcp = sub.add_parser("mcp", help="serve one session's agent tools over MCP",
                          description="Serve one session's agent tools over MCP.")
@@ -285,9 +327,10 @@ def _guarded(run: Callable[[], None]) -> int:
 
 def run_serve(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm serve` until interrupted; bad input is printed, exit 2."""
-    return _guarded(lambda: asyncio.run(serve_rest(_sessions(args), host=args.host,
-                                                   port=args.port, keys=args.keys,
-                                                   open_access=args.open_access)))
+    return _guarded(lambda: asyncio.run(serve_rest(
+        _sessions(args), host=args.host, port=args.port, keys=args.keys,
+        open_access=args.open_access, mqtt=mqtt_options(args),
+        mqtt_osd_hz=args.mqtt_osd_hz)))
 
 
 def run_mcp(args: argparse.Namespace) -> int:

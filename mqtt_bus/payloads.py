@@ -1,0 +1,131 @@
+"""What the bus publishes, as plain JSON-ready data: a drone's sample (what its own telemetry
+reports) becomes an `osd` payload and a `state` payload; events are built here too."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = [
+    "DroneSample",
+    "encode",
+    "event_payload",
+    "osd_payload",
+    "photo_event",
+    "radio_event",
+    "state_payload",
+    "status_payload",
+    "statustext_event",
+]
+
+_OBSTACLE = re.compile(r"^Obstacle (?P<obstacle>.+) ahead: holding$")
+_FAILSAFE = re.compile(r"^(?P<level>Critical|Emergency) battery (?P<pct>[\d.]+)%: "
+                       r"(?P<action>returning home|landing)$")
+_LINK_FAILSAFE = ("Offboard setpoints lost: holding", "Geofence reached: holding")
+
+
+def _r(value: float, digits: int = 2) -> float | None:
+    return round(value, digits) if value - value == 0.0 else None  # None: NaN or infinite
+
+
+@dataclass(frozen=True, slots=True)
+class DroneSample:
+    """One drone as its own telemetry reports it at simulated time `time_s` (local ENU metres
+    from the session origin's ground, WGS84, compass heading)."""
+
+    drone: str
+    time_s: float
+    position_m: tuple[float, float, float]
+    geodetic: tuple[float, float, float]  # latitude_deg, longitude_deg, altitude_amsl_m
+    velocity_m_s: tuple[float, float, float]  # east, north, up
+    heading_deg: float
+    battery_pct: float
+    mode: str
+    armed: bool
+    flight_state: str  # on_ground, taking_off, hovering, flying, landing
+    home_m: tuple[float, float, float] | None
+    home_geodetic: tuple[float, float, float] | None
+    primitive: str | None = None  # the gateway primitive running for it, if any
+
+
+def osd_payload(s: DroneSample) -> dict[str, Any]:
+    x, y, z = s.position_m
+    home_z = s.home_m[2] if s.home_m is not None else 0.0
+    lat, lon, alt = s.geodetic
+    ve, vn, vu = s.velocity_m_s
+    return {
+        "drone": s.drone, "time_s": round(s.time_s, 3),
+        "position": {"x_m": _r(x), "y_m": _r(y), "z_m": _r(z), "altitude_m": _r(z - home_z)},
+        "wgs84": {"latitude_deg": _r(lat, 8), "longitude_deg": _r(lon, 8),
+                  "altitude_amsl_m": _r(alt)},
+        "velocity": {"east_m_s": _r(ve), "north_m_s": _r(vn), "up_m_s": _r(vu)},
+        "heading_deg": _r(s.heading_deg, 1), "battery_pct": _r(s.battery_pct, 1),
+        "mode": s.mode, "armed": s.armed,
+    }
+
+
+def state_payload(s: DroneSample) -> dict[str, Any]:
+    """The change-driven part (compare with `time_s` left out)."""
+    home = None
+    if s.home_m is not None and s.home_geodetic is not None:
+        hx, hy, hz = s.home_m
+        lat, lon, alt = s.home_geodetic
+        home = {"x_m": _r(hx), "y_m": _r(hy), "z_m": _r(hz), "latitude_deg": _r(lat, 8),
+                "longitude_deg": _r(lon, 8), "altitude_amsl_m": _r(alt)}
+    return {"drone": s.drone, "time_s": round(s.time_s, 3), "flight_state": s.flight_state,
+            "mode": s.mode, "armed": s.armed, "home": home, "primitive": s.primitive}
+
+
+def event_payload(drone: str, time_s: float, kind: str, **data: Any) -> dict[str, Any]:
+    return {"drone": drone, "time_s": round(time_s, 3), "kind": kind, **data}
+
+
+def statustext_event(drone: str, time_s: float, severity: int | None, text: str
+                     ) -> dict[str, Any]:
+    """A STATUSTEXT, classified: obstacle holds and failsafes get their own kind (the text
+    is kept)."""
+    held = _OBSTACLE.match(text)
+    if held:
+        return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
+                             obstacle=held["obstacle"])
+    failsafe = _FAILSAFE.match(text)
+    if failsafe:
+        reason = f"battery_{failsafe['level'].lower()}"
+        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                             reason=reason, action=failsafe["action"].replace(" ", "_"))
+    if text in _LINK_FAILSAFE:
+        reason = "offboard_lost" if text.startswith("Offboard") else "geofence"
+        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                             reason=reason, action="hold")
+    return event_payload(drone, time_s, "statustext", severity=severity, text=text)
+
+
+def photo_event(drone: str, time_s: float, index: int, position_m: tuple[float, float, float],
+                targets: list[str] | None) -> dict[str, Any]:
+    """A photo and what it captured as far as the drone perceived it (None: unknown, e.g. a
+    vehicle behind a bridge)."""
+    x, y, z = position_m
+    return event_payload(drone, time_s, "photo", index=index,
+                         position={"x_m": _r(x), "y_m": _r(y), "z_m": _r(z)},
+                         targets=targets)
+
+
+def radio_event(sender: str, time_s: float, text: str, to: str | None) -> dict[str, Any]:
+    """A radio message a drone sent (`to` None: a broadcast)."""
+    return event_payload(sender, time_s, "radio", to=to, broadcast=to is None, text=text)
+
+
+def status_payload(online: bool, session: str, drones: list[str] | None = None,
+                   **extra: Any) -> dict[str, Any]:
+    payload: dict[str, Any] = {"status": "online" if online else "offline",
+                               "session": session}
+    if drones is not None:
+        payload["drones"] = drones
+    payload.update(extra)
+    return payload
+
+
+def encode(payload: dict[str, Any]) -> bytes:
+    return json.dumps(payload, separators=(",", ":"), allow_nan=False).encode()
