@@ -7,14 +7,18 @@ import contextlib
 import logging
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
 from emulator.lockstep import Watch, WatchBoard
+from emulator.mavlink.frames import FramePart, frame_batch
 from emulator.mavlink.streams import StreamSchedule
+from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
 from emulator.transport import UdpEndpoint
@@ -110,6 +114,12 @@ class Swarm:
             VehicleLink(ap, self._emit, self.streams, time.monotonic)
             for ap in self.fleet.autopilots
         ]
+        # Periodic telemetry is built for all due vehicles at once; the links' encoders
+        # share its sequence numbers, so every vehicle/component keeps one sequence.
+        self.telemetry = FleetTelemetry(self.fleet)
+        for link in self.links:
+            for component, sequences in self.telemetry.sequences.items():
+                link.encoder(component).share_sequence(sequences, link.k)
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
@@ -295,13 +305,12 @@ class Swarm:
 
     def _send_bursts(self) -> None:
         bursts, self._bursts = self._bursts, {}
+        ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
+        schedule = self.streams
+        on = np.isfinite(schedule.period_s[ks])
+        self._send_streams((spec.msg_id, ks[on[:, col]])
+                           for col, spec in enumerate(schedule.streams))
         for k, count in bursts.items():
-            for msg_id in self.streams.enabled(k):
-                try:
-                    self.links[k].send_stream(msg_id)
-                except Exception:  # the I/O edge: log, count, keep the swarm alive
-                    self._telemetry_errors += 1
-                    log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
             if count > 1:
                 self._bursts[k] = count - 1
 
@@ -376,21 +385,56 @@ class Swarm:
                 await asyncio.sleep(max(timeout, 0.0005))
 
     def _send_telemetry(self, wall: float) -> None:
-        links = self.links
+        self._send_streams(self.streams.due(wall))
+
+    def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
+        """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together
+        and packed several frames to a datagram."""
         for endpoint in self.endpoints:
             endpoint.batching = True
         try:
-            for msg_id, ks in self.streams.due(wall):
-                for k in ks:
+            parts: list[FramePart] = []
+            order: list[np.ndarray] = []
+            for msg_id, ks in due:
+                if not len(ks):
+                    continue
+                if msg_id in BATCHED_STREAMS:
                     try:
-                        links[k].send_stream(msg_id)
-                    except Exception:  # the I/O edge: log, count, keep the swarm alive
+                        parts.append(self.telemetry.part(msg_id, ks))
+                        order.append(ks)
+                        continue
+                    except Exception:  # the I/O edge: log, count, send them one by one
                         self._telemetry_errors += 1
-                        log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
+                        log.exception("batched message %d failed", msg_id)
+                self._send_one_by_one(msg_id, ks)
+            if parts:
+                self._emit_parts(parts, order)
         finally:
             for endpoint in self.endpoints:
                 endpoint.batching = False
                 endpoint.flush()
+
+    def _emit_parts(self, parts: list[FramePart], order: list[np.ndarray]) -> None:
+        try:
+            frames = frame_batch(parts)
+        except Exception:  # the I/O edge: log, count, send them one by one
+            self._telemetry_errors += 1
+            log.exception("framing a telemetry batch failed")
+            for part, ks in zip(parts, order, strict=True):
+                self._send_one_by_one(part.layout.msg_id, ks)
+            return
+        data, emit, start = frames.data, self._emit, 0
+        for k, end in zip(np.concatenate(order).tolist(), frames.ends.tolist(), strict=True):
+            emit(k, data[start:end])
+            start = end
+
+    def _send_one_by_one(self, msg_id: int, ks: np.ndarray) -> None:
+        for k in ks.tolist():
+            try:
+                self.links[k].send_stream(msg_id)
+            except Exception:  # the I/O edge: log, count, keep the swarm alive
+                self._telemetry_errors += 1
+                log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
 
     def _release_waiters(self) -> None:
         now = self.fleet.now_s
