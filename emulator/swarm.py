@@ -25,7 +25,9 @@ from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
-LOOP_TICK_S = 0.005
+LOOP_TICK_S = 0.005  # the longest the loop sleeps (real time: unless nothing is due sooner)
+REALTIME_IDLE_S = 0.02  # real time: the longest sleep when no step or telemetry is due sooner
+TELEMETRY_TICK_S = 0.01  # due telemetry is gathered and sent in batches this often (100 Hz)
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
@@ -343,7 +345,7 @@ class Swarm:
 
     async def _run(self) -> None:
         fleet = self.fleet
-        next_link_tick = next_peer_tick = 0.0
+        next_link_tick = next_peer_tick = next_telemetry = 0.0
         while True:
             wall = time.monotonic()
             if self.clock.stepped:
@@ -358,7 +360,9 @@ class Swarm:
                     fleet.step()
                 self._release_waiters()
             wall = time.monotonic()
-            self._send_telemetry(wall)
+            if wall >= next_telemetry:
+                next_telemetry = max(next_telemetry + TELEMETRY_TICK_S, wall)
+                self._send_telemetry(wall)
             if self._bursts:
                 self._send_bursts()
             if wall >= next_link_tick:
@@ -374,7 +378,13 @@ class Swarm:
                 await asyncio.sleep(0)
                 continue
             self._wake.clear()
-            timeout = min(LOOP_TICK_S, max(0.0, self.streams.next_wakeup_s() - time.monotonic()))
+            wake_at = max(self.streams.next_wakeup_s(), next_telemetry)
+            if self._pacer is not None:  # real time: sleep until a step or telemetry is due
+                wake_at = min(wake_at, self._pacer.next_step_wall_s(fleet.step_count))
+                cap = LOOP_TICK_S if self._bursts else REALTIME_IDLE_S
+            else:
+                cap = LOOP_TICK_S
+            timeout = min(cap, max(0.0, wake_at - time.monotonic()))
             if self.clock.stepped:
                 # Not asyncio.wait_for: before Python 3.12 it swallows a cancellation that
                 # arrives as the event is set, and close() would then wait forever.

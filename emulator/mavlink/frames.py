@@ -173,12 +173,13 @@ def frame_batch(parts: Sequence[FramePart]) -> Frames:
     words = covered // 2
     n_words = int(words.max())
     w = np.ascontiguousarray(m[:, 1:1 + 2 * n_words]).view("<u2").T.copy()
-    history = np.empty((n_words, rows), dtype=np.uint16)
     crc = np.full(rows, 0xFFFF, dtype=np.uint16)
+    take = _T16.take
+    history = []
     for j in range(n_words):
-        np.take(_T16, crc ^ w[j], out=history[j])
-        crc = history[j]
-    state = history[words - 1, at]
+        crc = take(crc ^ w[j])
+        history.append(crc)
+    state = np.stack(history)[words - 1, at]
     odd = (covered & 1).astype(bool)
     last = m[at, 1 + 2 * words]
     state = np.where(odd, (state >> 8) ^ _T8[(state ^ last) & 0xFF], state)
