@@ -27,7 +27,9 @@ __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
 LOOP_TICK_S = 0.005  # the longest the loop sleeps (real time: unless nothing is due sooner)
 REALTIME_IDLE_S = 0.02  # real time: the longest sleep when no step or telemetry is due sooner
-TELEMETRY_TICK_S = 0.01  # due telemetry is gathered and sent in batches this often (100 Hz)
+# Due telemetry is gathered and sent in batches this often, or at the shortest stream period
+# when a client asked for a faster stream (streams are capped at 100 Hz).
+TELEMETRY_TICK_S = 0.02
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
@@ -361,7 +363,10 @@ class Swarm:
                 self._release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:
-                next_telemetry = max(next_telemetry + TELEMETRY_TICK_S, wall)
+                tick = min(TELEMETRY_TICK_S, self.streams.shortest_period_s())
+                next_telemetry += tick
+                if next_telemetry <= wall:  # late (or the first turn): keep the cadence from now
+                    next_telemetry = wall + tick
                 self._send_telemetry(wall)
             if self._bursts:
                 self._send_bursts()
