@@ -29,8 +29,8 @@ __all__ = ["BATCHED_STREAMS", "FleetTelemetry"]
 AUTOPILOT_COMPONENT_ID = 1
 _RAD_TO_DEG = 180.0 / math.pi
 _DEG_TO_RAD = math.pi / 180.0
-_PRESENT = msgs._SENSORS | msgs._PREARM_CHECK
-_BASE_MODE = msgs._MODE_FLAG_CUSTOM | msgs._MODE_FLAG_STABILIZE | msgs._MODE_FLAG_GUIDED
+_PRESENT = msgs.SENSORS | msgs.PREARM_CHECK
+_BASE_MODE = msgs.MODE_FLAG_CUSTOM | msgs.MODE_FLAG_STABILIZE | msgs.MODE_FLAG_GUIDED
 _CHARGE_STATE = np.array([1, 2, 3, 4], dtype=np.uint8)  # by battery level; charging: 7
 
 _LAYOUTS = {
@@ -95,7 +95,7 @@ class FleetTelemetry:
 
     def _geo(self, x: np.ndarray, y: np.ndarray, z: np.ndarray):
         origin = self.fleet.world.origin
-        east_per_rad, north_per_rad = origin._metres_per_rad
+        east_per_rad, north_per_rad = origin.metres_per_rad
         lat = origin.latitude_deg + (y / north_per_rad) * _RAD_TO_DEG
         lon = origin.longitude_deg + (x / east_per_rad) * _RAD_TO_DEG
         alt = origin.altitude_amsl_m + z
@@ -122,12 +122,12 @@ class FleetTelemetry:
         modes = [aps[k].mode for k in ks.tolist()]
         armed = f.armed[ks]
         base = np.where([m is not FlightMode.OFFBOARD for m in modes],
-                        _BASE_MODE | msgs._MODE_FLAG_AUTO, _BASE_MODE)
-        base = base | np.where(armed, msgs._MODE_FLAG_ARMED, 0)
+                        _BASE_MODE | msgs.MODE_FLAG_AUTO, _BASE_MODE)
+        base = base | np.where(armed, msgs.MODE_FLAG_ARMED, 0)
         level = f.bat.level[ks]
-        state = np.where(armed, msgs._STATE_ACTIVE, msgs._STATE_STANDBY)
-        state = np.where(level == BATTERY_CRITICAL, msgs._STATE_CRITICAL, state)
-        state = np.where(level == BATTERY_EMERGENCY, msgs._STATE_EMERGENCY, state)
+        state = np.where(armed, msgs.STATE_ACTIVE, msgs.STATE_STANDBY)
+        state = np.where(level == BATTERY_CRITICAL, msgs.STATE_CRITICAL, state)
+        state = np.where(level == BATTERY_EMERGENCY, msgs.STATE_EMERGENCY, state)
         custom = [m.custom_mode for m in modes]
         return (msgs.MAV_TYPE_QUADROTOR, msgs.MAV_AUTOPILOT_PX4, base, custom, state, 3)
 
@@ -137,7 +137,7 @@ class FleetTelemetry:
     def _sys_status(self, ks: np.ndarray) -> Sequence[object]:
         f = self.fleet
         health = np.where(f.bat.level[ks] < BATTERY_CRITICAL,
-                          msgs._SENSORS | msgs._PREARM_CHECK, msgs._SENSORS)
+                          msgs.SENSORS | msgs.PREARM_CHECK, msgs.SENSORS)
         return (_PRESENT, _PRESENT, health, 150, self._voltage_mv(ks), -1,
                 _trunc(f.bat.pct[ks]), 0, 0, 0, 0, 0, 0)
 
