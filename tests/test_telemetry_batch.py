@@ -5,18 +5,22 @@ and zero tails included, several message types and senders in one batch, sequenc
 wrapping); the fleet builders (random vehicle states against `emulator.mavlink.messages`
 packed by the vehicle's own encoder, sequences shared); and a running swarm seen by a raw
 pymavlink ground station (every frame valid, one unbroken sequence per vehicle/component
-across telemetry and replies).
+across telemetry and replies), also with one port per vehicle.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import itertools
 import math
+import random
+import socket
 
 import numpy as np
 import pytest
 
+from emulator.clock import ClockConfig
 from emulator.flight.autopilot_mission import MissionState
 from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY
 from emulator.flight.fleet import Fleet
@@ -27,6 +31,7 @@ from emulator.mavlink.streams import DEFAULT_STREAMS, StreamSchedule
 from emulator.mavlink.telemetry import _LAYOUTS, BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import default_scenario
+from emulator.swarm import PortPlan, Swarm
 from tests.mavlink_client import running_swarm
 
 LAYOUTS = sorted({id(v): v for v in _LAYOUTS.values()}.values(), key=lambda x: x.msg_id)
@@ -212,3 +217,57 @@ async def test_swarm_frames_are_valid_with_one_sequence_per_component() -> None:
         for system in (1, 2, 3):
             assert names <= types[system], f"{system}: missing {names - types[system]}"
         assert "PARAM_VALUE" in types[2]
+
+
+def _consecutive_udp_sockets(count: int) -> list[socket.socket]:
+    """`count` bound sockets on consecutive loopback ports (retrying taken ranges)."""
+    rng = random.Random()
+    for _ in range(50):
+        base = rng.randrange(20_000, 60_000)
+        socks: list[socket.socket] = []
+        try:
+            for i in range(count):
+                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                socks.append(s)
+                s.bind(("127.0.0.1", base + i))
+                s.setblocking(False)
+            return socks
+        except OSError:
+            for s in socks:
+                s.close()
+    raise RuntimeError("no free range of UDP ports")
+
+
+async def test_per_vehicle_ports_get_only_their_vehicles_batched_frames() -> None:
+    n = 3
+    receivers = _consecutive_udp_sockets(n)
+    try:
+        for _ in range(20):
+            base = random.randrange(20_000, 60_000)
+            ports = PortPlan(bind_host="127.0.0.1", bind_port=base, api_port=receivers[0]
+                             .getsockname()[1], gcs_port=0, per_vehicle=True)
+            swarm = Swarm(default_scenario(n), clock=ClockConfig(speed=5.0), ports=ports)
+            try:
+                await swarm.start()
+                break
+            except OSError:
+                continue
+        else:
+            pytest.fail("no free range of UDP ports for the swarm")
+        try:
+            await asyncio.sleep(1.5)
+        finally:
+            await swarm.close()
+        for k, sock in enumerate(receivers):
+            parser = mavlink.MAVLink(None)
+            got: list = []
+            with contextlib.suppress(BlockingIOError):
+                while True:
+                    got += parser.parse_buffer(sock.recv(65535)) or []
+            assert got, f"vehicle {k + 1}'s port received nothing"
+            assert {m.get_srcSystem() for m in got} == {k + 1}
+            assert all(m.get_msgId() >= 0 for m in got)
+            assert {"HEARTBEAT", "GLOBAL_POSITION_INT", "ATTITUDE"} <= {m.get_type() for m in got}
+    finally:
+        for sock in receivers:
+            sock.close()
