@@ -24,6 +24,7 @@ from emulator.clock import ClockConfig
 
 LOOPBACK = "127.0.0.1"
 _SPAWN = multiprocessing.get_context("spawn")
+NETWORK_MAX = 250  # vehicles per swarm (MAVLink network) in one emulator process
 
 
 def free_udp_port() -> int:
@@ -147,6 +148,10 @@ def _serve_commands(conn, snap, stop: asyncio.Event, extra=None) -> None:
 class Emulator(_Child):
     """`Swarm(default_scenario(n))` alone in a child process, sending to 127.0.0.1:api_port.
 
+    Above 250 vehicles the child runs swarms of 250 (one MAVLink network each, system ids
+    1-250) side by side in its one process and event loop; snap() then sums their counters
+    and reports the slowest one's simulated time.
+
     Shared-socket topology (one socket for all vehicles, bound to an OS-chosen port), no
     GCS destination. `snap()` returns wall/cpu and the swarm's stats (sim time, datagrams).
     """
@@ -187,16 +192,23 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
 
     ports = PortPlan(bind_host=LOOPBACK, bind_port=0, api_host=LOOPBACK, api_port=api_port,
                      gcs_port=0)
-    swarm = Swarm(default_scenario(n), clock=clock, ports=ports, telemetry_hz=telemetry_hz or None)
+    # MAVLink system ids are 1-255 per network: beyond 250 vehicles the process runs several
+    # swarms of at most 250, each on its own socket, all in this one process and event loop.
+    sizes = [min(NETWORK_MAX, n - i) for i in range(0, n, NETWORK_MAX)]
+    swarms = [Swarm(default_scenario(m), clock=clock, ports=ports,
+                    telemetry_hz=telemetry_hz or None) for m in sizes]
+    swarm = swarms[0]
     stop = asyncio.Event()
 
     def snap() -> dict:
-        s = swarm.stats()
-        d = {"wall": time.monotonic(), "cpu": time.process_time(), **asdict(s),
-             "sim": s.sim_time_s, "out": s.frames_out, "dgrams": s.datagrams_out,
-             "in": s.datagrams_in,
-             "slipped": s.slipped_s,
-             "send_errors": sum(e.stats.send_errors for e in swarm.endpoints)}
+        stats = [s.stats() for s in swarms]
+        d = {"wall": time.monotonic(), "cpu": time.process_time(), **asdict(stats[0]),
+             "sim": min(s.sim_time_s for s in stats),
+             "out": sum(s.frames_out for s in stats),
+             "dgrams": sum(s.datagrams_out for s in stats),
+             "in": sum(s.datagrams_in for s in stats),
+             "slipped": max(s.slipped_s for s in stats),
+             "send_errors": sum(e.stats.send_errors for s in swarms for e in s.endpoints)}
         return d
 
     def events() -> list[tuple[int, str, float]]:
@@ -204,7 +216,9 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
         return [(swarm.fleet.index_by_id[e.vehicle_id], e.kind, e.t_s)
                 for e in swarm.recorder.events(kinds=kinds)]
 
-    async with swarm:
+    async with contextlib.AsyncExitStack() as stack:
+        for s in swarms:
+            await stack.enter_async_context(s)
         conn.send(("ready", swarm.endpoints[0].local_address[1]))
         _serve_commands(conn, snap, stop, {"events": events})
         await stop.wait()

@@ -1,7 +1,7 @@
 """Stepped-clock speed-up: a 10-vehicle swarm flies MAVSDK mission_raw missions flat out.
 
     ./dev bench stepped_speedup [--drones 10] [--physics-hz 50,20,100] [--repeat 1]
-                                [--prflt -1|keep] [--timeout 60]
+                                [--prflt -1|keep] [--timeout 60] [--profile FILE]
 
 The emulator (`Swarm(default_scenario(N), clock=ClockConfig(stepped=True, physics_hz=HZ))`)
 runs in its own process on 127.0.0.1; this process is the MAVSDK client (mavsdk.asyncio).
@@ -23,6 +23,7 @@ import asyncio
 import itertools
 import math
 import os
+import pstats
 import sys
 import time
 
@@ -98,11 +99,13 @@ async def start(mission_raw: MissionRawAsync, telemetry: TelemetryAsync) -> int:
     raise RuntimeError("start_mission failed 5 times")
 
 
-async def fly(n: int, hz: float, prflt: float | None, timeout_s: float) -> dict:
+async def fly(n: int, hz: float, prflt: float | None, timeout_s: float,
+              profile_to: str | None = None) -> dict:
     set_executor(n)
     scenario = default_scenario(n)
     port = free_udp_port()
-    with Emulator(n, port, clock=ClockConfig(stepped=True, physics_hz=hz)) as emu:
+    with Emulator(n, port, clock=ClockConfig(stepped=True, physics_hz=hz),
+                  profile_to=profile_to) as emu:
         async with new_mavsdk() as mavsdk:
             t0 = time.monotonic()
             await mavsdk.add_any_connection(f"udpin://127.0.0.1:{port}")
@@ -163,6 +166,9 @@ def main() -> None:
                         "PX4's 10 s; vehicles whose start_mission is processed after another "
                         "vehicle's flight advanced the shared clock by 10 s get disarmed)")
     p.add_argument("--timeout", type=float, default=60.0, help="wall s to wait per run")
+    p.add_argument("--profile", metavar="FILE",
+                   help="then fly once more at the first physics Hz under cProfile and print "
+                        "the emulator's top functions")
     args = p.parse_args()
     prflt = None if args.prflt == "keep" else float(args.prflt)
     hzs = [float(h) for h in args.physics_hz.split(",")]
@@ -192,6 +198,12 @@ def main() -> None:
           "retransmissions processed late re-start or resume the mission); host busy %: the whole "
           "machine's busy CPU (other users included) during the run, in % of one core.")
     print(warnings_line())
+    if args.profile:
+        asyncio.run(fly(args.drones, hzs[0], prflt, args.timeout, args.profile))
+        st = pstats.Stats(args.profile)
+        print(f"\ncProfile of the emulator over one run at {hzs[0]:g} Hz (whole process life, "
+              f"incl. discovery, upload and idle epoll), top 25 by own time:")
+        st.sort_stats("tottime").print_stats(25)
 
 
 if __name__ == "__main__":

@@ -55,6 +55,10 @@ class RealTimePacer:
         self._max_steps = max(1, int(max_lag_s * self.speed / self.dt_s))
         self.slipped_s = 0.0  # simulated time the clock gave up on because the host was slow
 
+    def next_step_wall_s(self, steps_done: int) -> float:
+        """The wall time at which one more step than `steps_done` becomes due."""
+        return self._wall0_s + (steps_done + 1 - self._steps0) * self.dt_s / self.speed
+
     def steps_due(self, wall_now_s: float, steps_done: int) -> int:
         target = int((wall_now_s - self._wall0_s) * self.speed / self.dt_s) + self._steps0
         due = target - steps_done

@@ -35,7 +35,7 @@ class GeoOrigin:
             raise ValueError(f"origin longitude {self.longitude_deg} outside [-180, 180] degrees")
 
     @property
-    def _metres_per_rad(self) -> tuple[float, float]:
+    def metres_per_rad(self) -> tuple[float, float]:
         """(east metres per radian of longitude, north metres per radian of latitude)."""
         lat = math.radians(self.latitude_deg)
         s2 = math.sin(lat) ** 2
@@ -46,7 +46,7 @@ class GeoOrigin:
 
     def to_geodetic(self, x_m: float, y_m: float, z_m: float) -> tuple[float, float, float]:
         """Local ENU metres -> (latitude_deg, longitude_deg, altitude_amsl_m)."""
-        east_per_rad, north_per_rad = self._metres_per_rad
+        east_per_rad, north_per_rad = self.metres_per_rad
         lat = self.latitude_deg + math.degrees(y_m / north_per_rad)
         lon = self.longitude_deg + math.degrees(x_m / east_per_rad)
         return lat, lon, self.altitude_amsl_m + z_m
@@ -55,14 +55,14 @@ class GeoOrigin:
         self, latitude_deg: float, longitude_deg: float, altitude_amsl_m: float
     ) -> tuple[float, float, float]:
         """(latitude_deg, longitude_deg, altitude_amsl_m) -> local ENU metres."""
-        east_per_rad, north_per_rad = self._metres_per_rad
+        east_per_rad, north_per_rad = self.metres_per_rad
         x = math.radians(longitude_deg - self.longitude_deg) * east_per_rad
         y = math.radians(latitude_deg - self.latitude_deg) * north_per_rad
         return x, y, altitude_amsl_m - self.altitude_amsl_m
 
     def scale(self) -> tuple[float, float]:
         """(degrees of longitude per east metre, degrees of latitude per north metre)."""
-        east_per_rad, north_per_rad = self._metres_per_rad
+        east_per_rad, north_per_rad = self.metres_per_rad
         return math.degrees(1.0 / east_per_rad), math.degrees(1.0 / north_per_rad)
 
 

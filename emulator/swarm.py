@@ -7,21 +7,29 @@ import contextlib
 import logging
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
 from emulator.lockstep import Watch, WatchBoard
+from emulator.mavlink.frames import FramePart, frame_batch
 from emulator.mavlink.streams import StreamSchedule
+from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
-LOOP_TICK_S = 0.005
+LOOP_TICK_S = 0.005  # the longest the loop sleeps (real time: unless nothing is due sooner)
+REALTIME_IDLE_S = 0.02  # real time: the longest sleep when no step or telemetry is due sooner
+# Due telemetry is gathered and sent in batches this often, or at the shortest stream period
+# when a client asked for a faster stream (streams are capped at 100 Hz).
+TELEMETRY_TICK_S = 0.02
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
@@ -110,6 +118,12 @@ class Swarm:
             VehicleLink(ap, self._emit, self.streams, time.monotonic)
             for ap in self.fleet.autopilots
         ]
+        # Periodic telemetry is built for all due vehicles at once; the links' encoders
+        # share its sequence numbers, so every vehicle/component keeps one sequence.
+        self.telemetry = FleetTelemetry(self.fleet)
+        for link in self.links:
+            for component, sequences in self.telemetry.sequences.items():
+                link.encoder(component).share_sequence(sequences, link.k)
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
@@ -295,13 +309,12 @@ class Swarm:
 
     def _send_bursts(self) -> None:
         bursts, self._bursts = self._bursts, {}
+        ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
+        schedule = self.streams
+        on = np.isfinite(schedule.period_s[ks])
+        self._send_streams((spec.msg_id, ks[on[:, col]])
+                           for col, spec in enumerate(schedule.streams))
         for k, count in bursts.items():
-            for msg_id in self.streams.enabled(k):
-                try:
-                    self.links[k].send_stream(msg_id)
-                except Exception:  # the I/O edge: log, count, keep the swarm alive
-                    self._telemetry_errors += 1
-                    log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
             if count > 1:
                 self._bursts[k] = count - 1
 
@@ -334,7 +347,7 @@ class Swarm:
 
     async def _run(self) -> None:
         fleet = self.fleet
-        next_link_tick = next_peer_tick = 0.0
+        next_link_tick = next_peer_tick = next_telemetry = 0.0
         while True:
             wall = time.monotonic()
             if self.clock.stepped:
@@ -349,7 +362,12 @@ class Swarm:
                     fleet.step()
                 self._release_waiters()
             wall = time.monotonic()
-            self._send_telemetry(wall)
+            if wall >= next_telemetry:
+                tick = min(TELEMETRY_TICK_S, self.streams.shortest_period_s())
+                next_telemetry += tick
+                if next_telemetry <= wall:  # late (or the first turn): keep the cadence from now
+                    next_telemetry = wall + tick
+                self._send_telemetry(wall)
             if self._bursts:
                 self._send_bursts()
             if wall >= next_link_tick:
@@ -365,7 +383,13 @@ class Swarm:
                 await asyncio.sleep(0)
                 continue
             self._wake.clear()
-            timeout = min(LOOP_TICK_S, max(0.0, self.streams.next_wakeup_s() - time.monotonic()))
+            wake_at = max(self.streams.next_wakeup_s(), next_telemetry)
+            if self._pacer is not None:  # real time: sleep until a step or telemetry is due
+                wake_at = min(wake_at, self._pacer.next_step_wall_s(fleet.step_count))
+                cap = LOOP_TICK_S if self._bursts else REALTIME_IDLE_S
+            else:
+                cap = LOOP_TICK_S
+            timeout = min(cap, max(0.0, wake_at - time.monotonic()))
             if self.clock.stepped:
                 # Not asyncio.wait_for: before Python 3.12 it swallows a cancellation that
                 # arrives as the event is set, and close() would then wait forever.
@@ -376,21 +400,56 @@ class Swarm:
                 await asyncio.sleep(max(timeout, 0.0005))
 
     def _send_telemetry(self, wall: float) -> None:
-        links = self.links
+        self._send_streams(self.streams.due(wall))
+
+    def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
+        """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together
+        and packed several frames to a datagram."""
         for endpoint in self.endpoints:
             endpoint.batching = True
         try:
-            for msg_id, ks in self.streams.due(wall):
-                for k in ks:
+            parts: list[FramePart] = []
+            order: list[np.ndarray] = []
+            for msg_id, ks in due:
+                if not len(ks):
+                    continue
+                if msg_id in BATCHED_STREAMS:
                     try:
-                        links[k].send_stream(msg_id)
-                    except Exception:  # the I/O edge: log, count, keep the swarm alive
+                        parts.append(self.telemetry.part(msg_id, ks))
+                        order.append(ks)
+                        continue
+                    except Exception:  # the I/O edge: log, count, send them one by one
                         self._telemetry_errors += 1
-                        log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
+                        log.exception("batched message %d failed", msg_id)
+                self._send_one_by_one(msg_id, ks)
+            if parts:
+                self._emit_parts(parts, order)
         finally:
             for endpoint in self.endpoints:
                 endpoint.batching = False
                 endpoint.flush()
+
+    def _emit_parts(self, parts: list[FramePart], order: list[np.ndarray]) -> None:
+        try:
+            frames = frame_batch(parts)
+        except Exception:  # the I/O edge: log, count, send them one by one
+            self._telemetry_errors += 1
+            log.exception("framing a telemetry batch failed")
+            for part, ks in zip(parts, order, strict=True):
+                self._send_one_by_one(part.layout.msg_id, ks)
+            return
+        data, emit, start = frames.data, self._emit, 0
+        for k, end in zip(np.concatenate(order).tolist(), frames.ends.tolist(), strict=True):
+            emit(k, data[start:end])
+            start = end
+
+    def _send_one_by_one(self, msg_id: int, ks: np.ndarray) -> None:
+        for k in ks.tolist():
+            try:
+                self.links[k].send_stream(msg_id)
+            except Exception:  # the I/O edge: log, count, keep the swarm alive
+                self._telemetry_errors += 1
+                log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
 
     def _release_waiters(self) -> None:
         now = self.fleet.now_s

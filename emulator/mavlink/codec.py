@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 import struct
 
+import numpy as np
+
 os.environ.setdefault("MAVLINK20", "1")
 
 from pymavlink.dialects.v20 import common as mavlink
@@ -23,14 +25,25 @@ _DECODE_ERRORS = (
 
 
 class Encoder:
-    """Packs messages as one (system id, component id), with its own sequence numbers."""
+    """Packs messages as one (system id, component id), with its own sequence numbers.
 
-    __slots__ = ("_mav",)
+    `share_sequence` moves the sequence number into a slot of an array that a batched
+    sender (emulator.mavlink.telemetry) also draws from, so both count one sequence.
+    """
+
+    __slots__ = ("_mav", "_seq_slot", "_seqs")
 
     def __init__(self, system_id: int, component_id: int) -> None:
         if not 1 <= system_id <= 255 or not 0 <= component_id <= 255:
             raise ValueError(f"invalid MAVLink address {system_id}/{component_id}")
         self._mav = mavlink.MAVLink(None, srcSystem=system_id, srcComponent=component_id)
+        self._seqs: np.ndarray | None = None
+        self._seq_slot = 0
+
+    def share_sequence(self, sequences: np.ndarray, slot: int) -> None:
+        """Count this encoder's sequence in `sequences[slot]` (a uint8 array) from now on."""
+        sequences[slot] = self._mav.seq
+        self._seqs, self._seq_slot = sequences, slot
 
     @property
     def system_id(self) -> int:
@@ -41,8 +54,13 @@ class Encoder:
         return self._mav.srcComponent
 
     def pack(self, message: mavlink.MAVLink_message) -> bytes:
-        buf = message.pack(self._mav)
-        self._mav.seq = (self._mav.seq + 1) & 0xFF
+        mav, seqs = self._mav, self._seqs
+        if seqs is not None:
+            mav.seq = int(seqs[self._seq_slot])
+        buf = message.pack(mav)
+        mav.seq = (mav.seq + 1) & 0xFF
+        if seqs is not None:
+            seqs[self._seq_slot] = mav.seq
         return buf
 
 

@@ -17,6 +17,17 @@ from emulator.mavlink.codec import mavlink
 __all__ = [
     "MAV_AUTOPILOT_PX4",
     "MAV_TYPE_QUADROTOR",
+    "MODE_FLAG_ARMED",
+    "MODE_FLAG_AUTO",
+    "MODE_FLAG_CUSTOM",
+    "MODE_FLAG_GUIDED",
+    "MODE_FLAG_STABILIZE",
+    "PREARM_CHECK",
+    "SENSORS",
+    "STATE_ACTIVE",
+    "STATE_CRITICAL",
+    "STATE_EMERGENCY",
+    "STATE_STANDBY",
     "attitude",
     "autopilot_version",
     "battery_status",
@@ -36,20 +47,20 @@ MAV_TYPE_QUADROTOR = 2
 MAV_AUTOPILOT_PX4 = 12
 GRAVITY_M_S2 = 9.80665
 
-_MODE_FLAG_CUSTOM = 1
-_MODE_FLAG_AUTO = 4
-_MODE_FLAG_GUIDED = 8
-_MODE_FLAG_STABILIZE = 16
-_MODE_FLAG_ARMED = 128
-_STATE_STANDBY, _STATE_ACTIVE, _STATE_CRITICAL, _STATE_EMERGENCY = 3, 4, 5, 6
+MODE_FLAG_CUSTOM = 1
+MODE_FLAG_AUTO = 4
+MODE_FLAG_GUIDED = 8
+MODE_FLAG_STABILIZE = 16
+MODE_FLAG_ARMED = 128
+STATE_STANDBY, STATE_ACTIVE, STATE_CRITICAL, STATE_EMERGENCY = 3, 4, 5, 6
 
 # SYS_STATUS sensor bits: gyro, accel, mag, baro, GPS, rate/attitude/yaw/z/xy control,
 # motor outputs, geofence, AHRS, battery, pre-arm check.
-_SENSORS = (
+SENSORS = (
     0x1 | 0x2 | 0x4 | 0x8 | 0x20 | 0x400 | 0x800 | 0x1000 | 0x2000 | 0x4000 | 0x8000
     | 0x100000 | 0x200000 | 0x2000000
 )
-_PREARM_CHECK = 0x10000000
+PREARM_CHECK = 0x10000000
 
 _CAP_MISSION_FLOAT, _CAP_PARAM_FLOAT, _CAP_MISSION_INT, _CAP_COMMAND_INT = 1, 2, 4, 8
 _CAP_PARAM_BYTEWISE, _CAP_POS_LOCAL_NED, _CAP_POS_GLOBAL_INT, _CAP_MAVLINK2 = 16, 256, 512, 8192
@@ -71,18 +82,18 @@ def _geo(ap: Autopilot, p: tuple[float, float, float]) -> tuple[int, int, int]:
 
 def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:
     mode = ap.mode
-    base = _MODE_FLAG_CUSTOM | _MODE_FLAG_STABILIZE | _MODE_FLAG_GUIDED
+    base = MODE_FLAG_CUSTOM | MODE_FLAG_STABILIZE | MODE_FLAG_GUIDED
     if mode is not FlightMode.OFFBOARD:
-        base |= _MODE_FLAG_AUTO
+        base |= MODE_FLAG_AUTO
     if ap.armed:
-        base |= _MODE_FLAG_ARMED
+        base |= MODE_FLAG_ARMED
     level = int(ap.fleet.bat.level[ap.k])
     if level == BATTERY_EMERGENCY:
-        state = _STATE_EMERGENCY
+        state = STATE_EMERGENCY
     elif level == BATTERY_CRITICAL:
-        state = _STATE_CRITICAL
+        state = STATE_CRITICAL
     else:
-        state = _STATE_ACTIVE if ap.armed else _STATE_STANDBY
+        state = STATE_ACTIVE if ap.armed else STATE_STANDBY
     return mavlink.MAVLink_heartbeat_message(
         MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, base, mode.custom_mode, state, 3
     )
@@ -95,10 +106,10 @@ def _voltage_mv(ap: Autopilot) -> int:
 
 
 def sys_status(ap: Autopilot) -> mavlink.MAVLink_message:
-    health = _SENSORS
+    health = SENSORS
     if ap.fleet.bat.level[ap.k] < BATTERY_CRITICAL:
-        health |= _PREARM_CHECK
-    present = _SENSORS | _PREARM_CHECK
+        health |= PREARM_CHECK
+    present = SENSORS | PREARM_CHECK
     return mavlink.MAVLink_sys_status_message(
         present, present, health, 150, _voltage_mv(ap), -1, int(ap.battery_pct), 0, 0, 0, 0, 0, 0
     )

@@ -95,5 +95,9 @@ class StreamSchedule:
         """The message ids of vehicle k's streams that are on."""
         return [self.streams[c].msg_id for c in np.flatnonzero(np.isfinite(self.period_s[k]))]
 
+    def shortest_period_s(self) -> float:
+        """The shortest period of any stream of any vehicle (inf when all are off)."""
+        return float(self.period_s.min()) if self.period_s.size else math.inf
+
     def next_wakeup_s(self) -> float:
         return float(self.next_due_s.min())

@@ -70,6 +70,9 @@ class VehicleLink:
              component_id: int = AUTOPILOT_COMPONENT_ID) -> None:
         self._emit(self.k, self._encoders[component_id].pack(message))
 
+    def encoder(self, component_id: int) -> Encoder:
+        return self._encoders[component_id]
+
     def statustext(self, severity: int, text: str) -> None:
         self.send(msgs.statustext(severity, text))
 
