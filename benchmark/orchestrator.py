@@ -24,6 +24,7 @@ from benchmark.agents import NoopAgent
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
+from benchmark.replay_data import session_world, write_task_replay
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
@@ -113,11 +114,40 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock)
+    world = _world_of(path)
+
+    def emit(record: dict[str, Any]) -> None:
+        nonlocal world
+        if world is not None and "replay" in record:
+            record["replay_world"], world = world, None  # once per unit: the driver keeps it
+        send(("record", record))
+
     try:
-        asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
+        asyncio.run(run_session(session, agent, emit=emit,
                                 done=done, options=options))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+def _world_of(path: str) -> dict[str, Any] | None:
+    """The session file's world (drones, targets, obstacles) for replays; None if unreadable."""
+    try:
+        data = read_session_json(path)
+    except SessionFileError:
+        return None
+    return session_world(data) if isinstance(data, dict) else None
+
+
+def _keep_replay(out_dir: Path, record: dict[str, Any],
+                 progress: Callable[[str], None]) -> None:
+    """Store a record's replay data apart from results.jsonl (the record keeps none)."""
+    replay, world = record.pop("replay", None), record.pop("replay_world", None)
+    if replay is None:
+        return
+    try:
+        write_task_replay(out_dir, record, replay, world)
+    except (OSError, ValueError) as error:  # a replay lost never loses the result
+        progress(f"note: replay of {record['key']} not stored: {error}")
 
 
 def _unloadable_records(path: str, plan: RunPlan, trial: int, error: str,
@@ -188,6 +218,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
         if kind == "record":
             if payload["key"] in log:
                 return
+            _keep_replay(plan.out_dir, payload, progress)
             log.append(payload)
             outcome.records_written += 1
             progress(_progress_line(payload, outcome.records_written))

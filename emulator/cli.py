@@ -10,6 +10,7 @@ import multiprocessing
 import signal
 import sys
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from emulator.reference_mapping import notes_to_show
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
-__all__ = ["add_parsers", "run_up"]
+__all__ = ["Attachment", "add_parsers", "run_up"]
 
 MAX_VEHICLES_PER_NETWORK = 250
 
@@ -70,8 +71,12 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
+Attachment = Callable[[Swarm], contextlib.AbstractAsyncContextManager[object]]
+"""Something run beside a swarm of `up` while it flies (the web console, for instance)."""
+
+
 async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None) -> None:
+                 truth_out: Path | None, attachments: Sequence[Attachment] = ()) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -83,7 +88,10 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
               f"physics {clock.physics_hz:g} Hz", flush=True)
         for url in swarm.connection_urls():
             print(f"{label}  {url}", flush=True)
-        await stop.wait()
+        async with contextlib.AsyncExitStack() as stack:
+            for attach in attachments:
+                await stack.enter_async_context(attach(swarm))
+            await stop.wait()
         stats = swarm.stats()
         print(f"{label}stopping after {stats.sim_time_s:.1f} s simulated in "
               f"{stats.wall_time_s:.1f} s (real-time factor {stats.real_time_factor:.2f}); "
@@ -115,7 +123,11 @@ def _up(args: argparse.Namespace) -> int:
         raise ValueError(f"--drones must be at least 1, got {args.drones}")
     clock = ClockConfig(physics_hz=args.physics_hz, speed=args.speed, stepped=args.stepped)
     total = args.drones
+    attachments: Sequence[Attachment] = getattr(args, "attachments", ())
     if args.session is None and total is not None and total > MAX_VEHICLES_PER_NETWORK:
+        if attachments:
+            raise ValueError(f"--web shows one swarm of at most {MAX_VEHICLES_PER_NETWORK} "
+                             f"drones; {total} run as several networks")
         return _up_networks(args, clock, total)
     scenario = _scenario(args)
     bind = args.bind_port if args.bind_port is not None else (
@@ -123,7 +135,7 @@ def _up(args: argparse.Namespace) -> int:
     ports = PortPlan(bind_host=args.bind_host, bind_port=bind, api_port=args.api_port,
                      gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(scenario, clock, ports, "", args.truth_out))
+        asyncio.run(_serve(scenario, clock, ports, "", args.truth_out, attachments))
     return 0
 
 

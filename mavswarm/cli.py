@@ -4,6 +4,7 @@
   mavswarm serve   live benchmark sessions over the REST API (benchmark.server)
   mavswarm mcp     one session's agent tools over MCP (benchmark.server)
   mavswarm bench   generate, run, report and import the benchmark (benchmark)
+  mavswarm replay  recorded runs in the web console (console; `up --web`: the live view)
 
 Each package adds its subcommands with `add_parsers(subparsers)` and names the function that
 runs them (`run`, taking the parsed options, returning the exit status); this module only
@@ -18,6 +19,7 @@ from collections.abc import Sequence
 
 from benchmark import cli as bench_cli
 from benchmark.server import serve
+from console import cli as console_cli
 from emulator import cli as emulator_cli
 
 __all__ = ["build_parser", "main"]
@@ -31,6 +33,8 @@ def build_parser() -> argparse.ArgumentParser:
     emulator_cli.add_parsers(sub)
     serve.add_parsers(sub)
     bench_cli.add_parsers(sub)
+    console_cli.add_parsers(sub)
+    console_cli.extend_parsers(sub)
     return parser
 
 

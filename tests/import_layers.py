@@ -2,9 +2,10 @@
 
 Each package may import only the packages listed for it: the emulator and the MAVLink gateway
 nothing of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
-the benchmark all of them, and the composition root (`mavswarm`) whatever it assembles. Every
-import counts wherever it stands: at the top, inside a function, under `TYPE_CHECKING`, or as
-a string passed to `__import__` / `importlib.import_module`.
+the benchmark all of them, the web console all of those, and the composition root
+(`mavswarm`) whatever it assembles. Every import counts wherever it stands: at the top, inside
+a function, under `TYPE_CHECKING`, or as a string passed to `__import__` /
+`importlib.import_module`.
 """
 
 from __future__ import annotations
@@ -22,8 +23,10 @@ LAYERS: dict[str, frozenset[str]] = {
     "agent_contract": frozenset({"mavlink_gateway"}),
     "llm_tools": frozenset({"mavlink_gateway", "agent_contract"}),
     "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
+    "console": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                          "benchmark"}),
     "mavswarm": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                           "benchmark"}),
+                           "benchmark", "console"}),
 }
 
 
