@@ -5,7 +5,7 @@
 import { el } from "./panel.js";
 import { shapeOutline } from "./world.js";
 
-const THRESHOLD = /^(min_|max_)|threshold|tolerance|^count$|^ratio$/;
+const THRESHOLD = /^(min_|max_|expected_)|threshold|tolerance|percentage|^ratio$/;
 
 function show(value) {
   if (typeof value === "number") return Number.isInteger(value) ? String(value) : value.toFixed(3).replace(/0+$/, "").replace(/\.$/, "");
@@ -53,7 +53,7 @@ export function checkTree(record, tree) {
 }
 
 export function coverageOverlay(player, record, world) {
-  const failed = (record.checks || []).filter((c) => !c.passed && /coverage/.test(c.endpoint) && c.parameters?.target_id);
+  const failed = (record.checks || []).filter((c) => !c.passed && /coverage|searched/.test(c.endpoint) && c.parameters?.target_id);
   const targets = failed.map((c) => world.targets.find((t) => t.id === c.parameters.target_id)).filter(Boolean);
   if (!targets.length) return null;
   const radius = new Map(world.drones.map((d) => [d.id, d.taskRadius]));

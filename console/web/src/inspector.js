@@ -61,10 +61,10 @@ export async function showTask(root, sessionId, taskId, params) {
   root.replaceChildren(
     el("header", {}, el("h1", {}, `${sessionId} / ${taskId}`), verdict,
       el("a", { href: pageUrl(`/runs/${view.run}`) }, "← all tasks")),
-    el("p", { class: "muted" }, facts),
+    ...[el("p", { class: "muted" }, facts),
     el("p", { class: "task-text", id: "task-text" }, task.text || "(task text not recorded)"),
     record.error ? el("p", { class: "bad" }, record.error) : null,
-    view.note ? el("p", { class: "note", id: "replay-note" }, view.note) : null);
+    view.note ? el("p", { class: "note", id: "replay-note" }, view.note) : null].filter(Boolean));
   const body = el("div", { class: "task-body" });
   const side = el("aside", { class: "side" }, el("h3", {}, "Checks"), checkTree(record, task.checks));
   const main = el("div", { class: "task-main" });
@@ -120,8 +120,8 @@ export async function showCompare(root, params) {
 
 export async function showTruth(root) {
   const view = await getJson("/api/truth");
-  root.replaceChildren(el("header", {}, el("h1", {}, `Replay: ${view.name}`)),
-    view.note ? el("p", { class: "note", id: "replay-note" }, view.note) : null);
+  root.replaceChildren(...[el("header", {}, el("h1", {}, `Replay: ${view.name}`)),
+    view.note ? el("p", { class: "note", id: "replay-note" }, view.note) : null].filter(Boolean));
   const main = el("div", { class: "task-main" });
   root.append(main);
   const player = new ReplayPlayer(main, { world: buildWorld(view.world || {}), replay: view.replay });

@@ -63,9 +63,9 @@ export async function showLive(root, liveId) {
   function renderCommands() {
     if (!scene.commands || !map.selected) { commandBox.replaceChildren(); return; }
     const alt = el("input", { id: "cmd-altitude", type: "number", value: state.altitude ?? 10, min: 1, step: 1,
-      onchange: (e) => { state.altitude = Number(e.target.value); } });
+      oninput: (e) => { state.altitude = Number(e.target.value); } });
     const dur = el("input", { id: "cmd-duration", type: "number", value: state.duration ?? 5, min: 1, step: 1,
-      onchange: (e) => { state.duration = Number(e.target.value); } });
+      oninput: (e) => { state.duration = Number(e.target.value); } });
     const altitude = () => Number(alt.value);
     commandBox.replaceChildren(
       el("h3", {}, `Command ${map.selected}`),

@@ -156,11 +156,11 @@ export class View3D {
       const text = d.id === selected ? `${d.id} ${d.z.toFixed(1)} m` : "";
       if (text !== entry.labelText) {
         if (entry.label) this.dynamic.remove(entry.label);
-        entry.label = text ? textSprite(text, this.droneSize * 3) : null;
+        entry.label = text ? textSprite(text, this.droneSize * 6) : null;
         if (entry.label) this.dynamic.add(entry.label);
         entry.labelText = text;
       }
-      if (entry.label) entry.label.position.set(d.x, d.z + this.droneSize * 4, -d.y);
+      if (entry.label) entry.label.position.set(d.x, d.z + this.droneSize * 7, -d.y);
     }
     this.render();
   }
