@@ -194,7 +194,7 @@ export async function showEditor(root) {
 
   function renderTasks() {
     const list = state.session.tasks || [];
-    tasks.replaceChildren(el("h3", {}, `Tasks (${list.length})`), list.map((t, k) => el("div", { class: "task-edit" },
+    tasks.replaceChildren(el("h3", {}, `Tasks (${list.length})`), ...list.map((t, k) => el("div", { class: "task-edit" },
       el("b", {}, t.id), el("textarea", { id: `task-text-${k}`, rows: 2, onchange: (ev) => { t.text = ev.target.value; validate(); } }, t.text || ""),
       el("label", {}, "tool calls ", el("input", { id: `task-calls-${k}`, type: "number", value: t.budget?.tool_calls ?? 0,
         onchange: (ev) => { t.budget = { ...t.budget, tool_calls: Number(ev.target.value) }; validate(); } })),

@@ -36,7 +36,7 @@ export async function showRuns(root, runId) {
     count.textContent = `${shown.length} of ${rows.length} tasks, ${shown.filter((r) => r.passed).length} passed`;
     table.replaceChildren(
       el("tr", {}, ["session", "task", "trial", "agent", "template", "verdict", "checks", "failed endpoints", "calls", "sim s", "replay"].map((h) => el("th", {}, h))),
-      shown.map((r) => el("tr", { class: r.passed ? "pass" : "fail" },
+      ...shown.map((r) => el("tr", { class: r.passed ? "pass" : "fail" },
         el("td", {}, r.session), el("td", {}, el("a", { href: pageUrl(`/inspect/${r.session}/${r.task}`, { trial: r.trial, run: runId, agent: r.agent }) }, r.task)),
         el("td", {}, r.trial), el("td", {}, r.agent), el("td", {}, r.template), el("td", { class: "verdict" }, r.passed ? "PASS" : `FAIL${r.finish !== "finished" ? ` (${r.finish})` : ""}`),
         el("td", {}, `${r.checks_passed}/${r.checks_total}`), el("td", {}, r.failed_endpoints.join(", ")),
