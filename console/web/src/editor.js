@@ -97,10 +97,13 @@ export async function showEditor(root) {
 
   function hitTest([x, y]) {
     const world = map.world;
-    for (let k = world.drones.length - 1; k >= 0; k--) {
-      const [sx, sy] = map.toScreen(world.drones[k].x, world.drones[k].y), [px, py] = map.toScreen(x, y);
-      if (Math.hypot(sx - px, sy - py) < 10) return { list: "drones", index: k };
-    }
+    const [px, py] = map.toScreen(x, y);
+    let nearest = null, best = 10;
+    world.drones.forEach((d, k) => {
+      const [sx, sy] = map.toScreen(d.x, d.y);
+      if (Math.hypot(sx - px, sy - py) < best) { best = Math.hypot(sx - px, sy - py); nearest = { list: "drones", index: k }; }
+    });
+    if (nearest) return nearest;
     for (const list of ["targets", "obstacles"]) {
       const items = world[list];
       for (let k = items.length - 1; k >= 0; k--) {
@@ -185,11 +188,11 @@ export async function showEditor(root) {
   function renderProps() {
     const e = entity(state.selected);
     if (!e) { props.replaceChildren(el("p", { class: "muted" }, "Select an entity (click), drag to move it; or pick 'add …' and click the map.")); return; }
-    props.replaceChildren(el("h3", {}, `${state.selected.list.slice(0, -1)} ${e.id} (${e.type || "drone"})`),
+    props.replaceChildren(...[el("h3", {}, `${state.selected.list.slice(0, -1)} ${e.id} (${e.type || "drone"})`),
       field(e, "name", "name", { number: false }), field(e, "x", "x", { sub: "position" }), field(e, "y", "y", { sub: "position" }),
       field(e, "z", "z", { sub: "position" }), field(e, "radius", "radius (m)"), field(e, "width", "half-width x (m)"),
       field(e, "length", "half-length y (m)"), field(e, "height", "height (m, 0 = all altitudes)"),
-      field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)"));
+      field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)")].filter(Boolean));
   }
 
   function renderTasks() {
