@@ -67,8 +67,12 @@ class LoggedTools(AgentTools):
             self._last[str(drone)] = entry
 
     def call_log(self) -> list[ToolCall]:
-        """Every call so far (a copy)."""
-        return [dict(c) for c in self.__dict__.get("calls", [])]
+        """Every call so far (a copy), in simulated start time, then drone, order and
+        numbered so: calls that threads of an agent make side by side at one simulated instant
+        list the same whatever order the threads' thinking let them through."""
+        calls = sorted(self.__dict__.get("calls", []),
+                       key=lambda c: (c["t0_s"], str(c["drone"] or ""), c["i"]))
+        return [{**c, "i": k} for k, c in enumerate(calls)]
 
     def activity(self) -> dict[str, dict[str, Any]]:
         """Per drone: the tool it is executing now (or None) and how its last call ended."""

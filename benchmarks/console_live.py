@@ -1,0 +1,103 @@
+"""What the web console's live view costs the server: `mavswarm up --drones N --web` in its
+own process, its CPU measured over a window with no page watching, then over a window with K
+WebSocket clients receiving the live frames.
+
+    ./dev bench console_live [--drones 250] [--hz 10] [--window 15] [--clients 1]
+
+CPU % is the `up` process's CPU time (all threads) / wall time over the window, in % of one
+core; the console's cost is the difference. Frames/s and frame size are what the clients got.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import socket
+import subprocess
+import sys
+import time
+
+import websockets
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _common import free_udp_port, machine_line, table
+
+TICK_S = os.sysconf("SC_CLK_TCK")
+
+
+def _free_tcp_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _cpu_s(pid: int) -> float:
+    with open(f"/proc/{pid}/stat") as handle:
+        fields = handle.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK_S
+
+
+async def _watch(url: str, seconds: float, clients: int) -> tuple[int, int]:
+    frames = size = 0
+
+    async def one() -> None:
+        nonlocal frames, size
+        async with websockets.connect(url, max_size=None) as ws:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                text = await asyncio.wait_for(ws.recv(), 5)
+                frames += 1
+                size += len(text)
+
+    await asyncio.gather(*(one() for _ in range(clients)))
+    return frames, size
+
+
+def _window(pid: int, seconds: float) -> float:
+    c0, w0 = _cpu_s(pid), time.monotonic()
+    time.sleep(seconds)
+    return 100.0 * (_cpu_s(pid) - c0) / (time.monotonic() - w0)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--drones", type=int, default=250)
+    parser.add_argument("--hz", type=float, default=10.0)
+    parser.add_argument("--window", type=float, default=15.0)
+    parser.add_argument("--clients", type=int, default=1)
+    args = parser.parse_args()
+    port, key = _free_tcp_port(), "bench"
+    cmd = [sys.executable, "-m", "mavswarm", "up", "--drones", str(args.drones), "--web",
+           "--web-port", str(port), "--web-key", key, "--web-hz", str(args.hz), "--no-truth",
+           "--api-port", str(free_udp_port()), "--gcs-port", "0",
+           "--bind-port", str(free_udp_port())]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            if "web console:" in line:
+                break
+        time.sleep(3.0)  # past start-up
+        alone = _window(proc.pid, args.window)
+        url = f"ws://127.0.0.1:{port}/api/live/swarm/ws?key={key}"
+        c0, w0 = _cpu_s(proc.pid), time.monotonic()
+        frames, size = asyncio.run(_watch(url, args.window, args.clients))
+        wall = time.monotonic() - w0
+        watched = 100.0 * (_cpu_s(proc.pid) - c0) / wall
+    finally:
+        proc.terminate()
+        proc.wait(10)
+    print(machine_line())
+    print(f"mavswarm up --drones {args.drones} --web, live frames at {args.hz:g} Hz, "
+          f"{args.clients} client(s), {args.window:g} s windows")
+    print(table(["no page: up CPU %", "watched: up CPU %", "console CPU %", "frames/s/client",
+                 "kB/frame"],
+                [[f"{alone:.1f}", f"{watched:.1f}", f"{watched - alone:.1f}",
+                  f"{frames / args.clients / wall:.1f}",
+                  f"{size / max(1, frames) / 1000:.1f}"]]))
+
+
+if __name__ == "__main__":
+    main()
