@@ -110,14 +110,15 @@ def _run(args: argparse.Namespace) -> int:
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
-                   clock=args.clock, backend=args.backend, ray_address=args.ray_address)
+                   clock=args.clock, backend=args.backend, ray_address=args.ray_address,
+                   live_hz=getattr(args, "live_hz", 0.0))
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
-    outcome = run_benchmark(plan)
+    outcome = run_benchmark(plan, on_live=getattr(args, "on_live", None))
     records = read_records(plan.results_path)
     md, js = write_report(records, out)
     print()

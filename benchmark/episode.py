@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
+from benchmark.live_channel import LiveChannel, TaskWatch
 from benchmark.replay_data import encode_window
 from benchmark.session_file import Session, TaskSpec
 from benchmark.tool_log import LoggedTools
@@ -201,9 +202,10 @@ async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
 
 async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[str, Any]], None],
                       done: Mapping[str, Mapping[str, Any] | None] | None = None,
-                      options: EpisodeOptions = EpisodeOptions()) -> None:
+                      options: EpisodeOptions = EpisodeOptions(),
+                      live: LiveChannel | None = None) -> None:
     """Run every task of `session` not already in `done` (key -> its end state, or None),
-    calling `emit(record)` as each task ends."""
+    calling `emit(record)` as each task ends; `live` publishes frames while it runs."""
     done = done or {}
     keys = [record_key(session.id, t.id, agent.name, options.trial) for t in session.tasks]
     if all(k in done for k in keys):
@@ -220,6 +222,10 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                                        f"{session.source}: the session cannot start: {error}"))
         return
     async with stack:
+        watch = None
+        if live is not None:
+            watch = await stack.enter_async_context(
+                live.publishing(session, swarm, options.trial))
         restore: Mapping[str, Any] | None = None
         for task, key in zip(session.tasks, keys, strict=True):
             if key in done:
@@ -232,12 +238,14 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
-            emit(await run_task(session, task, agent, swarm, services, gateway, options))
+            emit(await run_task(session, task, agent, swarm, services, gateway, options,
+                                watch=watch))
 
 
 async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                    services: SwarmServices, gateway: Gateway,
-                   options: EpisodeOptions) -> dict[str, Any]:
+                   options: EpisodeOptions, *, watch: TaskWatch | None = None
+                   ) -> dict[str, Any]:
     """Reset, run the agent on one task, evaluate its checks; the task's record. Its
     `replay` (the window's ground truth and the tool calls, `benchmark.replay_data`) is stored
     apart from results.jsonl by the orchestrator."""
@@ -247,6 +255,8 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     reset_s = time.perf_counter() - wall0
     agent_task = AgentTask(session.id, task.id, task.text, task.budget)
     tools = LoggedTools(gateway, agent_task)
+    if watch is not None:
+        watch.text, watch.tools = task.text, tools
     t0_s = services.clock_s()
     wall_agent = time.perf_counter()
     finish, error = await _run_agent(agent, agent_task, tools, options, services)

@@ -24,6 +24,7 @@ from benchmark.agents import NoopAgent
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
+from benchmark.live_channel import LiveChannel
 from benchmark.replay_data import session_world, write_task_replay
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
@@ -53,6 +54,7 @@ class RunPlan:
     price_out_usd_per_mtok: float = 0.0  # MAVSWARM_PRICE_IN / MAVSWARM_PRICE_OUT)
     backend: str = "local"  # where units run: "local" (processes here) or "ray" (a cluster)
     ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
+    live_hz: float = 0.0  # > 0: sessions publish live frames (benchmark.live_channel)
 
     @property
     def results_path(self) -> Path:
@@ -122,9 +124,12 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
             record["replay_world"], world = world, None  # once per unit: the driver keeps it
         send(("record", record))
 
+    live = None
+    if plan.live_hz > 0:
+        live = LiveChannel(lambda payload: send(("live", payload)), plan.live_hz)
     try:
         asyncio.run(run_session(session, agent, emit=emit,
-                                done=done, options=options))
+                                done=done, options=options, live=live))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
 
@@ -192,8 +197,10 @@ def _session_id(path: Path) -> str | None:
     return ident if isinstance(ident, str) else None
 
 
-def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> RunOutcome:
-    """Run the plan; returns what was written. Results go to plan.results_path."""
+def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print,
+                  on_live: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
+    """Run the plan; returns what was written. Results go to plan.results_path. With
+    `plan.live_hz`, each live frame a session publishes is handed to `on_live`."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
@@ -227,6 +234,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print) -> Run
             progress(f"error: {payload}")
         elif kind == "note":
             progress(f"note: {payload}")
+        elif kind == "live" and on_live is not None:
+            on_live(payload)
 
     try:
         backend.run(functools.partial(run_unit, plan), units, handle)

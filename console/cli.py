@@ -1,5 +1,6 @@
 """The console on the command line: `mavswarm replay PATH...`, and `--web` for `mavswarm up`
-(the live view of the swarm it runs); `mavswarm serve` gets the console under `/console`.
+(the live view of the swarm it runs) and `mavswarm bench run` (the sessions it runs);
+`mavswarm serve` gets the console under `/console`.
 
 `add_parsers` adds `replay`; `extend_parsers` adds `--web` to `up` and the console to `serve`,
 both defined by the packages below (the composition root calls it after they added theirs).
@@ -15,11 +16,13 @@ from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from benchmark import cli as bench_cli
 from benchmark.replay_data import session_world
 from benchmark.server import Hub
 from benchmark.server.serve import ApiKey, serve_asgi
 from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
+from console.bench_watch import LiveBoard, serve_in_thread
 from console.commands import Commander
 from console.live import DEFAULT_RATE_HZ, LiveSwarm
 from console.results_index import open_paths
@@ -67,6 +70,17 @@ def extend_parsers(sub: argparse._SubParsersAction) -> None:
     up.set_defaults(run=_run_up)
     serve = sub.choices["serve"]
     serve.set_defaults(extend=console_for_hub)
+    bench = sub.choices["bench"]
+    bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
+    run = bench_sub.choices["run"]
+    run.add_argument("--web", action="store_true",
+                     help="follow the sessions being run in the web console (prints the URL)")
+    run.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
+    run.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
+    run.add_argument("--web-key", help="--web: the operator key (default: generated)")
+    run.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
+                     help="--web: live updates per second")
+    bench.set_defaults(run=_run_bench)
 
 
 def _print(text: str) -> None:
@@ -123,6 +137,21 @@ def _run_up(args: argparse.Namespace) -> int:
                 on_ready=lambda url, key: _print(f"web console: {url}/live/swarm?key={key}"))
         args.attachments = [attach]
     return emulator_cli.run_up(args)
+
+
+def _run_bench(args: argparse.Namespace) -> int:
+    if args.bench_command != "run" or not args.web:
+        return bench_cli.run_bench(args)
+    board = LiveBoard()
+    try:
+        with serve_in_thread(board, host=args.web_host, port=args.web_port, key=args.web_key,
+                             rate_hz=args.web_hz) as (url, key):
+            _print(f"web console: {url}/?key={key} (pick the session to follow)")
+            args.live_hz, args.on_live = args.web_hz, board.update
+            return bench_cli.run_bench(args)
+    except OSError as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
 
 
 def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str], None]:

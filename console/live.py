@@ -16,9 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from console.commands import Commander
+from emulator.live_state import live_state
 from emulator.swarm import Swarm
 
 __all__ = ["DEFAULT_RATE_HZ", "LiveFeed", "LiveSwarm"]
@@ -31,16 +30,26 @@ Activity = Callable[[], dict[str, dict[str, Any]]]
 
 @dataclass
 class LiveSwarm:
-    """One swarm the console can show: an id, its scene (session-file layout), the swarm, who
-    reports what each drone's tools are doing, and the commander for hands-on commands."""
+    """One swarm the console can show: an id, its scene (session-file layout), the swarm in
+    this process (or `frames`, the latest state of one running elsewhere), who reports what
+    each drone's tools are doing, and the commander for hands-on commands."""
 
     id: str
     name: str
     scene: dict[str, Any]
-    swarm: Swarm
+    swarm: Swarm | None = None
     activities: list[Activity] = field(default_factory=list)
     commander: Commander | None = None
     task_text: str = ""
+    frames: Callable[[], dict[str, Any] | None] | None = None
+
+    def state(self) -> dict[str, Any]:
+        """The frame: the fleet's live state and each drone's activity."""
+        if self.swarm is not None:
+            return {**live_state(self.swarm.fleet), "act": self.activity()}
+        latest = self.frames() if self.frames is not None else None
+        return latest or {"t": 0.0, "x": [], "y": [], "z": [], "yaw": [], "spd": [], "bat": [],
+                          "armed": [], "mode": [], "act": {}}
 
     def activity(self) -> dict[str, dict[str, Any]]:
         merged: dict[str, dict[str, Any]] = {}
@@ -55,22 +64,9 @@ class LiveSwarm:
         return merged
 
 
-def _round(values: np.ndarray, digits: int) -> list[float]:
-    return [float(v) for v in np.round(values, digits)]
-
-
 def build_frame(live: LiveSwarm) -> str:
     """The frame of `live` now, as JSON text."""
-    fleet = live.swarm.fleet
-    dyn = fleet.dyn
-    pos = dyn.position_m
-    speed = np.linalg.norm(dyn.velocity_m_s, axis=1)
-    frame = {"t": round(fleet.now_s, 2), "x": _round(pos[:, 0], 2), "y": _round(pos[:, 1], 2),
-             "z": _round(pos[:, 2], 2), "yaw": _round(dyn.yaw_deg, 1),
-             "spd": _round(speed, 2), "bat": _round(fleet.bat.pct, 1),
-             "armed": fleet.armed.astype(int).tolist(),
-             "mode": [ap.mode.label for ap in fleet.autopilots], "act": live.activity()}
-    return json.dumps(frame, separators=(",", ":"))
+    return json.dumps(live.state(), separators=(",", ":"))
 
 
 class LiveFeed:

@@ -111,6 +111,7 @@ def drone_pixels_near(page: Any, x_m: float, y_m: float, radius_px: int = 3) -> 
 
 def webgl_colours(page: Any) -> int:
     """Distinct colours on the 3D view's canvas (a blank canvas has one)."""
+    page.wait_for_function("window.consoleView.view3d", timeout=20_000)
     return int(page.evaluate(
         """() => {
             const gl = document.querySelector('#view3d canvas');

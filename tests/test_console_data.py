@@ -113,7 +113,7 @@ def test_results_without_replay_data_open_with_a_note(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="neither a results folder nor a"):
         open_paths([tmp_path / "old" / "missing"])
     (tmp_path / "empty").mkdir()
-    with pytest.raises(ValueError, match="no results.jsonl in it"):
+    with pytest.raises(ValueError, match=r"no results\.jsonl in it"):
         open_paths([tmp_path / "empty"])
 
 
@@ -138,7 +138,7 @@ def test_the_editor_refuses_invalid_sessions_naming_the_entity(tmp_path: Path) -
     assert refused.value.entity == ("tasks", 3)
     with pytest.raises(EditorError, match="saved under"):
         save_session(blank_session(), Path("../outside.json"), tmp_path)
-    with pytest.raises(EditorError, match="ends in .json"):
+    with pytest.raises(EditorError, match=r"ends in \.json"):
         save_session(blank_session(), Path("x.txt"), tmp_path)
     with pytest.raises(EditorError):
         save_session(inside, Path("bad.json"), tmp_path)

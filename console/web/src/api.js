@@ -55,5 +55,5 @@ export async function postJson(path, data) {
 export function liveSocket(liveId) {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
   const key = encodeURIComponent(apiKey());
-  return new WebSocket(`${scheme}://${location.host}${url(`/api/live/${liveId}/ws`)}?key=${key}`);
+  return new WebSocket(`${scheme}://${location.host}${url(`/api/live/${encodeURIComponent(liveId)}/ws`)}?key=${key}`);
 }

@@ -82,7 +82,7 @@ export async function showTask(root, sessionId, taskId, params) {
     Object.defineProperty(holder, "t", { get: () => player.t });
     player.seek(player.t1);
     side.append(el("h3", {}, "Tool calls"), callList(player));
-    window.consoleView = { map: player.map, view3d: player.view3d, player, record };
+    window.consoleView = { map: player.map, get view3d() { return player.view3d; }, player, record };
   } else {
     window.consoleView = { record };
   }
@@ -125,5 +125,5 @@ export async function showTruth(root) {
   const main = el("div", { class: "task-main" });
   root.append(main);
   const player = new ReplayPlayer(main, { world: buildWorld(view.world || {}), replay: view.replay });
-  window.consoleView = { map: player.map, view3d: player.view3d, player };
+  window.consoleView = { map: player.map, get view3d() { return player.view3d; }, player };
 }

@@ -25,7 +25,7 @@ export async function showLive(root, liveId) {
     el("header", {}, el("h1", {}, `Live: ${scene.name}`), clock, status),
     el("main", { class: "live" },
       el("section", { class: "views" }, el("div", { class: "pane" }, canvas), el("div", { class: "pane" }, box3d)),
-      el("aside", { class: "side" }, scene.task ? el("p", { class: "task-text" }, scene.task) : null,
+      el("aside", { class: "side" }, el("p", { class: "task-text", id: "live-task", hidden: scene.task ? null : "" }, scene.task || ""),
         legend(), droneList, panelBox, commandBox)));
   const map = new Map2D(canvas, { onClick: (hit) => clicked(hit) });
   root.querySelector(".side").prepend(toggleBar(map));
@@ -98,7 +98,14 @@ export async function showLive(root, liveId) {
     ctx.beginPath(); ctx.moveTo(sx - 8, sy - 8); ctx.lineTo(sx + 8, sy + 8); ctx.moveTo(sx + 8, sy - 8); ctx.lineTo(sx - 8, sy + 8); ctx.stroke();
   });
 
+  const taskBox = () => root.querySelector("#live-task");
   function onFrame(frame) {
+    if (!frame.x || frame.x.length !== world.drones.length) return;  // not started yet
+    if (frame.task !== undefined && frame.task !== taskBox().textContent) {
+      taskBox().textContent = frame.task;
+      taskBox().hidden = !frame.task;
+    }
+    if (frame.done) { status.textContent = "session finished"; status.className = "muted"; }
     state.frame = frame;
     state.frames += 1;
     state.activity = frame.act || {};
@@ -109,7 +116,11 @@ export async function showLive(root, liveId) {
     for (const d of state.drones) {
       let trail = state.trails.get(d.id);
       if (!trail) { trail = []; state.trails.set(d.id, trail); }
-      const last = trail[trail.length - 1];
+      let last = trail[trail.length - 1];
+      if (last && Math.hypot(d.x - last[0], d.y - last[1]) > 50 && frame.t - last[2] < 2) {
+        trail.length = 0;  // put down elsewhere by an operator reset: a new trail
+        last = undefined;
+      }
       if (!last || Math.hypot(d.x - last[0], d.y - last[1], d.z - last[3]) > 0.3) {
         trail.push([d.x, d.y, frame.t, d.z]);
         if (trail.length > TRAIL_POINTS) trail.shift();

@@ -10,7 +10,7 @@ async function showHome(root) {
   const info = await getJson("/api/info");
   root.replaceChildren(el("header", {}, el("h1", {}, "mavswarm console")),
     el("h2", {}, "Live"), info.live.length
-      ? el("ul", {}, info.live.map((l) => el("li", {}, el("a", { href: pageUrl(`/live/${l.id}`) }, `${l.name} (${l.drones} drones)`))))
+      ? el("ul", {}, info.live.map((l) => el("li", {}, el("a", { href: pageUrl(`/live/${encodeURIComponent(l.id)}`) }, `${l.name} (${l.drones} drones)`))))
       : el("p", { class: "muted" }, "no live swarm here"),
     el("h2", {}, "Recorded"),
     el("ul", {}, info.runs.map((r) => el("li", {}, el("a", { href: pageUrl(`/runs/${r.id}`) }, `${r.id}: ${r.passed}/${r.tasks} tasks passed`))),

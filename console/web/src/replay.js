@@ -82,10 +82,19 @@ export class ReplayPlayer {
     this.map.overlays.push(...overlays);
     root.querySelector(".views").before(el("div", { class: "row" }, toggleBar(this.map), legend()));
     this.map.setWorld(world);
-    this.view3d = new View3D(box3d);
-    this.view3d.setWorld(world);
+    this.view3d = null;
+    // The map and timeline open first; the 3D scene (slower: WebGL, extruded obstacles) follows.
+    this.ready3d = new Promise((resolve) => setTimeout(() => {
+      this.view3d = new View3D(box3d);
+      this.view3d.setWorld(world);
+      this.render();
+      performance.mark("replay-3d");
+      resolve();
+    }, 20));
     new ResizeObserver(() => this._drawLanes()).observe(this.lanes);
     this.render();
+    this.map.draw();
+    performance.mark("replay-2d");
   }
 
   toggle() {
@@ -135,7 +144,7 @@ export class ReplayPlayer {
     this.map.trails = trails;
     this.map.now = this.t;
     this.map.redraw();
-    this.view3d.update(drones, trails, this.map.selected);
+    if (this.view3d) this.view3d.update(drones, trails, this.map.selected);
     this.slider.value = String(Math.round((1000 * (this.t - this.t0)) / (this.t1 - this.t0)));
     this.timeLabel.textContent = `t = ${(this.t - this.t0).toFixed(1)} / ${(this.t1 - this.t0).toFixed(1)} s`;
     this._drawLanes();

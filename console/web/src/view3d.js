@@ -88,7 +88,7 @@ export class View3D {
 
   _obstacle(o) {
     const height = o.allAltitudes ? ALL_ALTITUDE_DRAW_M : Math.max(0.5, o.height);
-    const geometry = new THREE.ExtrudeGeometry(shape2d(shapeOutline(o.shape, 40)), { depth: height, bevelEnabled: false });
+    const geometry = new THREE.ExtrudeGeometry(shape2d(shapeOutline(o.shape, 28)), { depth: height, bevelEnabled: false });
     geometry.rotateX(-Math.PI / 2);
     const material = o.allAltitudes
       ? new THREE.MeshLambertMaterial({ color: "#9b1d2a", transparent: true, opacity: 0.55 })
