@@ -2,7 +2,7 @@
 own process, its CPU measured over a window with no page watching, then over a window with K
 WebSocket clients receiving the live frames.
 
-    ./dev bench console_live [--drones 250] [--hz 10] [--window 15] [--clients 1]
+    ./dev bench console_live [--drones 250] [--hz 10] [--window 15] [--clients 1] [--rounds 3]
 
 CPU % is the `up` process's CPU time (all threads) / wall time over the window, in % of one
 core; the console's cost is the difference. Frames/s and frame size are what the clients got.
@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import os
 import socket
+import statistics
 import subprocess
 import sys
 import time
@@ -66,6 +68,8 @@ def main() -> None:
     parser.add_argument("--hz", type=float, default=10.0)
     parser.add_argument("--window", type=float, default=15.0)
     parser.add_argument("--clients", type=int, default=1)
+    parser.add_argument("--rounds", type=int, default=3,
+                        help="alternate unwatched and watched windows this many times")
     args = parser.parse_args()
     port, key = _free_tcp_port(), "bench"
     cmd = [sys.executable, "-m", "mavswarm", "up", "--drones", str(args.drones), "--web",
@@ -80,23 +84,42 @@ def main() -> None:
             if "web console:" in line:
                 break
         time.sleep(3.0)  # past start-up
-        alone = _window(proc.pid, args.window)
         url = f"ws://127.0.0.1:{port}/api/live/swarm/ws?key={key}"
-        c0, w0 = _cpu_s(proc.pid), time.monotonic()
-        frames, size = asyncio.run(_watch(url, args.window, args.clients))
-        wall = time.monotonic() - w0
-        watched = 100.0 * (_cpu_s(proc.pid) - c0) / wall
+        alones, watcheds, frames, size, wall = [], [], 0, 0, 0.0
+        for _ in range(args.rounds):
+            alones.append(_window(proc.pid, args.window))
+            c0, w0 = _cpu_s(proc.pid), time.monotonic()
+            got, nbytes = asyncio.run(_watch(url, args.window, args.clients))
+            seconds = time.monotonic() - w0
+            watcheds.append(100.0 * (_cpu_s(proc.pid) - c0) / seconds)
+            frames, size, wall = frames + got, size + nbytes, wall + seconds
+        alone, watched = statistics.median(alones), statistics.median(watcheds)
     finally:
         proc.terminate()
         proc.wait(10)
     print(machine_line())
     print(f"mavswarm up --drones {args.drones} --web, live frames at {args.hz:g} Hz, "
           f"{args.clients} client(s), {args.window:g} s windows")
-    print(table(["no page: up CPU %", "watched: up CPU %", "console CPU %", "frames/s/client",
-                 "kB/frame"],
-                [[f"{alone:.1f}", f"{watched:.1f}", f"{watched - alone:.1f}",
+    build_ms = _frame_build_ms(args.drones)
+    print(table(["no page: up CPU %", "watched: up CPU %", "difference", "frames/s/client",
+                 "kB/frame", "frame build ms", "build CPU % at rate"],
+                [[f"{alone:.1f}", f"{watched:.1f}", f"{watched - alone:+.1f}",
                   f"{frames / args.clients / wall:.1f}",
-                  f"{size / max(1, frames) / 1000:.1f}"]]))
+                  f"{size / max(1, frames) / 1000:.1f}", f"{build_ms:.2f}",
+                  f"{build_ms * args.hz / 10:.2f}"]]))
+    print("CPU % columns: medians over the rounds of the `up` process's CPU time / wall time; "
+          "frame build: one frame of every drone's state as JSON, timed in this process")
+
+
+def _frame_build_ms(drones: int, repeats: int = 200) -> float:
+    from emulator.flight.fleet import Fleet
+    from emulator.live_state import live_state
+    from emulator.scenario import default_scenario
+    fleet = Fleet(default_scenario(drones))
+    start = time.perf_counter()
+    for _ in range(repeats):
+        json.dumps({**live_state(fleet), "act": {}}, separators=(",", ":"))
+    return 1000 * (time.perf_counter() - start) / repeats
 
 
 if __name__ == "__main__":
