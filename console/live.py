@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,6 +24,7 @@ from emulator.swarm import Swarm
 __all__ = ["DEFAULT_RATE_HZ", "LiveFeed", "LiveSwarm"]
 
 DEFAULT_RATE_HZ = 10.0
+log = logging.getLogger("mavswarm.console")
 QUEUE_FRAMES = 2  # a slow page skips frames rather than lagging behind
 
 Activity = Callable[[], dict[str, dict[str, Any]]]
@@ -95,9 +97,13 @@ class LiveFeed:
         loop = asyncio.get_running_loop()
         next_at = loop.time()
         while self._subscribers:
-            text = build_frame(self.live)
+            try:
+                text = build_frame(self.live)
+            except Exception:  # a view must never take the swarm down: log, try next tick
+                log.exception("live frame of %s failed", self.live.id)
+                text = ""
             self.frames_built += 1
-            for queue in list(self._subscribers):
+            for queue in list(self._subscribers) if text else ():
                 if queue.full():
                     with contextlib.suppress(asyncio.QueueEmpty):
                         queue.get_nowait()

@@ -192,7 +192,16 @@ export async function showEditor(root) {
       field(e, "name", "name", { number: false }), field(e, "x", "x", { sub: "position" }), field(e, "y", "y", { sub: "position" }),
       field(e, "z", "z", { sub: "position" }), field(e, "radius", "radius (m)"), field(e, "width", "half-width x (m)"),
       field(e, "length", "half-length y (m)"), field(e, "height", "height (m, 0 = all altitudes)"),
-      field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)")].filter(Boolean));
+      field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)"),
+      e.vertices ? el("label", { class: "field" }, "scale polygon ", el("input", { id: "prop-scale", type: "number", value: 1, step: 0.1, min: 0.1,
+        onchange: (ev) => { scalePolygon(e, Number(ev.target.value)); refresh(); } })) : null].filter(Boolean));
+  }
+
+  function scalePolygon(e, factor) {
+    if (!(factor > 0)) return;
+    const cx = e.vertices.reduce((a, v) => a + Number(v.x), 0) / e.vertices.length;
+    const cy = e.vertices.reduce((a, v) => a + Number(v.y), 0) / e.vertices.length;
+    for (const v of e.vertices) { v.x = +(cx + (v.x - cx) * factor).toFixed(2); v.y = +(cy + (v.y - cy) * factor).toFixed(2); }
   }
 
   function renderTasks() {
