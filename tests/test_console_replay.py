@@ -165,7 +165,7 @@ def test_a_task_page_lays_the_tool_calls_on_the_replay(browser: Any,
         assert page.text_content("#verdict") == "PASS"
         calls = page.locator("#call-list li").all_text_contents()
         assert len([c for c in calls if " finish(" not in c]) == record["tool_calls"]
-        assert " finish(" in calls[-1]  # finish is logged, though it costs no budget
+        assert any(" finish(" in c for c in calls)  # logged, though it costs no budget
         assert any("take_off(altitude_m=25) → ok" in c for c in calls)
         t0, t1 = page.evaluate("[window.consoleView.player.t0, window.consoleView.player.t1]")
         assert [t0, t1] == pytest.approx(record["window_s"], abs=0.01)
