@@ -94,6 +94,8 @@ def main() -> None:
             watcheds.append(100.0 * (_cpu_s(proc.pid) - c0) / seconds)
             frames, size, wall = frames + got, size + nbytes, wall + seconds
         alone, watched = statistics.median(alones), statistics.median(watcheds)
+        page_fps = _page_frames_per_s(f"http://127.0.0.1:{port}/live/swarm?key={key}",
+                                      args.window)
     finally:
         proc.terminate()
         proc.wait(10)
@@ -101,6 +103,9 @@ def main() -> None:
     print(f"mavswarm up --drones {args.drones} --web, live frames at {args.hz:g} Hz, "
           f"{args.clients} client(s), {args.window:g} s windows")
     build_ms = _frame_build_ms(args.drones)
+    if page_fps is not None:
+        print(f"headless Chromium (software WebGL) showing the live view: {page_fps:.1f} "
+              "frames/s drawn into its 2D map and 3D view")
     print(table(["no page: up CPU %", "watched: up CPU %", "difference", "frames/s/client",
                  "kB/frame", "frame build ms", "build CPU % at rate"],
                 [[f"{alone:.1f}", f"{watched:.1f}", f"{watched - alone:+.1f}",
@@ -109,6 +114,28 @@ def main() -> None:
                   f"{build_ms * args.hz / 10:.2f}"]]))
     print("CPU % columns: medians over the rounds of the `up` process's CPU time / wall time; "
           "frame build: one frame of every drone's state as JSON, timed in this process")
+
+
+def _page_frames_per_s(url: str, seconds: float) -> float | None:
+    """Frames per second the console page itself takes in (None without chromium)."""
+    import shutil
+    chromium = shutil.which("chromium")
+    if chromium is None:
+        return None
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=chromium, args=[
+            "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"])
+        page = browser.new_page(viewport={"width": 1500, "height": 900})
+        page.goto(url)
+        page.wait_for_function("window.consoleView && window.consoleView.state.frames > 5",
+                               timeout=30_000)
+        f0, t0 = page.evaluate("window.consoleView.state.frames"), time.monotonic()
+        time.sleep(seconds)
+        f1 = page.evaluate("window.consoleView.state.frames")
+        rate = (f1 - f0) / (time.monotonic() - t0)
+        browser.close()
+    return rate
 
 
 def _frame_build_ms(drones: int, repeats: int = 200) -> float:

@@ -221,18 +221,29 @@ export class Map2D {
   }
 
   _trails() {
+    // Segments grouped into a few alpha steps by age: one stroke per step, not per segment.
     const ctx = this.ctx;
     const [r, g, b] = COLORS.trail;
-    ctx.lineWidth = 2;
+    const steps = 6;
+    const paths = Array.from({ length: steps }, () => new Path2D());
+    const used = new Array(steps).fill(false);
     for (const trail of this.trails.values()) {
       for (let k = 1; k < trail.length; k++) {
         const age = this.now - trail[k][2];
-        const alpha = Math.max(0.08, 0.8 * (1 - age / TRAIL_FADE_S));
+        const step = Math.min(steps - 1, Math.max(0, Math.floor((age / TRAIL_FADE_S) * steps)));
         const [ax, ay] = this.toScreen(trail[k - 1][0], trail[k - 1][1]);
         const [bx, by] = this.toScreen(trail[k][0], trail[k][1]);
-        ctx.strokeStyle = `rgba(${r}, ${g}, ${b}, ${alpha.toFixed(3)})`;
-        ctx.beginPath(); ctx.moveTo(ax, ay); ctx.lineTo(bx, by); ctx.stroke();
+        paths[step].moveTo(ax, ay);
+        paths[step].lineTo(bx, by);
+        used[step] = true;
       }
+    }
+    ctx.lineWidth = 2;
+    for (let step = steps - 1; step >= 0; step--) {
+      if (!used[step]) continue;
+      const alpha = Math.max(0.08, 0.8 * (1 - step / steps));
+      ctx.strokeStyle = `rgba(${r}, ${g}, ${b}, ${alpha.toFixed(3)})`;
+      ctx.stroke(paths[step]);
     }
   }
 
@@ -262,7 +273,7 @@ export class Map2D {
       }
       ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX, 0, 2 * Math.PI);
       ctx.fillStyle = COLORS.drone; ctx.fill();
-      if (this.toggles.labels) {
+      if (this.toggles.labels && (this.drones.length <= 40 || this.view.scale > 4 || d.id === this.selected)) {
         ctx.font = "bold 11px sans-serif"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
         ctx.fillStyle = "#1b1b1b"; ctx.fillText(d.id, sx + DRONE_RADIUS_PX + 3, sy + 8);
       }

@@ -49,8 +49,11 @@ export class View3D {
     this.scene.add(this.static, this.dynamic);
     this.drones = new Map();
     this.selected = null;
+    this._dirty = false;
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
+    const loop = () => { if (this._dirty) this.render(); requestAnimationFrame(loop); };
+    requestAnimationFrame(loop);
   }
 
   resize() {
@@ -131,9 +134,11 @@ export class View3D {
     heading.add(body, nose);
     const drop = new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3()]),
       new THREE.LineBasicMaterial({ color: "#555555" }));
+    drop.frustumCulled = false;
     const trail = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: "#e6007e" }));
+    trail.frustumCulled = false;
     this.dynamic.add(heading, drop, trail);
-    const entry = { heading, drop, trail, label: null, labelText: "" };
+    const entry = { heading, drop, trail, label: null, labelText: "", points: 0, first: null, capacity: 0 };
     this.drones.set(id, entry);
     return entry;
   }
@@ -145,14 +150,8 @@ export class View3D {
       entry.heading.rotation.y = -((d.yaw || 0) * Math.PI) / 180;
       const drop = entry.drop.geometry.attributes.position;
       drop.setXYZ(0, d.x, d.z, -d.y); drop.setXYZ(1, d.x, 0, -d.y); drop.needsUpdate = true;
-      entry.drop.geometry.computeBoundingSphere();
       const trail = trails.get(d.id);
-      if (trail && trail.length > 1) {
-        const flat = new Float32Array(trail.length * 3);
-        trail.forEach(([x, y, , z], k) => { flat[3 * k] = x; flat[3 * k + 1] = z ?? 0; flat[3 * k + 2] = -y; });
-        entry.trail.geometry.setAttribute("position", new THREE.BufferAttribute(flat, 3));
-        entry.trail.geometry.computeBoundingSphere();
-      }
+      if (trail && trail.length > 1) this._trail(entry, trail);
       const text = d.id === selected ? `${d.id} ${d.z.toFixed(1)} m` : "";
       if (text !== entry.labelText) {
         if (entry.label) this.dynamic.remove(entry.label);
@@ -162,10 +161,32 @@ export class View3D {
       }
       if (entry.label) entry.label.position.set(d.x, d.z + this.droneSize * 7, -d.y);
     }
-    this.render();
+    this._dirty = true;
+  }
+
+  // Trails grow by appending to a buffer with room to spare; a trail that changed otherwise
+  // (a replay scrubbed back, a trail restarted) is written again.
+  _trail(entry, trail) {
+    const n = trail.length;
+    const appendable = entry.first === trail[0] && n >= entry.points && n <= entry.capacity;
+    if (!appendable) {
+      entry.capacity = Math.max(64, 2 ** Math.ceil(Math.log2(n + 1)));
+      entry.trail.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(entry.capacity * 3), 3));
+      entry.points = 0;
+      entry.first = trail[0];
+    }
+    const attr = entry.trail.geometry.attributes.position;
+    for (let k = Math.max(0, entry.points - 1); k < n; k++) {
+      const [x, y, , z] = trail[k];
+      attr.setXYZ(k, x, z ?? 0, -y);
+    }
+    attr.needsUpdate = true;
+    entry.points = n;
+    entry.trail.geometry.setDrawRange(0, n);
   }
 
   render() {
+    this._dirty = false;
     this.renderer.render(this.scene, this.camera);
   }
 }
