@@ -144,16 +144,17 @@ def _run(args: argparse.Namespace) -> int:
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
                    clock=args.clock, backend=args.backend, ray_address=args.ray_address,
-                   mavsdk_log=args.verbose)
+                   mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0))
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
     print(f"mavswarm bench: {args.agent} agent, {len(paths)} sessions"
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
+    on_live = getattr(args, "on_live", None)
     if url is None:
         with ProgressBar("tasks") as bar:
-            outcome = run_benchmark(plan, sink=bar)
+            outcome = run_benchmark(plan, sink=bar, on_live=on_live)
         records = read_records(plan.results_path)
     else:
         from mqtt_bus import BenchBus
@@ -168,7 +169,8 @@ def _run(args: argparse.Namespace) -> int:
             for record in earlier:
                 bus.record(record)
             with ProgressBar("tasks") as bar:
-                outcome = run_benchmark(plan, sink=bar, on_record=bus.record)
+                outcome = run_benchmark(plan, sink=bar, on_record=bus.record,
+                                        on_live=on_live)
             records = read_records(plan.results_path)
             bus.finish(len(records))
         stats = bus.stats

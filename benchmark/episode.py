@@ -22,8 +22,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
+from benchmark.live_channel import LiveChannel, TaskWatch
+from benchmark.replay_data import encode_window
 from benchmark.session_file import Session, TaskSpec
-from benchmark.validators import CheckContext, evaluate, leaf_count
+from benchmark.tool_log import LoggedTools
+from benchmark.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from emulator.clock import ClockConfig
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
@@ -199,9 +202,10 @@ async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
 
 async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[str, Any]], None],
                       done: Mapping[str, Mapping[str, Any] | None] | None = None,
-                      options: EpisodeOptions = EpisodeOptions()) -> None:
+                      options: EpisodeOptions = EpisodeOptions(),
+                      live: LiveChannel | None = None) -> None:
     """Run every task of `session` not already in `done` (key -> its end state, or None),
-    calling `emit(record)` as each task ends."""
+    calling `emit(record)` as each task ends; `live` publishes frames while it runs."""
     done = done or {}
     keys = [record_key(session.id, t.id, agent.name, options.trial) for t in session.tasks]
     if all(k in done for k in keys):
@@ -218,6 +222,10 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                                        f"{session.source}: the session cannot start: {error}"))
         return
     async with stack:
+        watch = None
+        if live is not None:
+            watch = await stack.enter_async_context(
+                live.publishing(session, swarm, options.trial))
         restore: Mapping[str, Any] | None = None
         for task, key in zip(session.tasks, keys, strict=True):
             if key in done:
@@ -230,19 +238,25 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
-            emit(await run_task(session, task, agent, swarm, services, gateway, options))
+            emit(await run_task(session, task, agent, swarm, services, gateway, options,
+                                watch=watch))
 
 
 async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                    services: SwarmServices, gateway: Gateway,
-                   options: EpisodeOptions) -> dict[str, Any]:
-    """Reset, run the agent on one task, evaluate its checks; the task's record."""
+                   options: EpisodeOptions, *, watch: TaskWatch | None = None
+                   ) -> dict[str, Any]:
+    """Reset, run the agent on one task, evaluate its checks; the task's record. Its
+    `replay` (the window's ground truth and the tool calls, `benchmark.replay_data`) is stored
+    apart from results.jsonl by the orchestrator."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
     await reset_for_task(swarm, services, gateway)
     reset_s = time.perf_counter() - wall0
     agent_task = AgentTask(session.id, task.id, task.text, task.budget)
-    tools = AgentTools(gateway, agent_task)
+    tools = LoggedTools(gateway, agent_task)
+    if watch is not None:
+        watch.text, watch.tools = task.text, tools
     t0_s = services.clock_s()
     wall_agent = time.perf_counter()
     finish, error = await _run_agent(agent, agent_task, tools, options, services)
@@ -256,6 +270,10 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                                                     t1_s))
         eval_s = time.perf_counter() - wall_eval
         end_state = services.operator_snapshot()
+        replay = encode_window(swarm.recorder, t0_s, t1_s, tools.call_log())
+        replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),
+                          "budget": {"tool_calls": task.budget.tool_calls,
+                                     "sim_time_s": task.budget.sim_time_s}}
         services.operator_land_all()  # before the clock may run again
     finally:
         swarm.release_clock(hold)
@@ -273,4 +291,5 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
             "sim_time_s": round(t1_s - t0_s, 3), "wall_time_s": round(agent_wall_s, 3),
             "tokens": tokens,
             "overhead_s": {"reset": round(reset_s, 4), "evaluate": round(eval_s, 4)},
-            "end_state": end_state}
+            "end_state": end_state, "window_s": [round(t0_s, 3), round(t1_s, 3)],
+            "replay": replay}

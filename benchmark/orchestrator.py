@@ -25,6 +25,8 @@ from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
 from benchmark.progress import LineProgress, ProgressSink, task_line
+from benchmark.live_channel import LiveChannel
+from benchmark.replay_data import session_world, write_task_replay
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
@@ -55,6 +57,7 @@ class RunPlan:
     backend: str = "local"  # where units run: "local" (processes here) or "ray" (a cluster)
     ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
     mavsdk_log: bool = False  # print MAVSDK's own log lines in the units (mavsdk_log.py)
+    live_hz: float = 0.0  # > 0: sessions publish live frames (benchmark.live_channel)
 
     @property
     def results_path(self) -> Path:
@@ -117,11 +120,43 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock)
+    world = _world_of(path)
+
+    def emit(record: dict[str, Any]) -> None:
+        nonlocal world
+        if world is not None and "replay" in record:
+            record["replay_world"], world = world, None  # once per unit: the driver keeps it
+        send(("record", record))
+
+    live = None
+    if plan.live_hz > 0:
+        live = LiveChannel(lambda payload: send(("live", payload)), plan.live_hz)
     try:
-        asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
-                                done=done, options=options))
+        asyncio.run(run_session(session, agent, emit=emit,
+                                done=done, options=options, live=live))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+def _world_of(path: str) -> dict[str, Any] | None:
+    """The session file's world (drones, targets, obstacles) for replays; None if unreadable."""
+    try:
+        data = read_session_json(path)
+    except SessionFileError:
+        return None
+    return session_world(data) if isinstance(data, dict) else None
+
+
+def _keep_replay(out_dir: Path, record: dict[str, Any],
+                 progress: Callable[[str], None]) -> None:
+    """Store a record's replay data apart from results.jsonl (the record keeps none)."""
+    replay, world = record.pop("replay", None), record.pop("replay_world", None)
+    if replay is None:
+        return
+    try:
+        write_task_replay(out_dir, record, replay, world)
+    except (OSError, ValueError) as error:  # a replay lost never loses the result
+        progress(f"note: replay of {record['key']} not stored: {error}")
 
 
 def _unloadable_records(path: str, plan: RunPlan, trial: int, error: str,
@@ -172,10 +207,12 @@ def _session_head(path: Path) -> tuple[str | None, int]:
 
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                   sink: ProgressSink | None = None,
-                  on_record: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
+                  on_record: Callable[[dict[str, Any]], None] | None = None,
+                  on_live: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
     """Run the plan; returns what was written. Results go to plan.results_path. Each task's
     line and every note or error go to `sink` (default: lines handed to `progress`);
-    `on_record` hears each record right after it was appended (e.g. the MQTT bus)."""
+    `on_record` hears each record right after it was appended (e.g. the MQTT bus). With
+    `plan.live_hz`, each live frame a session publishes is handed to `on_live`."""
     if plan.agent not in AGENTS:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
@@ -208,6 +245,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         if kind == "record":
             if payload["key"] in log:
                 return
+            _keep_replay(plan.out_dir, payload, progress)
             log.append(payload)
             outcome.records_written += 1
             if on_record is not None:
@@ -218,6 +256,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
             out.say(f"error: {payload}")
         elif kind == "note":
             out.say(f"note: {payload}")
+        elif kind == "live" and on_live is not None:
+            on_live(payload)
 
     try:
         backend.run(functools.partial(run_unit, plan), units, handle)

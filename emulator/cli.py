@@ -10,7 +10,7 @@ import multiprocessing
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -20,7 +20,7 @@ from emulator.reference_mapping import notes_to_show
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
-__all__ = ["add_parsers", "run_up"]
+__all__ = ["Attachment", "add_parsers", "run_up"]
 
 MAX_VEHICLES_PER_NETWORK = 250
 
@@ -50,7 +50,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
 def run_up(args: argparse.Namespace) -> int:
     """Run the `up` command; errors in the arguments or the session are printed, exit 2.
-    `args.attach` (optional, an `Attach`) runs beside each swarm."""
+    `args.attachments` (optional, `Attachment`s) run beside each swarm."""
     try:
         return _up(args)
     except (ScenarioError, ValueError, OSError) as error:
@@ -74,13 +74,13 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
-Attach = Callable[[Swarm, "int | None"], contextlib.AbstractAsyncContextManager[Any]]
-"""What a composing command adds beside a running swarm (e.g. the MQTT bus): called with the
-swarm and its network index (None for a single network), entered while the swarm runs."""
+Attachment = Callable[[Swarm, "int | None"], contextlib.AbstractAsyncContextManager[object]]
+"""Something a composing command runs beside a swarm of `up` while it flies (the MQTT bus, the
+web console): called with the swarm and its network index (None for a single network)."""
 
 
 async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None, attach: Attach | None = None,
+                 truth_out: Path | None, attachments: Sequence[Attachment] = (),
                  network: int | None = None) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -93,7 +93,9 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
               f"physics {clock.physics_hz:g} Hz", flush=True)
         for url in swarm.connection_urls():
             print(f"{label}  {url}", flush=True)
-        async with attach(swarm, network) if attach else contextlib.nullcontext():
+        async with contextlib.AsyncExitStack() as stack:
+            for attach in attachments:
+                await stack.enter_async_context(attach(swarm, network))
             await stop.wait()
         stats = swarm.stats()
         print(f"{label}stopping after {stats.sim_time_s:.1f} s simulated in "
@@ -105,10 +107,10 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
 
 
 def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None, attach: Attach | None, network: int) -> None:
+                 truth_out: Path | None, attachments: Sequence[Attachment], network: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(scenario, clock, ports, label, truth_out, attach, network))
+        asyncio.run(_serve(scenario, clock, ports, label, truth_out, attachments, network))
 
 
 def _truth_path(args: argparse.Namespace) -> Path | None:
@@ -135,7 +137,7 @@ def _up(args: argparse.Namespace) -> int:
                      gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(_serve(scenario, clock, ports, "", args.truth_out,
-                           getattr(args, "attach", None)))
+                           tuple(getattr(args, "attachments", ()))))
     return 0
 
 
@@ -154,7 +156,7 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
         truth = args.truth_out.with_suffix(f".net{j}.npz") if args.truth_out else None
         proc = multiprocessing.Process(
             target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth,
-                                       getattr(args, "attach", None), j),
+                                       tuple(getattr(args, "attachments", ())), j),
             name=f"mavswarm-net{j}",
         )
         proc.start()

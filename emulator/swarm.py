@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 import math
 import time
@@ -21,6 +22,7 @@ from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
+from emulator.scenario_export import scenario_to_dict
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
@@ -234,7 +236,9 @@ class Swarm:
         )
 
     def export_truth(self, path: str | Path) -> Path:
-        return self.fleet.recorder.export(path)
+        """The ground truth, with the scenario attached as `scenario` (session-file JSON)."""
+        scene = json.dumps(scenario_to_dict(self.fleet.scenario))
+        return self.fleet.recorder.export(path, attachments={"scenario": scene})
 
     # -------------------------------------------------------------- stepping
     async def advance(self, seconds: float) -> None:

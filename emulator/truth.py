@@ -206,8 +206,10 @@ class TruthHistory(ABC):
         candidates = self._events if index is None else self._events_by_vehicle[index]
         return [e for e in candidates if t0 <= e.t_s <= t1 and (wanted is None or e.kind in wanted)]
 
-    def export(self, path: str | Path) -> Path:
-        """Write the whole history to one compressed ``.npz`` file, atomically."""
+    def export(self, path: str | Path, attachments: Mapping[str, str] | None = None) -> Path:
+        """Write the whole history to one compressed ``.npz`` file, atomically; each of
+        `attachments` (name -> text, e.g. the scenario as JSON) is stored beside it and read
+        back with :meth:`TruthLog.attachment`."""
         target = Path(path)
         target.parent.mkdir(parents=True, exist_ok=True)
         arrays: dict[str, Any] = {
@@ -219,6 +221,8 @@ class TruthHistory(ABC):
         arrays["meta_json"] = np.str_(json.dumps(meta))
         arrays["events_json"] = np.str_(json.dumps([e.to_json() for e in self._events]))
         arrays["format_version"] = np.array(FORMAT_VERSION)
+        for name, text in (attachments or {}).items():
+            arrays[f"attachment_{name}"] = np.str_(text)
         fd, temp_name = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
         try:
             with os.fdopen(fd, "wb") as handle:
@@ -259,6 +263,13 @@ class TruthLog(TruthHistory):
 
     def _samples(self, index: int) -> np.ndarray:
         return self._trajectories[index]
+
+    @staticmethod
+    def attachment(path: str | Path, name: str) -> str | None:
+        """The text attached as `name` when the file was exported; None when there is none."""
+        with np.load(Path(path), allow_pickle=False) as archive:
+            key = f"attachment_{name}"
+            return str(archive[key]) if key in archive else None
 
     @classmethod
     def load(cls, path: str | Path) -> TruthLog:

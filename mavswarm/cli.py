@@ -5,6 +5,7 @@
   mavswarm mcp     one session's agent tools over MCP (benchmark.server)
   mavswarm bench   generate, run, report and import the benchmark (benchmark)
   mavswarm mqtt-bridge  any MAVLink fleet on an MQTT broker (mqtt_bus)
+  mavswarm replay  recorded runs in the web console (console; `up --web`: the live view)
 
 `--verbose` (up, serve, bench run, bench generate) prints MAVSDK's own log lines and the
 packages' info logging; without it MAVSDK is silent.
@@ -23,6 +24,7 @@ from collections.abc import Sequence
 
 from benchmark import cli as bench_cli
 from benchmark.server import serve
+from console import cli as console_cli
 from emulator import cli as emulator_cli
 from mavlink_gateway import set_mavsdk_log
 from mqtt_bus import cli as mqtt_cli
@@ -40,6 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
     serve.add_parsers(sub)
     bench_cli.add_parsers(sub)
     mqtt_cli.add_parsers(sub)
+    console_cli.add_parsers(sub)
+    console_cli.extend_parsers(sub)
     return parser
 
 

@@ -64,8 +64,9 @@ def _run_up(args: argparse.Namespace) -> int:
         return 2
     if url is not None:
         base = args.mqtt_session or (args.session.stem if args.session else "swarm")
-        args.attach = functools.partial(_up_bus, url, base if _ok(base) else "swarm",
-                                        args.mqtt_osd_hz, not args.per_vehicle_ports)
+        args.attachments = [*getattr(args, "attachments", ()), functools.partial(
+            _up_bus, url, base if _ok(base) else "swarm", args.mqtt_osd_hz,
+            not args.per_vehicle_ports)]
     return emulator_cli.run_up(args)
 
 

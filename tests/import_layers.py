@@ -3,10 +3,10 @@
 Each package may import only the packages listed for it: the emulator and the MAVLink gateway
 nothing of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
 the MQTT bus the emulator and the agent side (it reads what vehicles report, never ground
-truth), the benchmark all of them, and the composition root (`mavswarm`) whatever it
-assembles. Every
-import counts wherever it stands: at the top, inside a function, under `TYPE_CHECKING`, or as
-a string passed to `__import__` / `importlib.import_module`.
+truth), the benchmark all of them, the web console all of those, and the composition root
+(`mavswarm`) whatever it assembles. Every import counts wherever it stands: at the top, inside
+a function, under `TYPE_CHECKING`, or as a string passed to `__import__` /
+`importlib.import_module`.
 """
 
 from __future__ import annotations
@@ -26,8 +26,10 @@ LAYERS: dict[str, frozenset[str]] = {
     "mqtt_bus": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
     "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
                             "mqtt_bus"}),
+    "console": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                          "mqtt_bus", "benchmark"}),
     "mavswarm": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                           "mqtt_bus", "benchmark"}),
+                           "mqtt_bus", "benchmark", "console"}),
 }
 
 

@@ -48,6 +48,7 @@ from mqtt_bus.url import BrokerUrl
 __all__ = [
     "FREE_FLIGHT",
     "ApiKey",
+    "AppExtension",
     "add_parsers",
     "current_task_tools",
     "generated_keys",
@@ -65,6 +66,7 @@ DEFAULT_REST_PORT = 8000
 DEFAULT_MCP_PORT = 8765
 MCP_PATH = "/mcp"
 Transport = Literal["stdio", "http"]
+AppExtension = Callable[[Any, Hub, Sequence["ApiKey"]], Callable[[str], None] | None]
 TRANSPORTS: tuple[Transport, ...] = ("stdio", "http")
 
 
@@ -201,12 +203,15 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
                      port: int = DEFAULT_REST_PORT, keys: Sequence[str | ApiKey] = (),
                      on_ready: Callable[[str], None] | None = None,
                      out: TextIO | None = None, open_access: bool = False,
-                     mqtt: BrokerUrl | None = None, mqtt_osd_hz: float = 2.0) -> None:
+                     mqtt: BrokerUrl | None = None, mqtt_osd_hz: float = 2.0,
+                     extend: AppExtension | None = None) -> None:
     """Serve the REST API over live sessions from `session_paths` until cancelled. `keys` are
     `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
     `out` (stdout by default) with the URL. `open_access` lets requests without a key act as
     the agent of the one session served (MultiUAV-Plat clients send none). `mqtt`: every
-    session started here also goes on that broker (README "MQTT bus")."""
+    session started here also goes on that broker (README "MQTT bus"). `extend(app, hub,
+    keys)` adds routes of a layer above (the web console) and may return what to call with
+    the base URL once the server listens."""
     if open_access and len(session_paths) != 1:
         raise ValueError("--open serves exactly one session: a request without a key must "
                          "know whose agent it is")
@@ -241,10 +246,13 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
         _add_keys(hub, parsed)
         hub.open_access = open_access
         app = create_app(hub)
+        extended = extend(app, hub, parsed) if extend is not None else None
 
         def ready(url: str) -> None:
             print(f"mavswarm REST API on {url} (docs at {url}/docs); sessions: "
                   f"{', '.join(hub.sessions)}", file=out, flush=True)
+            if extended is not None:
+                extended(url)
             if on_ready is not None:
                 on_ready(url)
 
@@ -326,11 +334,12 @@ def _guarded(run: Callable[[], None]) -> int:
 
 
 def run_serve(args: argparse.Namespace) -> int:
-    """Run a parsed `mavswarm serve` until interrupted; bad input is printed, exit 2."""
+    """Run a parsed `mavswarm serve` until interrupted; bad input is printed, exit 2.
+    `args.extend`, when a layer above set it, is passed on to `serve_rest`."""
     return _guarded(lambda: asyncio.run(serve_rest(
         _sessions(args), host=args.host, port=args.port, keys=args.keys,
         open_access=args.open_access, mqtt=mqtt_options(args),
-        mqtt_osd_hz=args.mqtt_osd_hz)))
+        mqtt_osd_hz=args.mqtt_osd_hz, extend=getattr(args, "extend", None))))
 
 
 def run_mcp(args: argparse.Namespace) -> int:

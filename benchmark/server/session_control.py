@@ -6,11 +6,12 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
-from agent_contract import AgentTask, AgentTools
+from agent_contract import AgentTask
 from benchmark.episode import reset_for_task
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.session_file import TaskSpec
+from benchmark.tool_log import LoggedTools
 
 __all__ = ["add_session_control_routes", "next_task"]
 
@@ -38,7 +39,7 @@ async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
     await live.tools.close()
     await reset_for_task(live.swarm, live.services, live.gateway)
     live.task = task
-    live.tools = AgentTools(live.gateway, AgentTask(live.id, task.id, task.text, task.budget))
+    live.tools = LoggedTools(live.gateway, AgentTask(live.id, task.id, task.text, task.budget))
     live.task_start_s = live.services.clock_s()
     return task, skipped
 

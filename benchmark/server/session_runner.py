@@ -14,6 +14,7 @@ from benchmark.episode import swarm_gateway
 from benchmark.importer import import_session
 from benchmark.server.hub import LiveSession
 from benchmark.session_file import Session, TaskSpec, session_from_dict
+from benchmark.tool_log import LoggedTools
 from mavlink_gateway import Gateway
 
 __all__ = ["FREE_FLIGHT", "SessionRunner", "current_task_tools", "first_task",
@@ -42,7 +43,7 @@ def current_task_tools(session: Session, gateway: Gateway) -> AgentTools:
     """The agent's tools for the session's current (first) task, under its budget."""
     task = first_task(session)
     assert task.budget is not None
-    return AgentTools(gateway, AgentTask(session.id, task.id, task.text, task.budget))
+    return LoggedTools(gateway, AgentTask(session.id, task.id, task.text, task.budget))
 
 
 def session_from_json(data: Any, source: str) -> tuple[Session, list[str]]:

@@ -1,0 +1,235 @@
+"""The console's HTTP and WebSocket routes (a FastAPI app, mounted at the root by `replay` and
+`up --web`, under `/console` by `serve`).
+
+Pages (one HTML page; the script picks the view from the path): `/` (home), `/live/{id}`,
+`/runs`, `/runs/{run}`, `/inspect/{session}/{task}?trial=K[&run=R][&agent=A]`, `/compare`,
+`/replay` (a truth file), `/editor`. Data under `/api/...`; live frames over the WebSocket
+`/api/live/{id}/ws?key=KEY`. Every API route needs an operator or admin key (`X-API-Key`
+header or `key` query parameter) unless the console was opened for local files only.
+"""
+
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastapi import Depends, FastAPI, HTTPException, Query, Request, WebSocket
+from fastapi.responses import HTMLResponse, JSONResponse, Response
+from starlette.websockets import WebSocketDisconnect
+
+from console.auth import ConsoleAuth
+from console.editor import (
+    EditorError,
+    blank_session,
+    generated_session,
+    load_for_editing,
+    save_session,
+    validate_session,
+)
+from console.live import LiveFeed, LiveSwarm
+from console.results_index import ReplayIndex
+
+__all__ = ["ConsoleState", "create_console_app"]
+
+PAGES = ("/", "/live/{rest:path}", "/runs", "/runs/{rest:path}", "/inspect/{rest:path}",
+         "/compare", "/replay", "/editor")
+ASSETS = {"app.js": "text/javascript", "style.css": "text/css"}
+
+
+@dataclass
+class ConsoleState:
+    """What one console serves."""
+
+    auth: ConsoleAuth
+    lives: dict[str, LiveSwarm] = field(default_factory=dict)
+    index: ReplayIndex = field(default_factory=ReplayIndex)
+    editor_root: Path = field(default_factory=Path.cwd)
+    feeds: dict[str, LiveFeed] = field(default_factory=dict)
+    rate_hz: float = 10.0
+    refresh: Callable[[], None] | None = None
+    """Called before live swarms are looked up (sessions a server starts later)."""
+
+    def live_swarms(self) -> dict[str, LiveSwarm]:
+        if self.refresh is not None:
+            self.refresh()
+        return self.lives
+
+    def feed(self, live_id: str) -> LiveFeed:
+        if live_id not in self.feeds:
+            self.feeds[live_id] = LiveFeed(self.lives[live_id], self.rate_hz)
+        return self.feeds[live_id]
+
+    async def aclose(self) -> None:
+        for feed in self.feeds.values():
+            await feed.aclose()
+
+
+def _asset(name: str) -> bytes:
+    path = resources.files("console") / "static" / name
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise HTTPException(500, f"console/static/{name} is missing: the page was not built "
+                                 "(run ./dev, or `npm ci && npm run build` in console/web)"
+                            ) from None
+
+
+def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
+    """The console app; `base` is the path it is mounted at ("" for the root)."""
+    app = FastAPI(title="mavswarm console", openapi_url=None, docs_url=None, redoc_url=None)
+
+    def staff(request: Request) -> str:
+        key = request.headers.get("x-api-key") or request.query_params.get("key")
+        verdict = state.auth.check(key)
+        if verdict.role is None:
+            raise HTTPException(verdict.status, verdict.reason)
+        return verdict.role
+
+    Staff = Annotated[str, Depends(staff)]
+    config = json.dumps({"base": base, "open": state.auth.open_access})
+
+    def page() -> HTMLResponse:
+        html = _asset("index.html").decode("utf-8").replace("__CONSOLE_CONFIG__", config)
+        return HTMLResponse(html.replace("__BASE__", base))
+
+    for route in PAGES:
+        app.add_api_route(route, page, methods=["GET"], response_class=HTMLResponse)
+
+    @app.get("/favicon.ico")
+    def favicon() -> Response:
+        return Response(status_code=204)
+
+    @app.get("/static/{name}")
+    def asset(name: str) -> Response:
+        if name not in ASSETS:
+            raise HTTPException(404, f"no asset {name!r}")
+        return Response(_asset(name), media_type=ASSETS[name],
+                        headers={"Cache-Control": "no-cache"})
+
+    @app.get("/api/info")
+    def info(role: Staff) -> dict[str, Any]:
+        return {"role": role,
+                "live": [{"id": live.id, "name": live.name, "drones": len(live.scene["drones"]),
+                          "commands": live.commander is not None}
+                         for live in state.live_swarms().values()],
+                "runs": [run.summary() for run in state.index.runs.values()],
+                "truth": None if state.index.truth is None else state.index.truth.path.name}
+
+    def live_or_404(live_id: str) -> LiveSwarm:
+        if live_id not in state.live_swarms():
+            raise HTTPException(404, f"no live swarm {live_id!r}; live: "
+                                     f"{', '.join(state.lives) or 'none'}")
+        return state.lives[live_id]
+
+    @app.get("/api/live/{live_id}/scene")
+    def scene(live_id: str, role: Staff) -> dict[str, Any]:
+        live = live_or_404(live_id)
+        return {"id": live.id, "name": live.name, "world": live.scene,
+                "task": live.task_text, "commands": live.commander is not None}
+
+    @app.websocket("/api/live/{live_id}/ws")
+    async def live_ws(websocket: WebSocket, live_id: str) -> None:
+        verdict = state.auth.check(websocket.query_params.get("key"))
+        if verdict.role is None or live_id not in state.live_swarms():
+            await websocket.close(code=4403 if verdict.status == 403 else 4401
+                                  if verdict.role is None else 4404,
+                                  reason=verdict.reason or f"no live swarm {live_id!r}")
+            return
+        await websocket.accept()
+        feed = state.feed(live_id)
+        queue = feed.subscribe()
+        try:
+            while True:
+                await websocket.send_text(await queue.get())
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass
+        finally:
+            feed.unsubscribe(queue)
+
+    @app.post("/api/live/{live_id}/command")
+    async def command(live_id: str, request: Request, role: Staff) -> JSONResponse:
+        live = live_or_404(live_id)
+        if live.commander is None:
+            raise HTTPException(409, "this live view takes no commands")
+        try:
+            body = json.loads(await request.body() or b"{}")
+        except ValueError as error:
+            raise HTTPException(422, f"the body is not JSON: {error}") from None
+        if not isinstance(body, dict) or not isinstance(body.get("drone_id"), str) \
+                or not isinstance(body.get("tool"), str):
+            raise HTTPException(422, "send {drone_id: str, tool: str, args: {...}}")
+        drone = body["drone_id"]
+        if drone not in {d["id"] for d in live.scene["drones"]}:
+            raise HTTPException(404, f"unknown drone {drone[:40]!r}")
+        result = await live.commander.run(drone, body["tool"], body.get("args") or {})
+        return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
+
+    def run_or_404(run_id: str):
+        if run_id not in state.index.runs:
+            raise HTTPException(404, f"no results run {run_id!r}; runs: "
+                                     f"{', '.join(state.index.runs) or 'none'}")
+        return state.index.runs[run_id]
+
+    @app.get("/api/runs/{run_id}/tasks")
+    def run_tasks(run_id: str, role: Staff) -> dict[str, Any]:
+        run = run_or_404(run_id)
+        return {**run.summary(), "rows": run.rows()}
+
+    @app.get("/api/task/{session_id}/{task_id}")
+    def task(session_id: str, task_id: str, role: Staff, trial: int = 0,
+             run: Annotated[str | None, Query()] = None,
+             agent: Annotated[str | None, Query()] = None) -> dict[str, Any]:
+        runs = [run_or_404(run)] if run is not None else list(state.index.runs.values())
+        for candidate in runs:
+            record = candidate.find(session_id, task_id, trial, agent)
+            if record is not None:
+                return candidate.task_view(record)
+        raise HTTPException(404, f"no record of task {task_id!r} of session {session_id!r} "
+                                 f"(trial {trial}) in runs {', '.join(r.id for r in runs)}")
+
+    @app.get("/api/truth")
+    def truth(role: Staff) -> dict[str, Any]:
+        if state.index.truth is None:
+            raise HTTPException(404, "no truth file was opened")
+        return state.index.truth.view()
+
+    @app.get("/api/editor/start")
+    def editor_start(role: Staff, source: str = "blank", path: str = "", family: str = "",
+                     level: str = "", index: int = 1) -> dict[str, Any]:
+        try:
+            if source == "blank":
+                return blank_session()
+            if source == "file":
+                return load_for_editing(Path(path))
+            if source == "level":
+                return generated_session(family, level, index)
+        except (ValueError, OSError) as error:
+            raise HTTPException(422, str(error)) from None
+        raise HTTPException(422, f"source must be blank, file or level, got {source[:20]!r}")
+
+    @app.post("/api/editor/validate")
+    async def editor_validate(request: Request, role: Staff) -> JSONResponse:
+        try:
+            return JSONResponse(validate_session(json.loads(await request.body())))
+        except ValueError as error:
+            failure = error if isinstance(error, EditorError) else EditorError(str(error))
+            return JSONResponse(failure.to_json(), status_code=422)
+
+    @app.post("/api/editor/save")
+    async def editor_save(request: Request, role: Staff) -> JSONResponse:
+        try:
+            body = json.loads(await request.body())
+            if not isinstance(body, dict) or not isinstance(body.get("path"), str):
+                raise EditorError("send {path: str, session: {...}}")
+            saved = save_session(body.get("session"), Path(body["path"]), state.editor_root)
+            return JSONResponse(saved)
+        except ValueError as error:
+            failure = error if isinstance(error, EditorError) else EditorError(str(error))
+            return JSONResponse(failure.to_json(), status_code=422)
+        except OSError as error:
+            return JSONResponse({"ok": False, "error": str(error), "entity": None}, 500)
+
+    return app

@@ -1,0 +1,231 @@
+"""The console on the command line: `mavswarm replay PATH...`, and `--web` for `mavswarm up`
+(the live view of the swarm it runs) and `mavswarm bench run` (the sessions it runs);
+`mavswarm serve` gets the console under `/console`.
+
+`add_parsers` adds `replay`; `extend_parsers` adds `--web` to `up` and the console to `serve`,
+both defined by the packages below (the composition root calls it after they added theirs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import sys
+from collections.abc import AsyncIterator, Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from benchmark import cli as bench_cli
+from benchmark.replay_data import session_world
+from benchmark.server import Hub
+from benchmark.server.serve import ApiKey, serve_asgi
+from console.app import ConsoleState, create_console_app
+from console.auth import ConsoleAuth
+from console.bench_watch import LiveBoard, serve_in_thread
+from console.commands import Commander
+from console.live import DEFAULT_RATE_HZ, LiveSwarm
+from console.results_index import open_paths
+from emulator import cli as emulator_cli
+from emulator.scenario_export import scenario_to_dict
+from emulator.services import SwarmServices
+from emulator.swarm import Swarm
+from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
+
+__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "add_parsers", "console_for_hub", "extend_parsers",
+           "run_replay", "swarm_console"]
+
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 8765
+SERVE_MOUNT = "/console"
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    """`replay`, on the `mavswarm` command's subparsers."""
+    replay = sub.add_parser(
+        "replay", help="open recorded runs in the web console (truth files, results folders)",
+        description="Serve the web console over a ground-truth file (*.truth.npz) or benchmark "
+                    "results folders (replay, run inspector, comparison).")
+    replay.add_argument("paths", type=Path, nargs="+", metavar="PATH",
+                        help="a *.truth.npz file, a results folder, or a folder of them")
+    replay.add_argument("--session", type=Path, help="a truth file's session (its world), "
+                        "for truth files that carry none")
+    replay.add_argument("--host", default=DEFAULT_HOST, help="address to listen on")
+    replay.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port")
+    replay.add_argument("--key", help="require this key (default: none; the console "
+                        "serves this machine's files on 127.0.0.1)")
+    replay.set_defaults(run=run_replay)
+
+
+def extend_parsers(sub: argparse._SubParsersAction) -> None:
+    """`up --web` and the console of `serve`."""
+    up = sub.choices["up"]
+    up.add_argument("--web", action="store_true",
+                    help="serve the web console's live view of the swarm (prints the URL)")
+    up.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
+    up.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
+    up.add_argument("--web-key", help="--web: the operator key (default: generated)")
+    up.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
+                    help="--web: live updates per second")
+    up.set_defaults(run=_run_up, run_up_next=up.get_default("run"))
+    serve = sub.choices["serve"]
+    serve.set_defaults(extend=console_for_hub)
+    bench = sub.choices["bench"]
+    bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
+    run = bench_sub.choices["run"]
+    run.add_argument("--web", action="store_true",
+                     help="follow the sessions being run in the web console (prints the URL)")
+    run.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
+    run.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
+    run.add_argument("--web-key", help="--web: the operator key (default: generated)")
+    run.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
+                     help="--web: live updates per second")
+    bench.set_defaults(run=_run_bench)
+
+
+def _print(text: str) -> None:
+    print(text, flush=True)
+
+
+@contextlib.asynccontextmanager
+async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
+                        key: str | None = None, rate_hz: float = DEFAULT_RATE_HZ,
+                        on_ready: Callable[[str, str], None] | None = None
+                        ) -> AsyncIterator[ConsoleState]:
+    """The console's live view of `swarm` served while inside; `on_ready(url, key)`."""
+    auth, key = ConsoleAuth.single_key(key)
+    scenario = swarm.fleet.scenario
+    gateway_stack = contextlib.AsyncExitStack()
+
+    async def open_gateway() -> Gateway:
+        _, bound = swarm.endpoints[0].local_address
+        fleet = await FleetConnection.connect(
+            f"udpout://127.0.0.1:{bound}", profiles_from_scenario(scenario),
+            scenario.world.origin)
+        gateway_stack.push_async_callback(fleet.close)
+        return Gateway(fleet.drones, SwarmServices(swarm))
+
+    commander = None if swarm.ports.per_vehicle else Commander("swarm", open_gateway)
+    live = LiveSwarm("swarm", scenario.name, scenario_to_dict(scenario), swarm,
+                     commander=commander)
+    state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz)
+    app = create_console_app(state)
+
+    def ready(url: str) -> None:
+        if on_ready is not None:
+            on_ready(url, key)
+
+    server = asyncio.create_task(serve_asgi(app, host=host, port=port, on_ready=ready))
+    try:
+        yield state
+    finally:
+        server.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await server
+        await state.aclose()
+        if commander is not None:
+            await commander.aclose()
+        await gateway_stack.aclose()
+
+
+def _run_up(args: argparse.Namespace) -> int:
+    if args.web:
+        most = emulator_cli.MAX_VEHICLES_PER_NETWORK
+        if args.session is None and (args.drones or 0) > most:
+            print(f"mavswarm: --web shows one swarm of at most {most} drones; {args.drones} "
+                  "run as several networks", file=sys.stderr)
+            return 2
+
+        def attach(swarm: Swarm, _network: int | None
+                   ) -> contextlib.AbstractAsyncContextManager[object]:
+            return swarm_console(
+                swarm, host=args.web_host, port=args.web_port, key=args.web_key,
+                rate_hz=args.web_hz,
+                on_ready=lambda url, key: _print(f"web console: {url}/live/swarm?key={key}"))
+        args.attachments = [*getattr(args, "attachments", ()), attach]
+    return args.run_up_next(args)
+
+
+def _run_bench(args: argparse.Namespace) -> int:
+    if args.bench_command != "run" or not args.web:
+        return bench_cli.run_bench(args)
+    board = LiveBoard()
+    try:
+        with serve_in_thread(board, host=args.web_host, port=args.web_port, key=args.web_key,
+                             rate_hz=args.web_hz) as (url, key):
+            _print(f"web console: {url}/?key={key} (pick the session to follow)")
+            args.live_hz, args.on_live = args.web_hz, board.update
+            return bench_cli.run_bench(args)
+    except OSError as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+
+
+def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str], None]:
+    """Mount the console on `serve`'s app at /console: operator and admin keys of the hub open
+    it, agent keys are refused. Sessions loaded later appear as they start."""
+
+    def lookup(key: str) -> str | None:
+        caller = hub.caller(key)
+        return None if caller is None else caller.role.value
+
+    state = ConsoleState(ConsoleAuth(lookup))
+    commanders: dict[str, Commander] = {}
+
+    def sync() -> None:
+        for sid, session in hub.sessions.items():
+            if sid in state.lives:
+                continue
+            commanders[sid] = Commander(sid, session.gateway)
+
+            def activity(sid: str = sid) -> dict[str, dict[str, Any]]:
+                tools = hub.sessions[sid].tools
+                return tools.activity() if hasattr(tools, "activity") else {}
+
+            state.lives[sid] = LiveSwarm(sid, session.session.name,
+                                         session_world(session.session.data), session.swarm,
+                                         activities=[activity], commander=commanders[sid],
+                                         task_text=session.task.text)
+
+    sync()
+    state.refresh = sync
+    app.mount(SERVE_MOUNT, create_console_app(state, base=SERVE_MOUNT))
+    staff = next((k.key for k in keys if k.role.value == "operator"), None)
+
+    def ready(url: str) -> None:
+        suffix = f"?key={staff}" if staff else "?key=OPERATOR_OR_ADMIN_KEY"
+        first = next(iter(hub.sessions), "")
+        _print(f"web console: {url}{SERVE_MOUNT}/live/{first}{suffix}")
+
+    return ready
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    """Serve the console over recorded runs until interrupted; bad paths exit 2."""
+    try:
+        index = open_paths(args.paths, args.session)
+    except ValueError as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+    if args.key:
+        auth, _ = ConsoleAuth.single_key(args.key)
+    else:
+        auth = ConsoleAuth(lambda _key: None, open_access=True)
+    state = ConsoleState(auth, index=index)
+    app = create_console_app(state)
+    suffix = f"?key={args.key}" if args.key else ""
+
+    def ready(url: str) -> None:
+        if index.runs:
+            _print(f"run inspector: {url}/runs{suffix}")
+        if index.truth is not None:
+            _print(f"replay of {index.truth.path.name}: {url}/replay{suffix}")
+
+    try:
+        asyncio.run(serve_asgi(app, host=args.host, port=args.port, on_ready=ready))
+    except KeyboardInterrupt:
+        return 130
+    except OSError as error:
+        print(f"mavswarm: {error}", file=sys.stderr)
+        return 2
+    return 0

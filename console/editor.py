@@ -1,0 +1,121 @@
+"""The scenario editor's server half: a blank map, an existing session file or a generated
+level to start from, and validation and saving of what the page edited. A session is saved
+only when it loads exactly as `mavswarm up` and `bench run` will load it; otherwise the problem
+is answered, naming the entity (`drones[2]`, ...) so the page can mark it, and nothing is
+written.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from benchmark.importer import load_any_session
+from benchmark.scenarios.generator import generate_world
+from benchmark.session_file import (
+    SCHEMA,
+    SessionFileError,
+    dump_session,
+    read_session_json,
+    session_from_dict,
+)
+
+__all__ = ["EditorError", "blank_session", "generated_session", "load_for_editing",
+           "save_session", "validate_session"]
+
+MIN_DRONE_SPACING_M = 1.0
+_ENTITY = re.compile(r"\b(drones|targets|obstacles|tasks)\[(\d+)\]")
+
+
+class EditorError(ValueError):
+    """A session the editor refuses; `entity` is ("drones", 2) when one is to blame."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        found = _ENTITY.search(message)
+        self.entity = (found.group(1), int(found.group(2))) if found else None
+
+    def to_json(self) -> dict[str, Any]:
+        where = None if self.entity is None else {"list": self.entity[0],
+                                                  "index": self.entity[1]}
+        return {"ok": False, "error": str(self), "entity": where}
+
+
+def blank_session(width_m: float = 600.0, height_m: float = 600.0) -> dict[str, Any]:
+    """An empty map with one drone, ready to edit."""
+    return {"schema": SCHEMA, "id": "custom-1", "family": "custom", "level": "custom",
+            "index": 0, "name": "Custom session", "description": "", "task_type": "others",
+            "map_size_m": [width_m, height_m], "safety_margin_m": 2.0,
+            "drones": [{"id": "d1", "name": "Drone 1", "position": {"x": 20.0, "y": 20.0,
+                                                                    "z": 0.0},
+                        "max_speed": 15, "max_altitude": 120, "battery_capacity": 5000}],
+            "targets": [], "obstacles": [], "tasks": []}
+
+
+def generated_session(family: str, level: str, index: int) -> dict[str, Any]:
+    """A generated level's world (no tasks) as a session to edit."""
+    world: dict[str, Any] = dict(generate_world(family, level, index))
+    world.setdefault("schema", SCHEMA)
+    world["tasks"] = []
+    return world
+
+
+def load_for_editing(path: Path) -> dict[str, Any]:
+    """A session file as the editor edits it (a MultiUAV-Plat file converted as `bench
+    import` does)."""
+    data = read_session_json(path)
+    if isinstance(data, Mapping) and data.get("schema") == SCHEMA:
+        return dict(data)
+    session, _ = load_any_session(path)
+    return dict(session.data)
+
+
+def _check_spacing(data: Mapping[str, Any]) -> None:
+    spots: list[tuple[float, float, float]] = []
+    for k, drone in enumerate(data.get("drones") or []):
+        p = drone.get("position") if isinstance(drone, Mapping) else None
+        if not isinstance(p, Mapping):
+            continue
+        try:
+            here = (float(p.get("x", 0.0)), float(p.get("y", 0.0)), float(p.get("z", 0.0)))
+        except (TypeError, ValueError):
+            continue
+        for j, other in enumerate(spots):
+            if math.dist(here, other) < MIN_DRONE_SPACING_M:
+                raise EditorError(f"drones[{k}]: overlaps drones[{j}] (closer than "
+                                  f"{MIN_DRONE_SPACING_M:g} m)")
+        spots.append(here)
+
+
+def validate_session(data: Any) -> dict[str, Any]:
+    """A summary of a valid session; raises EditorError naming what is wrong."""
+    if not isinstance(data, Mapping):
+        raise EditorError("the session must be a JSON object")
+    _check_spacing(data)
+    try:
+        session = session_from_dict(data, source="session")
+    except SessionFileError as error:
+        raise EditorError(str(error)) from None
+    for k, task in enumerate(session.tasks):
+        if task.error is not None:
+            raise EditorError(f"tasks[{k}] ({task.id}): {task.error}")
+    return {"ok": True, "id": session.id, "drones": len(session.scenario.vehicles),
+            "targets": len(session.scenario.world.targets),
+            "obstacles": len(session.scenario.world.obstacles), "tasks": len(session.tasks),
+            "notes": list(session.scenario.notes)}
+
+
+def save_session(data: Any, path: Path, root: Path) -> dict[str, Any]:
+    """Validate, then write `data` to `path` (inside `root`, ending in .json)."""
+    summary = validate_session(data)
+    target = (root / path).resolve() if not path.is_absolute() else path.resolve()
+    if not target.is_relative_to(root.resolve()):
+        raise EditorError(f"{path}: sessions are saved under {root}")
+    if target.suffix != ".json":
+        raise EditorError(f"{path}: a session file name ends in .json")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(dump_session(data), encoding="utf-8")
+    return {**summary, "path": str(target)}

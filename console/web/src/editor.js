@@ -1,0 +1,242 @@
+// The scenario editor: start from a blank map, a session file or a generated level; place,
+// move (drag), resize (fields) and delete drones, targets and obstacles; edit tasks' text and
+// budgets; every edit is validated by the server, an invalid one is shown (the entity in red)
+// and the session cannot be saved until it is fixed.
+
+import { getJson, postJson } from "./api.js";
+import { Map2D } from "./map2d.js";
+import { el } from "./panel.js";
+import { buildWorld, shapeOutline } from "./world.js";
+
+const TARGET_KINDS = ["fixed", "moving", "waypoint", "circle", "polygon"];
+const OBSTACLE_KINDS = ["circle", "point", "ellipse", "polygon"];
+const LISTS = ["drones", "targets", "obstacles"];
+
+function square(x, y, half) {
+  return [[x - half, y - half], [x + half, y - half], [x + half, y + half], [x - half, y + half]].map(([a, b]) => ({ x: a, y: b }));
+}
+
+function nextId(list, prefix) {
+  const used = new Set(list.map((e) => e.id));
+  for (let k = list.length + 1; ; k++) if (!used.has(`${prefix}${k}`)) return `${prefix}${k}`;
+}
+
+function inside([px, py], points) {
+  let hit = false;
+  for (let i = 0, j = points.length - 1; i < points.length; j = i++) {
+    const [xi, yi] = points[i], [xj, yj] = points[j];
+    if ((yi > py) !== (yj > py) && px < ((xj - xi) * (py - yi)) / (yj - yi) + xi) hit = !hit;
+  }
+  return hit;
+}
+
+export async function showEditor(root) {
+  const state = { session: null, selected: null, problem: null, valid: false, tool: "select" };
+  const status = el("p", { id: "editor-status", class: "muted" }, "");
+  const props = el("div", { id: "editor-props" });
+  const tasks = el("div", { id: "editor-tasks" });
+  const canvas = el("canvas", { id: "map2d" });
+  const pathInput = el("input", { id: "save-path", value: "sessions/custom.json", size: 28 });
+  const source = el("select", { id: "start-source" }, ["blank", "file", "level"].map((s) => el("option", { value: s }, s)));
+  const fileInput = el("input", { id: "start-path", placeholder: "session file path", size: 28 });
+  const family = el("select", { id: "start-family" }, ["area_search", "area_assignment_and_patrol", "target_assignment"].map((f) => el("option", { value: f }, f)));
+  const level = el("select", { id: "start-level" }, ["easy", "intermediate", "moderate", "hard", "extreme"].map((f) => el("option", { value: f }, f)));
+  const index = el("input", { id: "start-index", type: "number", value: 1, min: 1, max: 5 });
+  const toolSel = el("select", { id: "editor-tool", onchange: (e) => { state.tool = e.target.value; } },
+    ["select", "add drone", ...TARGET_KINDS.map((k) => `add target ${k}`), ...OBSTACLE_KINDS.map((k) => `add obstacle ${k}`)].map((t) => el("option", { value: t }, t)));
+  root.replaceChildren(
+    el("header", {}, el("h1", {}, "Scenario editor")),
+    el("div", { class: "filters" }, "start from ", source, fileInput, family, level, index,
+      el("button", { id: "start-load", onclick: () => start() }, "load")),
+    el("main", { class: "live" },
+      el("section", { class: "views" }, el("div", { class: "pane wide" }, canvas)),
+      el("aside", { class: "side" }, el("label", {}, "click to ", toolSel),
+        el("button", { id: "delete-selected", onclick: () => removeSelected() }, "delete selected"),
+        props, status, el("div", { class: "buttons" }, pathInput, el("button", { id: "save", onclick: () => save() }, "save")), tasks)));
+  const map = new Map2D(canvas, { onClick: (hit) => clicked(hit), onDragStart: (xy) => dragStart(xy) });
+  map.toggles.labels = true;
+  map.overlays.push((ctx, m, layer) => highlight(ctx, m, layer));
+  window.consoleView = { map, state };
+
+  async function start() {
+    const params = new URLSearchParams({ source: source.value, path: fileInput.value, family: family.value, level: level.value, index: index.value });
+    try {
+      state.session = await getJson(`/api/editor/start?${params}`);
+      state.selected = null;
+      refresh(true);
+    } catch (error) {
+      status.textContent = `cannot start: ${error.message}`;
+      status.className = "bad";
+    }
+  }
+
+  function refresh(fit = false) {
+    const world = buildWorld(state.session);
+    if (fit) map.setWorld(world); else { map.world = world; }
+    map.drones = world.drones.map((d) => ({ ...d, yaw: 0 }));
+    map.redraw();
+    renderProps();
+    renderTasks();
+    validate();
+  }
+
+  let pending = 0;
+  async function validate() {
+    const mine = ++pending;
+    const { status: code, body } = await postJson("/api/editor/validate", state.session);
+    if (mine !== pending) return;
+    state.valid = code === 200;
+    state.problem = state.valid ? null : body;
+    status.textContent = state.valid ? `valid: ${body.drones} drones, ${body.targets} targets, ${body.obstacles} obstacles, ${body.tasks} tasks`
+      : `invalid: ${body.error}`;
+    status.className = state.valid ? "ok" : "bad";
+    map.redraw();
+  }
+
+  function entity(sel) { return sel ? state.session[sel.list][sel.index] : null; }
+
+  function hitTest([x, y]) {
+    const world = map.world;
+    const [px, py] = map.toScreen(x, y);
+    let nearest = null, best = 10;
+    world.drones.forEach((d, k) => {
+      const [sx, sy] = map.toScreen(d.x, d.y);
+      if (Math.hypot(sx - px, sy - py) < best) { best = Math.hypot(sx - px, sy - py); nearest = { list: "drones", index: k }; }
+    });
+    if (nearest) return nearest;
+    for (const list of ["targets", "obstacles"]) {
+      const items = world[list];
+      for (let k = items.length - 1; k >= 0; k--) {
+        const s = items[k].shape;
+        const outline = shapeOutline(s, 32);
+        const small = s.type !== "polygon" && Math.max(s.rx, s.ry) * map.view.scale < 6;
+        if (inside([x, y], outline) || (small && Math.hypot(s.x - x, s.y - y) * map.view.scale < 8)) return { list, index: k };
+      }
+    }
+    return null;
+  }
+
+  function moveBy(e, dx, dy) {
+    const shift = (p) => { if (p) { p.x = +(Number(p.x) + dx).toFixed(2); p.y = +(Number(p.y) + dy).toFixed(2); } };
+    const samePlace = e.home_position && e.position && e.home_position.x === e.position.x && e.home_position.y === e.position.y;
+    shift(e.position);
+    if (samePlace) shift(e.home_position);
+    (e.vertices || []).forEach(shift);
+  }
+
+  function dragStart(xy) {
+    if (!state.session || state.tool !== "select") return null;
+    const hit = hitTest(xy);
+    if (!hit) return null;
+    state.selected = hit;
+    let last = xy;
+    return {
+      move: (now) => { moveBy(entity(hit), now[0] - last[0], now[1] - last[1]); last = now; refreshQuiet(); },
+      end: () => refresh(),
+    };
+  }
+
+  function refreshQuiet() {
+    const world = buildWorld(state.session);
+    map.world = world;
+    map.drones = world.drones.map((d) => ({ ...d, yaw: 0 }));
+  }
+
+  function clicked(hit) {
+    if (!state.session) return;
+    const x = +hit.x.toFixed(1), y = +hit.y.toFixed(1);
+    const s = state.session;
+    if (state.tool === "select") { state.selected = hitTest([hit.x, hit.y]); renderProps(); map.redraw(); return; }
+    if (state.tool === "add drone") {
+      const id = nextId(s.drones, "d");
+      s.drones.push({ id, name: `Drone ${id.slice(1)}`, position: { x, y, z: 0 }, max_speed: 15, max_altitude: 120, battery_capacity: 5000 });
+      state.selected = { list: "drones", index: s.drones.length - 1 };
+    } else if (state.tool.startsWith("add target")) {
+      const kind = state.tool.split(" ")[2];
+      const id = nextId(s.targets, "t");
+      const t = { id, name: `${kind} ${id}`, type: kind };
+      if (kind === "polygon") t.vertices = square(x, y, 25); else { t.position = { x, y, z: 0 }; t.radius = kind === "circle" ? 30 : 5; }
+      if (kind === "waypoint") t.charge_amount = 25;
+      s.targets.push(t);
+      state.selected = { list: "targets", index: s.targets.length - 1 };
+    } else if (state.tool.startsWith("add obstacle")) {
+      const kind = state.tool.split(" ")[2];
+      const id = nextId(s.obstacles, "o");
+      const o = { id, name: `${kind} ${id}`, type: kind, height: 20 };
+      if (kind === "polygon") o.vertices = square(x, y, 15);
+      else { o.position = { x, y, z: 0 }; if (kind === "ellipse") { o.width = 20; o.length = 10; } else o.radius = kind === "point" ? 2 : 15; }
+      s.obstacles.push(o);
+      state.selected = { list: "obstacles", index: s.obstacles.length - 1 };
+    }
+    refresh();
+  }
+
+  function removeSelected() {
+    if (!state.selected) return;
+    state.session[state.selected.list].splice(state.selected.index, 1);
+    state.selected = null;
+    refresh();
+  }
+
+  function field(e, key, label, { sub = null, number = true } = {}) {
+    const holder = sub ? e[sub] : e;
+    if (!holder || !(key in holder)) return null;
+    return el("label", { class: "field" }, `${label} `, el("input", { id: `prop-${sub ? `${sub}-` : ""}${key}`, value: holder[key], type: number ? "number" : "text", step: "any",
+      onchange: (ev) => { holder[key] = number ? Number(ev.target.value) : ev.target.value; refresh(); } }));
+  }
+
+  function renderProps() {
+    const e = entity(state.selected);
+    if (!e) { props.replaceChildren(el("p", { class: "muted" }, "Select an entity (click), drag to move it; or pick 'add …' and click the map.")); return; }
+    props.replaceChildren(...[el("h3", {}, `${state.selected.list.slice(0, -1)} ${e.id} (${e.type || "drone"})`),
+      field(e, "name", "name", { number: false }), field(e, "x", "x", { sub: "position" }), field(e, "y", "y", { sub: "position" }),
+      field(e, "z", "z", { sub: "position" }), field(e, "radius", "radius (m)"), field(e, "width", "half-width x (m)"),
+      field(e, "length", "half-length y (m)"), field(e, "height", "height (m, 0 = all altitudes)"),
+      field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)"),
+      e.vertices ? el("label", { class: "field" }, "scale polygon ", el("input", { id: "prop-scale", type: "number", value: 1, step: 0.1, min: 0.1,
+        onchange: (ev) => { scalePolygon(e, Number(ev.target.value)); refresh(); } })) : null].filter(Boolean));
+  }
+
+  function scalePolygon(e, factor) {
+    if (!(factor > 0)) return;
+    const cx = e.vertices.reduce((a, v) => a + Number(v.x), 0) / e.vertices.length;
+    const cy = e.vertices.reduce((a, v) => a + Number(v.y), 0) / e.vertices.length;
+    for (const v of e.vertices) { v.x = +(cx + (v.x - cx) * factor).toFixed(2); v.y = +(cy + (v.y - cy) * factor).toFixed(2); }
+  }
+
+  function renderTasks() {
+    const list = state.session.tasks || [];
+    tasks.replaceChildren(el("h3", {}, `Tasks (${list.length})`), ...list.map((t, k) => el("div", { class: "task-edit" },
+      el("b", {}, t.id), el("textarea", { id: `task-text-${k}`, rows: 2, onchange: (ev) => { t.text = ev.target.value; validate(); } }, t.text || ""),
+      el("label", {}, "tool calls ", el("input", { id: `task-calls-${k}`, type: "number", value: t.budget?.tool_calls ?? 0,
+        onchange: (ev) => { t.budget = { ...t.budget, tool_calls: Number(ev.target.value) }; validate(); } })),
+      el("label", {}, " sim s ", el("input", { id: `task-sim-${k}`, type: "number", value: t.budget?.sim_time_s ?? 0,
+        onchange: (ev) => { t.budget = { ...t.budget, sim_time_s: Number(ev.target.value) }; validate(); } })))));
+  }
+
+  function highlight(ctx, m, layer) {
+    if (layer !== "above" || !m.world) return;
+    const mark = (sel, color) => {
+      if (!sel || !LISTS.includes(sel.list)) return;
+      const item = m.world[sel.list][sel.index];
+      if (!item) return;
+      ctx.strokeStyle = color; ctx.lineWidth = 3;
+      if (sel.list === "drones") { const [sx, sy] = m.toScreen(item.x, item.y); ctx.beginPath(); ctx.arc(sx, sy, 11, 0, 2 * Math.PI); ctx.stroke(); return; }
+      ctx.beginPath();
+      shapeOutline(item.shape, 48).forEach(([x, y], k) => { const [sx, sy] = m.toScreen(x, y); k ? ctx.lineTo(sx, sy) : ctx.moveTo(sx, sy); });
+      ctx.closePath(); ctx.stroke();
+    };
+    mark(state.selected, "#ffb400");
+    if (state.problem?.entity) mark(state.problem.entity, "#d90429");
+  }
+
+  async function save() {
+    await validate();
+    if (!state.valid) { status.textContent = `not saved: ${state.problem?.error}`; status.className = "bad"; return; }
+    const { status: code, body } = await postJson("/api/editor/save", { path: pathInput.value, session: state.session });
+    status.textContent = code === 200 ? `saved to ${body.path}` : `not saved: ${body.error}`;
+    status.className = code === 200 ? "ok" : "bad";
+  }
+
+  await start();
+}

@@ -1,0 +1,307 @@
+// The 2D top-down map: metres east (x) and north (y), north up, with a scale bar; obstacles,
+// targets, drones with heading and fading trails; pan (drag) and zoom (wheel); clicks report
+// the world point and the drone under the pointer.
+
+import { shapeOutline } from "./world.js";
+
+export const COLORS = {
+  background: "#eef1f4", grid: "#dde3e9", building: "#8d99ae", buildingEdge: "#5c677d",
+  wall: "#2b2d42", wallEdge: "#d90429", area: "rgba(46, 204, 113, 0.18)", areaEdge: "#1e8449",
+  point: "#f39c12", station: "#2e86de", drone: "#e6007e", selected: "#ffb400",
+  trail: [230, 0, 126], perception: "rgba(46, 134, 222, 0.55)", task: "rgba(230, 0, 126, 0.5)",
+};
+export const DRONE_RADIUS_PX = 6;
+const TRAIL_FADE_S = 120;
+
+export class Map2D {
+  constructor(canvas, { onClick = null, onDragStart = null } = {}) {
+    this.canvas = canvas;
+    this.onDragStart = onDragStart;
+    this.ctx = canvas.getContext("2d");
+    this.onClick = onClick;
+    this.world = null;
+    this.drones = [];
+    this.trails = new Map();
+    this.now = 0;
+    this.selected = null;
+    this.toggles = { perception: false, task: false, labels: true };
+    this.overlays = [];
+    this.view = { scale: 1, cx: 0, cy: 0 };
+    this.dpr = window.devicePixelRatio || 1;
+    this._dirty = true;
+    this._fitted = false;
+    this._bindInput();
+    new ResizeObserver(() => this._resize()).observe(canvas);
+    this._resize();
+    const loop = () => { if (this._dirty) this.draw(); requestAnimationFrame(loop); };
+    requestAnimationFrame(loop);
+  }
+
+  get width() { return this.canvas.clientWidth; }
+  get height() { return this.canvas.clientHeight; }
+
+  _resize() {
+    this.dpr = window.devicePixelRatio || 1;
+    this.canvas.width = Math.max(1, Math.round(this.width * this.dpr));
+    this.canvas.height = Math.max(1, Math.round(this.height * this.dpr));
+    if (!this._fitted && this.world) this.fit();
+    this.redraw();
+  }
+
+  redraw() { this._dirty = true; }
+
+  setWorld(world) {
+    this.world = world;
+    this._fitted = false;
+    if (this.width > 0) this.fit();
+    this.redraw();
+  }
+
+  fit() {
+    if (!this.world) return;
+    const [x0, y0, x1, y1] = this.world.bounds;
+    const scale = Math.min(this.width / Math.max(1, x1 - x0), this.height / Math.max(1, y1 - y0));
+    this.view = { scale: scale > 0 ? scale : 1, cx: (x0 + x1) / 2, cy: (y0 + y1) / 2 };
+    this._fitted = this.width > 0;
+    this.redraw();
+  }
+
+  toScreen(x, y) {
+    const v = this.view;
+    return [this.width / 2 + (x - v.cx) * v.scale, this.height / 2 - (y - v.cy) * v.scale];
+  }
+
+  toWorld(px, py) {
+    const v = this.view;
+    return [v.cx + (px - this.width / 2) / v.scale, v.cy - (py - this.height / 2) / v.scale];
+  }
+
+  droneAt(px, py) {
+    let best = null, bestD = 12;
+    for (const d of this.drones) {
+      const [sx, sy] = this.toScreen(d.x, d.y);
+      const dist = Math.hypot(sx - px, sy - py);
+      if (dist < bestD) { best = d.id; bestD = dist; }
+    }
+    return best;
+  }
+
+  _bindInput() {
+    let drag = null;
+    this.canvas.addEventListener("mousedown", (e) => {
+      const handler = this.onDragStart ? this.onDragStart(this.toWorld(e.offsetX, e.offsetY), e) : null;
+      drag = { x: e.offsetX, y: e.offsetY, cx: this.view.cx, cy: this.view.cy, moved: false, handler };
+    });
+    window.addEventListener("mousemove", (e) => {
+      if (!drag) return;
+      const rect = this.canvas.getBoundingClientRect();
+      const dx = e.clientX - rect.left - drag.x, dy = e.clientY - rect.top - drag.y;
+      if (Math.abs(dx) + Math.abs(dy) > 3) drag.moved = true;
+      if (drag.moved && drag.handler) {
+        drag.handler.move(this.toWorld(e.clientX - rect.left, e.clientY - rect.top));
+        this.redraw();
+      } else if (drag.moved) {
+        this.view.cx = drag.cx - dx / this.view.scale;
+        this.view.cy = drag.cy + dy / this.view.scale;
+        this.redraw();
+      }
+    });
+    window.addEventListener("mouseup", (e) => {
+      if (drag && drag.moved && drag.handler) drag.handler.end();
+      if (drag && !drag.moved && this.onClick && e.target === this.canvas) {
+        const [x, y] = this.toWorld(e.offsetX, e.offsetY);
+        this.onClick({ x, y, drone: this.droneAt(e.offsetX, e.offsetY), event: e });
+      }
+      drag = null;
+    });
+    this.canvas.addEventListener("wheel", (e) => {
+      e.preventDefault();
+      const [wx, wy] = this.toWorld(e.offsetX, e.offsetY);
+      const factor = Math.exp(-e.deltaY * 0.0015);
+      this.view.scale = Math.min(200, Math.max(0.01, this.view.scale * factor));
+      const [nx, ny] = this.toWorld(e.offsetX, e.offsetY);
+      this.view.cx += wx - nx;
+      this.view.cy += wy - ny;
+      this.redraw();
+    }, { passive: false });
+  }
+
+  _path(points) {
+    const ctx = this.ctx;
+    ctx.beginPath();
+    points.forEach(([x, y], k) => {
+      const [sx, sy] = this.toScreen(x, y);
+      if (k === 0) ctx.moveTo(sx, sy); else ctx.lineTo(sx, sy);
+    });
+    ctx.closePath();
+  }
+
+  _circle(x, y, radiusM) {
+    const [sx, sy] = this.toScreen(x, y);
+    this.ctx.beginPath();
+    this.ctx.arc(sx, sy, Math.max(0.5, radiusM * this.view.scale), 0, 2 * Math.PI);
+  }
+
+  draw() {
+    this._dirty = false;
+    const ctx = this.ctx;
+    ctx.setTransform(this.dpr, 0, 0, this.dpr, 0, 0);
+    ctx.fillStyle = COLORS.background;
+    ctx.fillRect(0, 0, this.width, this.height);
+    if (!this.world) return;
+    this._grid();
+    this._targets();
+    this._obstacles();
+    for (const overlay of this.overlays) overlay(ctx, this, "below");
+    this._trails();
+    this._drones();
+    for (const overlay of this.overlays) overlay(ctx, this, "above");
+    this._scaleBar();
+  }
+
+  _grid() {
+    const ctx = this.ctx;
+    const step = niceStep(80 / this.view.scale);
+    const [x0, y1] = this.toWorld(0, 0), [x1, y0] = this.toWorld(this.width, this.height);
+    ctx.strokeStyle = COLORS.grid;
+    ctx.lineWidth = 1;
+    ctx.beginPath();
+    for (let x = Math.ceil(x0 / step) * step; x <= x1; x += step) {
+      const [sx] = this.toScreen(x, 0); ctx.moveTo(sx, 0); ctx.lineTo(sx, this.height);
+    }
+    for (let y = Math.ceil(y0 / step) * step; y <= y1; y += step) {
+      const [, sy] = this.toScreen(0, y); ctx.moveTo(0, sy); ctx.lineTo(this.width, sy);
+    }
+    ctx.stroke();
+  }
+
+  _targets() {
+    const ctx = this.ctx;
+    for (const t of this.world.targets) {
+      if (t.area) {
+        this._path(shapeOutline(t.shape, 64));
+        ctx.fillStyle = COLORS.area; ctx.fill();
+        ctx.strokeStyle = COLORS.areaEdge; ctx.lineWidth = 1.5; ctx.stroke();
+      } else {
+        const [sx, sy] = this.toScreen(t.shape.x, t.shape.y);
+        const r = Math.max(4, t.radius * this.view.scale);
+        ctx.beginPath();
+        if (t.station) ctx.rect(sx - r, sy - r, 2 * r, 2 * r);
+        else { ctx.moveTo(sx, sy - r); ctx.lineTo(sx + r, sy); ctx.lineTo(sx, sy + r); ctx.lineTo(sx - r, sy); ctx.closePath(); }
+        ctx.fillStyle = t.station ? COLORS.station : COLORS.point; ctx.fill();
+      }
+      if (this.toggles.labels) this._label(t.name, t.shape.type === "polygon" ? centroid(t.shape.points) : [t.shape.x, t.shape.y], "#145a32", 12);
+    }
+  }
+
+  _obstacles() {
+    const ctx = this.ctx;
+    for (const o of this.world.obstacles) {
+      this._path(shapeOutline(o.shape, 48));
+      ctx.fillStyle = o.allAltitudes ? COLORS.wall : COLORS.building;
+      ctx.fill();
+      ctx.strokeStyle = o.allAltitudes ? COLORS.wallEdge : COLORS.buildingEdge;
+      ctx.lineWidth = o.allAltitudes ? 2 : 1;
+      ctx.stroke();
+      if (this.toggles.labels && this.view.scale > 0.25) {
+        const c = o.shape.type === "polygon" ? centroid(o.shape.points) : [o.shape.x, o.shape.y];
+        this._label(o.allAltitudes ? "all alt." : `${o.height.toFixed(0)} m`, c, "#ffffff", 0, true);
+      }
+    }
+  }
+
+  _label(text, [x, y], color, dy = 0, center = false) {
+    const ctx = this.ctx;
+    const [sx, sy] = this.toScreen(x, y);
+    ctx.font = "11px sans-serif";
+    ctx.textAlign = "center";
+    ctx.textBaseline = center ? "middle" : "bottom";
+    ctx.fillStyle = color;
+    ctx.fillText(text, sx, sy - dy);
+  }
+
+  _trails() {
+    // Segments grouped into a few alpha steps by age: one stroke per step, not per segment.
+    const ctx = this.ctx;
+    const [r, g, b] = COLORS.trail;
+    const steps = 6;
+    const paths = Array.from({ length: steps }, () => new Path2D());
+    const used = new Array(steps).fill(false);
+    for (const trail of this.trails.values()) {
+      for (let k = 1; k < trail.length; k++) {
+        const age = this.now - trail[k][2];
+        const step = Math.min(steps - 1, Math.max(0, Math.floor((age / TRAIL_FADE_S) * steps)));
+        const [ax, ay] = this.toScreen(trail[k - 1][0], trail[k - 1][1]);
+        const [bx, by] = this.toScreen(trail[k][0], trail[k][1]);
+        paths[step].moveTo(ax, ay);
+        paths[step].lineTo(bx, by);
+        used[step] = true;
+      }
+    }
+    ctx.lineWidth = 2;
+    for (let step = steps - 1; step >= 0; step--) {
+      if (!used[step]) continue;
+      const alpha = Math.max(0.08, 0.8 * (1 - step / steps));
+      ctx.strokeStyle = `rgba(${r}, ${g}, ${b}, ${alpha.toFixed(3)})`;
+      ctx.stroke(paths[step]);
+    }
+  }
+
+  _drones() {
+    const ctx = this.ctx;
+    const spec = new Map((this.world.drones || []).map((d) => [d.id, d]));
+    for (const d of this.drones) {
+      const s = spec.get(d.id);
+      if (s && this.toggles.perception) {
+        this._circle(d.x, d.y, s.perceived);
+        ctx.setLineDash([5, 4]); ctx.strokeStyle = COLORS.perception; ctx.lineWidth = 1; ctx.stroke(); ctx.setLineDash([]);
+      }
+      if (s && this.toggles.task) {
+        this._circle(d.x, d.y, s.taskRadius);
+        ctx.strokeStyle = COLORS.task; ctx.lineWidth = 1; ctx.stroke();
+      }
+    }
+    for (const d of this.drones) {
+      const [sx, sy] = this.toScreen(d.x, d.y);
+      const yaw = ((d.yaw || 0) * Math.PI) / 180;
+      const hx = sx + Math.sin(yaw) * (DRONE_RADIUS_PX + 7), hy = sy - Math.cos(yaw) * (DRONE_RADIUS_PX + 7);
+      ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 2;
+      ctx.beginPath(); ctx.moveTo(sx, sy); ctx.lineTo(hx, hy); ctx.stroke();
+      if (d.id === this.selected) {
+        ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX + 4, 0, 2 * Math.PI);
+        ctx.strokeStyle = COLORS.selected; ctx.lineWidth = 3; ctx.stroke();
+      }
+      ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX, 0, 2 * Math.PI);
+      ctx.fillStyle = COLORS.drone; ctx.fill();
+      if (this.toggles.labels && (this.drones.length <= 40 || this.view.scale > 4 || d.id === this.selected)) {
+        ctx.font = "bold 11px sans-serif"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
+        ctx.fillStyle = "#1b1b1b"; ctx.fillText(d.id, sx + DRONE_RADIUS_PX + 3, sy + 8);
+      }
+    }
+  }
+
+  _scaleBar() {
+    const ctx = this.ctx;
+    const metres = niceStep(120 / this.view.scale);
+    const px = metres * this.view.scale;
+    const x = 16, y = this.height - 18;
+    ctx.fillStyle = "rgba(255,255,255,0.85)";
+    ctx.fillRect(x - 6, y - 18, px + 12, 28);
+    ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 2;
+    ctx.beginPath(); ctx.moveTo(x, y - 5); ctx.lineTo(x, y); ctx.lineTo(x + px, y); ctx.lineTo(x + px, y - 5); ctx.stroke();
+    ctx.font = "11px sans-serif"; ctx.fillStyle = "#1b1b1b"; ctx.textAlign = "center"; ctx.textBaseline = "bottom";
+    ctx.fillText(metres >= 1000 ? `${metres / 1000} km` : `${metres} m`, x + px / 2, y - 4);
+  }
+}
+
+export function niceStep(raw) {
+  const p = Math.pow(10, Math.floor(Math.log10(Math.max(raw, 1e-6))));
+  for (const m of [1, 2, 5, 10]) if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+
+export function centroid(points) {
+  let x = 0, y = 0;
+  for (const [px, py] of points) { x += px; y += py; }
+  return [x / Math.max(1, points.length), y / Math.max(1, points.length)];
+}
