@@ -24,8 +24,8 @@ from benchmark.agents import NoopAgent
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
-from benchmark.progress import LineProgress, ProgressSink, task_line
 from benchmark.live_channel import LiveChannel
+from benchmark.progress import LineProgress, ProgressSink, task_line
 from benchmark.replay_data import session_world, write_task_replay
 from benchmark.results import ResultsLog, read_records
 from benchmark.session_file import Session, SessionFileError, read_session_json

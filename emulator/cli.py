@@ -13,7 +13,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
 
 from emulator.clock import ClockConfig
 from emulator.reference_mapping import notes_to_show
