@@ -13,10 +13,12 @@ from pathlib import Path
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
+from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch, WatchBoard
 from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
+from emulator.swarm_faults import SwarmFaults
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
@@ -93,7 +95,8 @@ class Swarm:
 
     def __init__(self, scenario: Scenario, *, clock: ClockConfig | None = None,
                  ports: PortPlan | None = None,
-                 telemetry_hz: Mapping[str, float] | None = None) -> None:
+                 telemetry_hz: Mapping[str, float] | None = None,
+                 link_faults: LinkFaults | None = None) -> None:
         self.clock = clock or ClockConfig()
         self.ports = ports or PortPlan()
         self.ports.check(len(scenario.vehicles))
@@ -110,6 +113,9 @@ class Swarm:
             VehicleLink(ap, self._emit, self.streams, time.monotonic)
             for ap in self.fleet.autopilots
         ]
+        self.faults = SwarmFaults(self.fleet, link_faults)
+        for link in self.links:
+            link.on_mavlink_signal = self.faults.mavlink_signal_changed
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
@@ -145,6 +151,7 @@ class Swarm:
                     dests.append((p.api_host, p.gcs_port))
                 port = p.bind_port + i if p.per_vehicle else p.bind_port
                 endpoint = UdpEndpoint(group, dests, time.monotonic, self._wake.set)
+                endpoint.gate = self.faults.gate
                 endpoint.open(p.bind_host, port)
                 self.endpoints.append(endpoint)
                 self._endpoint_of.extend([endpoint] * len(group))
@@ -218,6 +225,12 @@ class Swarm:
             internal_errors=self._telemetry_errors
             + sum(e.stats.handler_errors for e in self.endpoints),
         )
+
+    def set_link_faults(self, faults: LinkFaults) -> None:
+        """Change the link faults from now on (an operator at run time); recorded in the
+        ground truth."""
+        self.faults.configure(faults)
+        self._wake.set()
 
     def export_truth(self, path: str | Path) -> Path:
         return self.fleet.recorder.export(path)
@@ -315,7 +328,8 @@ class Swarm:
         limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
         targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
         targets += self.watches.advance_targets()
-        ahead = [t for t in targets if t > now + 1e-9]
+        targets.append(self.faults.next_event_s())  # never step past a fault's time
+        ahead = [t for t in targets if t > now + 1e-9 and math.isfinite(t)]
         if ahead:
             to_target = math.ceil((min(ahead) - now) / dt - 1e-9)
             limit = to_target if limit == 0 else min(limit, to_target)
@@ -341,12 +355,14 @@ class Swarm:
                 deadline = wall + STEP_BUDGET_S
                 while self._should_step() and time.monotonic() < deadline:
                     fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
+                    self.faults.fire_due()
                     self._release_waiters()
                     self.watches.check()
             else:
                 assert self._pacer is not None
                 for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
                     fleet.step()
+                    self.faults.fire_due()
                 self._release_waiters()
             wall = time.monotonic()
             self._send_telemetry(wall)

@@ -17,6 +17,7 @@ from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
 from emulator.mavlink.camera import CAMERA_COMPONENT_ID, CAMERA_MESSAGES, CameraComponent
 from emulator.mavlink.codec import Encoder, mavlink
+from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import CommandArgs, Result, execute_command
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import apply_global_setpoint, apply_local_setpoint
@@ -63,6 +64,9 @@ class VehicleLink:
         self.missions = MissionTransfer(self)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
+        self.dedup = CommandDedup()
+        # told when this vehicle's MAVLink goes off or comes back (the swarm's link faults)
+        self.on_mavlink_signal: Callable[[Autopilot], None] | None = None
         ap.listener = self
 
     # ---------------------------------------------------------------- sending
@@ -154,6 +158,7 @@ class VehicleLink:
 
     def on_operator_reset(self) -> None:
         """An operator moved the vehicle or refilled its battery: report the new state now."""
+        self.dedup.forget()
         self.on_state_changed()
         for msg_id in _OPERATOR_RESET_STREAMS:
             self.send_once(msg_id)
@@ -182,19 +187,31 @@ class VehicleLink:
             2000, 2001, 521, 522, 525, 527, 530, 512
         ):
             result, reason = Result.UNSUPPORTED, None
+        elif args.command in STATEFUL_COMMANDS:
+            key, step = command_key(m), self.ap.fleet.step_count
+            repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s)
+            if repeated is not None:  # a retransmission: the first copy's answer again
+                self._after_ack.clear()
+                self._ack(m, args.command, repeated, target_component)
+                return
+            result, reason = execute_command(self, args)
+            self.dedup.answered(self._peer(m), key, step, self.wall_now_s, result)
         else:
             result, reason = execute_command(self, args)
-        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
-        src_system, src_component = self._peer(m)
-        self.send(mavlink.MAVLink_command_ack_message(
-            args.command, result, 0, 0, src_system, src_component
-        ), component)
+        self._ack(m, args.command, result, target_component)
         if reason:
             self.statustext(Severity.WARNING if result else Severity.INFO, reason)
         actions, self._after_ack = self._after_ack, []
         if result == Result.ACCEPTED:
             for action in actions:
                 action()
+
+    def _ack(self, m, command: int, result: int, target_component: int) -> None:
+        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
+        src_system, src_component = self._peer(m)
+        self.send(mavlink.MAVLink_command_ack_message(
+            command, result, 0, 0, src_system, src_component
+        ), component)
 
     def _command_long(self, m) -> None:
         self._on_command(m, CommandArgs.from_long(m))
