@@ -15,11 +15,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
 from benchmark.suite import SUITES, suite_paths
+from emulator.link_faults import add_link_arguments, link_faults_from_args
 
 __all__ = ["add_parsers", "run_bench"]
 
@@ -66,6 +68,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="results folder (default runs/bench-<agent>-<suite>); re-running "
                           "with the same folder resumes")
     _add_backend_arguments(run)
+    add_link_arguments(run)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -110,7 +113,8 @@ def _run(args: argparse.Namespace) -> int:
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
-                   clock=args.clock, backend=args.backend, ray_address=args.ray_address)
+                   clock=args.clock, backend=args.backend, ray_address=args.ray_address,
+                   link_faults=_link_faults_json(args))
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
@@ -127,6 +131,12 @@ def _run(args: argparse.Namespace) -> int:
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
+
+
+def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
+    """--link-* options as LinkFaults JSON for every session (None: each session's own)."""
+    faults = link_faults_from_args(args)
+    return None if faults is None else faults.to_json()
 
 
 def _report(args: argparse.Namespace) -> int:

@@ -52,6 +52,9 @@ class RunPlan:
     price_out_usd_per_mtok: float = 0.0  # MAVSWARM_PRICE_IN / MAVSWARM_PRICE_OUT)
     backend: str = "local"  # where units run: "local" (processes here) or "ray" (a cluster)
     ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
+    # link faults for every session (emulator.link_faults.LinkFaults.to_json()), else each
+    # session file's own ``link_faults``, if any
+    link_faults: dict[str, Any] | None = None
 
     @property
     def results_path(self) -> Path:
@@ -112,7 +115,8 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
-    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock)
+    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock,
+                             link_faults=plan.link_faults)
     try:
         asyncio.run(run_session(session, agent, emit=lambda r: send(("record", r)),
                                 done=done, options=options))

@@ -93,7 +93,7 @@ class LinkProfile:
         """A profile from {loss, latency_ms, jitter_ms, duplicate, reorder, outages}; fields
         not given keep `base`'s values."""
         if not isinstance(raw, Mapping):
-            raise LinkFaultError(f"{where or 'link profile'} must be an object")
+            raise LinkFaultError(f"{where.rstrip('.') or 'link profile'} must be an object")
         unknown = sorted(set(raw) - set(_PROFILE_KEYS))
         if unknown:
             raise LinkFaultError(f"{where}{unknown[0]} is not a link setting (known: "

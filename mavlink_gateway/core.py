@@ -30,10 +30,12 @@ LANDED_Z_M = 0.3  # the ground is z = 0 of the local frame everywhere
 FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.5 Hz)
 # A command MAVSDK got no answer to (it retransmits 3 times itself) is sent again this many
 # times in all; the vehicle acts on a command once (emulator.mavlink.command_dedup).
-COMMAND_TRIES = 4
+COMMAND_TRIES = 3
 SILENT_WALL_S = 5.0  # a drone whose telemetry stopped this long ago is tried only once
 # MAVSDK results that mean "no answer came", not "the vehicle said no"
 NO_ANSWER_RESULTS = frozenset({"TIMEOUT", "CONNECTION_ERROR", "NO_SYSTEM", "UNKNOWN", "BUSY"})
+# MAVSDK results given both for a refusal and for no answer (a parameter write that timed out)
+AMBIGUOUS_RESULTS = frozenset({"PARAMETER_ERROR"})
 
 
 class Refusal(Exception):
@@ -153,6 +155,10 @@ class GatewayCore:
                 raise
             except Exception as error:  # MAVSDK raises one error class per plugin
                 result = getattr(getattr(error, "result", None), "name", "UNKNOWN")
+                if result in AMBIGUOUS_RESULTS:  # a refusal comes with the autopilot's text
+                    await self._refusal_text(link, texts)
+                    if len(link.status_texts) == texts:
+                        result = "TIMEOUT"
                 if result in NO_ANSWER_RESULTS:
                     if attempt == tries:
                         raise NoAnswer(f"no answer from {link.drone_id} to {what} after "
