@@ -308,7 +308,10 @@ class Swarm:
 
     def _send_bursts(self) -> None:
         bursts, self._bursts = self._bursts, {}
+        lossy = self.faults.gate.active
         for k, count in bursts.items():
+            if lossy:
+                self.links[k].resend_mission_reached()
             for msg_id in self.streams.enabled(k):
                 try:
                     self.links[k].send_stream(msg_id)

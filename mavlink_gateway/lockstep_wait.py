@@ -30,6 +30,7 @@ OBSTACLE_TEXT = "Obstacle"
 FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost",
                   "Data link lost")
 REBURST_WALL_S = 0.3  # telemetry lost on the way: ask the swarm for the stopped state again
+REJUDGE_ROUNDS = 2  # a halt that shows no outcome is looked at again this many times
 # The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
 # cm/s per axis, which can read a little higher. A stepped clock stops right then.
 ARRIVED_SPEED_M_S = 0.5
@@ -110,6 +111,14 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
             if outcome is None and not watch.at_deadline:
                 await _text_grace(link)
                 outcome = judge_stop(link, what, texts, watch_obstacles)
+            for _ in range(REJUDGE_ROUNDS if outcome is None and not watch.at_deadline else 0):
+                # Telemetry that showed nothing may be stale (messages lost on the way): the
+                # clock stands still, so ask for the state again before letting it run on.
+                services.refresh_telemetry(link.drone_id)
+                await settle_telemetry(link, services)
+                outcome = await _done(done) or judge_stop(link, what, texts, watch_obstacles)
+                if outcome is not None:
+                    break
             if outcome is not None:
                 return outcome
             if watch.at_deadline:

@@ -183,3 +183,24 @@ async def test_link_faults_changed_at_run_time_are_recorded() -> None:
         assert swarm.fleet.autopilots[1].mode.name == "LAND"
     finally:
         await swarm.close()
+
+
+async def test_a_retransmitted_command_is_answered_as_the_first_and_run_once() -> None:
+    from tests.mavlink_client import running_swarm
+    nan = float("nan")
+    async with running_swarm(1) as (swarm, client):
+        assert (await client.command_long(1, 400, 1.0)).result == 0
+        first = await client.command_long(1, 22, nan, nan, nan, nan, nan, nan, nan)
+        again = await client.command_long(1, 22, nan, nan, nan, nan, nan, nan, nan)
+        assert (first.result, again.result) == (0, 0)  # not "already in the air"
+        takeoffs = [e for e in swarm.recorder.events() if e.kind == "takeoff"]
+        assert len(takeoffs) == 1
+        assert swarm.links[0].dedup.duplicates == 1
+        # a photo repeated with its capture sequence number: one photo, reported twice
+        for _ in range(2):
+            ack = await client.command_long(1, 2000, 0.0, 0.0, 1.0, 5.0, component=100)
+            assert ack.result == 0
+        await client.settle()
+        reports = client.messages("CAMERA_IMAGE_CAPTURED", system=1)
+        assert swarm.fleet.autopilots[0].photo_count == 1
+        assert [m.image_index for m in reports] == [1, 1]  # the same photo, twice

@@ -65,6 +65,7 @@ class VehicleLink:
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
+        self.last_reached: int | None = None  # the last MISSION_ITEM_REACHED of this mission
         # told when this vehicle's MAVLink goes off or comes back (the swarm's link faults)
         self.on_mavlink_signal: Callable[[Autopilot], None] | None = None
         ap.listener = self
@@ -140,7 +141,15 @@ class VehicleLink:
         self.statustext(severity, text)
 
     def on_mission_item_reached(self, seq: int) -> None:
+        self.last_reached = seq
         self.send(mavlink.MAVLink_mission_item_reached_message(seq))
+
+    def resend_mission_reached(self) -> None:
+        """MISSION_ITEM_REACHED comes once per item: on a lossy link the swarm repeats the
+        last one with the vehicle's telemetry at a lockstep halt, or a client could never
+        learn that its mission finished."""
+        if self.last_reached is not None:
+            self.send(mavlink.MAVLink_mission_item_reached_message(self.last_reached))
 
     def on_mission_current(self) -> None:
         self.send(msgs.mission_current(self.ap))
@@ -265,6 +274,7 @@ class VehicleLink:
 
     # ---------------------------------------------------------------- missions
     def _mission_count(self, m) -> None:
+        self.last_reached = None
         self.missions.on_count(m, self._peer(m), self.wall_now_s)
 
     def _mission_item_int(self, m) -> None:
@@ -283,6 +293,7 @@ class VehicleLink:
         self.missions.on_request(m, self._peer(m), wants_int=False)
 
     def _mission_clear_all(self, m) -> None:
+        self.last_reached = None
         self.missions.on_clear_all(m, self._peer(m))
 
     def _mission_set_current(self, m) -> None:
