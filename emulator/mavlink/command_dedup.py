@@ -62,6 +62,7 @@ class CommandDedup:
             return None
         if last.step != step and wall_s - last.wall_s > RETRANSMIT_WINDOW_S:
             return None
+        last.wall_s = wall_s  # the window runs from the latest copy
         self.duplicates += 1
         return last.result
 
@@ -70,5 +71,6 @@ class CommandDedup:
         self._last[source] = _Answered(key, step, wall_s, result)
 
     def forget(self) -> None:
-        """An operator moved the vehicle: a command sent before means nothing now."""
+        """The vehicle's state changed otherwise (an operator moved it, a client changed its
+        mission or a parameter): a command sent before is no retransmission of the next."""
         self._last.clear()

@@ -255,6 +255,7 @@ class VehicleLink:
         self.send(self._param_value(name))
 
     def _param_set(self, m) -> None:
+        self.dedup.forget()
         name = m.param_id
         try:
             d = ParamStore.definition(name)
@@ -275,6 +276,7 @@ class VehicleLink:
     # ---------------------------------------------------------------- missions
     def _mission_count(self, m) -> None:
         self.last_reached = None
+        self.dedup.forget()  # a command after this one is no retransmission of one before
         self.missions.on_count(m, self._peer(m), self.wall_now_s)
 
     def _mission_item_int(self, m) -> None:
@@ -294,9 +296,11 @@ class VehicleLink:
 
     def _mission_clear_all(self, m) -> None:
         self.last_reached = None
+        self.dedup.forget()
         self.missions.on_clear_all(m, self._peer(m))
 
     def _mission_set_current(self, m) -> None:
+        self.dedup.forget()
         self.missions.on_set_current(m)
 
     # ------------------------------------------------------------------ others
