@@ -180,7 +180,8 @@ async def test_link_faults_changed_at_run_time_are_recorded() -> None:
                 if e.kind == "link_faults"] == [("d1", 0.0), ("d2", 1.0)]
         lost = [e for e in events if e.kind == "link_lost"]
         assert [(e.vehicle_id, round(e.t_s - t0, 2)) for e in lost] == [("d2", 10.0)]
-        assert swarm.fleet.autopilots[1].mode.name == "LAND"
+        to_land = [e for e in events if e.kind == "mode" and e.data["mode"] == "land"]
+        assert [(e.vehicle_id, round(e.t_s - t0, 2)) for e in to_land] == [("d2", 10.0)]
     finally:
         await swarm.close()
 

@@ -6,7 +6,8 @@ and only its ACK lost; executing the copy again would answer, for a take-off, "a
 air", and the client would report a refusal of something that happened. So a state-changing
 command identical to the last one from the same client, arriving in the same physics step (a
 lockstep clock stands still while a client exchanges commands) or within the client's
-retransmission span, is answered with the cached result and not executed again. Commands that
+retransmission span while the vehicle is still as the first copy left it, is answered with the
+cached result and not executed again. Commands that
 only ask for data are always executed (answering them twice is harmless), and camera captures
 use the camera protocol's capture sequence number instead (see emulator.mavlink.camera).
 """
@@ -45,6 +46,7 @@ class _Answered:
     step: int
     wall_s: float
     result: int
+    state: object  # the vehicle's state right after it acted
 
 
 class CommandDedup:
@@ -55,20 +57,24 @@ class CommandDedup:
         self.duplicates = 0
 
     def repeat_of(self, source: tuple[int, int], key: tuple[object, ...], step: int,
-                  wall_s: float) -> int | None:
-        """The cached result if this command repeats the last one from `source`."""
+                  wall_s: float, state: object) -> int | None:
+        """The cached result if this command repeats the last one from `source`: in the same
+        physics step, or within the retransmission span while the vehicle is still in the
+        state the first copy left it in (a command sent again after that goal ended, say a
+        move towards an obstacle it already stopped at, is a new command)."""
         last = self._last.get(source)
         if last is None or last.key != key:
             return None
-        if last.step != step and wall_s - last.wall_s > RETRANSMIT_WINDOW_S:
+        if last.step != step and (wall_s - last.wall_s > RETRANSMIT_WINDOW_S
+                                  or state != last.state):
             return None
         last.wall_s = wall_s  # the window runs from the latest copy
         self.duplicates += 1
         return last.result
 
     def answered(self, source: tuple[int, int], key: tuple[object, ...], step: int,
-                 wall_s: float, result: int) -> None:
-        self._last[source] = _Answered(key, step, wall_s, result)
+                 wall_s: float, result: int, state: object) -> None:
+        self._last[source] = _Answered(key, step, wall_s, result, state)
 
     def forget(self) -> None:
         """The vehicle's state changed otherwise (an operator moved it, a client changed its

@@ -198,22 +198,36 @@ class VehicleLink:
             result, reason = Result.UNSUPPORTED, None
         elif args.command in STATEFUL_COMMANDS:
             key, step = command_key(m), self.ap.fleet.step_count
-            repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s)
+            repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s,
+                                            self._state_key())
             if repeated is not None:  # a retransmission: the first copy's answer again
                 self._after_ack.clear()
                 self._ack(m, args.command, repeated, target_component)
                 return
             result, reason = execute_command(self, args)
-            self.dedup.answered(self._peer(m), key, step, self.wall_now_s, result)
+            self._answer(m, args.command, result, reason, target_component)
+            self.dedup.answered(self._peer(m), key, step, self.wall_now_s, result,
+                                self._state_key())
+            return
         else:
             result, reason = execute_command(self, args)
-        self._ack(m, args.command, result, target_component)
+        self._answer(m, args.command, result, reason, target_component)
+
+    def _answer(self, m, command: int, result: int, reason: str | None,
+                target_component: int) -> None:
+        self._ack(m, command, result, target_component)
         if reason:
             self.statustext(Severity.WARNING if result else Severity.INFO, reason)
         actions, self._after_ack = self._after_ack, []
         if result == Result.ACCEPTED:
             for action in actions:
                 action()
+
+    def _state_key(self) -> tuple[object, ...]:
+        """What a command changes: mode, arming, landed state, goal, whether a goal runs."""
+        ap, fleet = self.ap, self.ap.fleet
+        return (ap.mode, ap.armed, ap.landed_state, fleet.dyn.goal_m[self.k].tobytes(),
+                bool(fleet.busy[self.k]))
 
     def _ack(self, m, command: int, result: int, target_component: int) -> None:
         component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
