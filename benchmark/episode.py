@@ -23,6 +23,7 @@ from typing import Any
 
 from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
 from benchmark.session_file import Session, TaskSpec
+from benchmark.task_faults import TaskFaults, task_faults
 from benchmark.validators import CheckContext, evaluate, leaf_count
 from emulator.clock import ClockConfig
 from emulator.link_faults import LinkFaults
@@ -172,6 +173,14 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
     return swarm.fleet.now_s
 
 
+def _task_faults(session: Session, task: TaskSpec) -> TaskFaults | None:
+    """The hidden faults a task schedules (benchmark.task_faults), if any."""
+    raw_tasks = session.data.get("tasks")
+    index = session.tasks.index(task)
+    raw = raw_tasks[index] if isinstance(raw_tasks, list) and index < len(raw_tasks) else None
+    return task_faults(raw, [v.id for v in session.scenario.vehicles], f"tasks[{index}]")
+
+
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
                 category: str, agent: str, trial: int) -> dict[str, Any]:
     """The fields that name a task's record."""
@@ -255,6 +264,12 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
+            try:
+                _task_faults(session, task)
+            except ValueError as error:
+                emit(task_error_record(session, task, agent.name, options.trial,
+                                       f"{session.source}: {error}"))
+                continue
             emit(await run_task(session, task, agent, swarm, services, gateway, options))
 
 
@@ -269,6 +284,9 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     agent_task = AgentTask(session.id, task.id, task.text, task.budget)
     tools = AgentTools(gateway, agent_task)
     t0_s = services.clock_s()
+    faults = _task_faults(session, task)
+    if faults is not None:
+        faults.apply(swarm, t0_s)
     wall_agent = time.perf_counter()
     finish, error = await _run_agent(agent, agent_task, tools, options, services)
     agent_wall_s = time.perf_counter() - wall_agent
@@ -281,6 +299,8 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                                                     t1_s))
         eval_s = time.perf_counter() - wall_eval
         end_state = services.operator_snapshot()
+        if faults is not None:
+            faults.end(swarm, session_link_faults(session, options.link_faults))
         services.operator_land_all()  # before the clock may run again
     finally:
         swarm.release_clock(hold)

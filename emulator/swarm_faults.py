@@ -84,6 +84,11 @@ class SwarmFaults:
         heapq.heappush(self._events, (max(t_s, self._fleet.now_s), next(self._order), kind,
                                       action))
 
+    def clear_scheduled(self) -> None:
+        """Drop every scheduled event that is not the links' own (a task's failures)."""
+        self._events = [e for e in self._events if e[1] in self._link_events]
+        heapq.heapify(self._events)
+
     def _outage_start(self, ap: Autopilot, direction: str, start_s: float, end_s: float
                       ) -> Callable[[], None]:
         def fire() -> None:

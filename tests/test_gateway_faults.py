@@ -149,3 +149,41 @@ async def test_injected_failures_as_px4_answers_them() -> None:
 
         services.operator_land_all()  # the operator's reset between tasks repairs them
         assert not any(ap.failures.any for ap in aps)
+
+
+async def test_a_task_schedules_hidden_failures_and_link_faults_from_its_start() -> None:
+    import copy
+    import json
+
+    from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
+    from benchmark.oracle import OracleAgent
+    from benchmark.session_file import session_from_dict
+    from tests.cli_fixtures import ROOT
+
+    path = ROOT / "benchmark" / "sessions" / "target_assignment-easy-1.json"
+    data = json.loads(path.read_text())
+    data["tasks"] = copy.deepcopy(data["tasks"][:2])  # t01: d2 takes off to 13 m and holds
+    data["tasks"][0]["faults"] = {"failures": [{"drone": "d2", "after_s": 3, "unit": "motor"}],
+                                  "link": {"loss": 0.1, "seed": 5}}
+    session = session_from_dict(data, source="resilience-test")
+    agent = OracleAgent(session.scenario, {t.id: t.oracle for t in session.tasks})
+    async with swarm_gateway(session, lockstep=True) as (swarm, services, gateway):
+        t0 = services.clock_s()
+        record = await run_task(session, session.tasks[0], agent, swarm, services, gateway,
+                                EpisodeOptions())
+        # the record's own start is after the reset; the failure comes 3 s into the task
+        failure = next(e for e in swarm.recorder.events() if e.kind == "failure")
+        assert (failure.vehicle_id, failure.data["unit"], failure.data["source"]) == \
+            ("d2", "motor", "schedule")
+        faults_events = [e for e in swarm.recorder.events() if e.kind == "link_faults"]
+        assert [e.data["uplink"]["loss"] for e in faults_events if e.vehicle_id == "d2"] == \
+            [0.1, 0.0]  # the task's link, then the session's clean link again
+        start = faults_events[0].t_s
+        assert start >= t0 and round(failure.t_s - start, 6) == 3.0
+        assert record["passed"] is False and record["finish"] == "finished"
+        second = await run_task(session, session.tasks[1], agent, swarm, services, gateway,
+                                EpisodeOptions())
+        assert second["finish"] == "finished"
+        assert any(e.kind == "operator_repair" and e.vehicle_id == "d2"
+                   for e in swarm.recorder.events())
+        assert not swarm.fleet.autopilots[1].failures.any

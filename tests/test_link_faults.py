@@ -205,3 +205,27 @@ async def test_a_retransmitted_command_is_answered_as_the_first_and_run_once() -
         reports = client.messages("CAMERA_IMAGE_CAPTURED", system=1)
         assert swarm.fleet.autopilots[0].photo_count == 1
         assert [m.image_index for m in reports] == [1, 1]  # the same photo, twice
+
+
+def test_operator_link_faults_are_checked_before_anything_changes() -> None:
+    from emulator.services import SwarmServices
+    swarm = Swarm(tiny_scenario([vehicle(1), vehicle(2, x=50.0)]), clock=ClockConfig(stepped=True))
+    services = SwarmServices(swarm)
+    with pytest.raises(LinkFaultError, match="loss must be"):
+        services.operator_set_link_faults({"vehicles": {"d1": {"loss": -0.5}}})
+    with pytest.raises(LinkFaultError, match="unknown drone 'd7'"):
+        services.operator_set_link_faults({"vehicles": {"d7": {"loss": 0.5}}})
+    assert swarm.faults.gate.faults.clean and not swarm.recorder.events()
+    services.operator_set_link_faults({"vehicles": {"d1": {"loss": 0.5}}})
+    assert swarm.faults.gate.profile(0, UPLINK).loss == 0.5
+    assert swarm.faults.gate.profile(1, UPLINK).clean
+    assert [e.kind for e in swarm.recorder.events()] == ["link_faults", "link_faults"]
+
+
+def test_mavswarm_up_refuses_bad_link_options_with_the_field_named(capsys) -> None:
+    from emulator.cli import add_parsers
+    parser = argparse.ArgumentParser()
+    add_parsers(parser.add_subparsers())
+    args = parser.parse_args(["up", "--link-loss", "1.5", "--no-truth"])
+    assert args.run(args) == 2
+    assert "loss must be a number within [0, 1]" in capsys.readouterr().err
