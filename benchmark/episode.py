@@ -52,7 +52,7 @@ LOCKSTEP_TELEMETRY_HZ = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATU
                          "ATTITUDE": 0.5, "GPS_RAW_INT": 0.5, "VFR_HUD": 0.5}
 POSITION_MSGS_PER_S = 300.0  # all drones together: what the gateway's MAVSDK keeps up with
 RESET_SYNC_TIMEOUT_S = 20.0
-RESET_RESEND_S = 0.5
+RESET_RESEND_S = 0.25
 PLAY_OUT_WALL_S = 120.0
 SETTLE_S = 1.0
 

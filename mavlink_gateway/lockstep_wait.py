@@ -29,7 +29,7 @@ POLL_S = 0.01
 OBSTACLE_TEXT = "Obstacle"
 FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost",
                   "Data link lost")
-REBURST_WALL_S = 0.3  # telemetry lost on the way: ask the swarm for the stopped state again
+REBURST_WALL_S = 0.15  # telemetry lost on the way: ask the swarm for the stopped state again
 REJUDGE_ROUNDS = 2  # a halt that shows no outcome is looked at again this many times
 # The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
 # cm/s per axis, which can read a little higher. A stepped clock stops right then.

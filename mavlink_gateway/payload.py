@@ -23,7 +23,7 @@ MAX_WAIT_S = 3600.0
 IMAGE_START_CAPTURE = 2000
 MAV_RESULT_ACCEPTED = 0
 PHOTO_TRIES = 4
-PHOTO_REPORT_WALL_S = 1.5  # wall time a capture report may take before it is asked again
+PHOTO_REPORT_WALL_S = 0.6  # wall time a capture report may take before it is asked again
 
 MAV_RESULTS = {1: "temporarily rejected", 2: "denied", 3: "unsupported", 4: "failed"}
 
