@@ -97,6 +97,10 @@ class FlightPrimitives(GatewayCore):
             raise Refusal(f"({x:.0f}, {y:.0f}) is more than 10 km from home")
         start = link.position_m or target
         lat, lon, alt = link.geodetic(x, y, home[2] + z)
+        # Home's altitude arrives in whole millimetres, then as float32 (HOME_POSITION or
+        # the GPS origin): the same home can differ by 3e-5 m. A millimetre altitude makes
+        # the same command of the same move on every run.
+        alt = round(alt, 3)
         texts = len(link.status_texts)
         await self._mavsdk(link, what, lambda: link.action.goto_location(lat, lon, alt, yaw_deg))
         goal = (x, y, home[2] + z)
@@ -220,7 +224,7 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             if not isinstance(waypoints, Sequence) or not 1 <= len(waypoints) <= MAX_WAYPOINTS:
                 raise Refusal(f"waypoints must be a list of 1 to {MAX_WAYPOINTS} points")
-            start_alt = link.state().altitude_m
+            start_alt = round(link.state().altitude_m, 3)  # mm: see _goto
             points: list[tuple[float, float, float]] = []
             for i, wp in enumerate(waypoints):
                 if not isinstance(wp, Sequence) or len(wp) not in (2, 3):
@@ -259,7 +263,7 @@ class FlightPrimitives(GatewayCore):
             if not 0.0 < duration <= MAX_HOVER_S:
                 raise Refusal(f"duration_s must be within (0, {MAX_HOVER_S:g}], got {duration:g}")
             x, y, z = link.position_m or (0.0, 0.0, 0.0)
-            altitude = link.state().altitude_m
+            altitude = round(link.state().altitude_m, 3)  # mm: see _goto
             item = MissionItem(0, FRAME_RELATIVE_ALT_INT, NAV_LOITER_TIME, 1, 1, duration, 0.0,
                                0.0, math.nan, 0, 0, altitude, 0)
             outcome = await self._fly_mission(link, [item], "hover", duration + 30.0, (x, y, z))

@@ -127,8 +127,10 @@ class Autopilot:
         bat.hover_endurance_s[k] = p["SIM_HOVER_ENDUR"]
 
     def set_param(self, name: str, value: float) -> float:
+        before = self.params[name]
         stored = self.params.set(name, value)
-        self.apply_params()
+        if stored != before:  # the same value again (a retransmitted PARAM_SET) changes nothing
+            self.apply_params()
         return stored
 
     def _event(self, kind: str, **data: object) -> None:
