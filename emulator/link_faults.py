@@ -335,11 +335,17 @@ def link_faults_from_args(args: Any, base: LinkFaults | None = None) -> LinkFaul
     base = base or LinkFaults()
     where = "--link options: "
     direction = getattr(args, "link_direction", "both")
-    up, down = base.uplink, base.downlink
-    if direction in ("both", "uplink"):
-        up = LinkProfile.from_json(settings, where, up)
-    if direction in ("both", "downlink"):
-        down = LinkProfile.from_json(settings, where, down)
+
+    def apply(up: LinkProfile, down: LinkProfile) -> tuple[LinkProfile, LinkProfile]:
+        if direction in ("both", "uplink"):
+            up = LinkProfile.from_json(settings, where, up)
+        if direction in ("both", "downlink"):
+            down = LinkProfile.from_json(settings, where, down)
+        return up, down
+
     if seed is not None and not 0 <= seed < 2**63:
         raise LinkFaultError(f"--link-seed must be a non-negative integer, got {seed}")
-    return replace(base, seed=base.seed if seed is None else seed, uplink=up, downlink=down)
+    up, down = apply(base.uplink, base.downlink)
+    vehicles = {v: apply(*pair) for v, pair in base.vehicles.items()}  # the options win
+    return replace(base, seed=base.seed if seed is None else seed, uplink=up, downlink=down,
+                   vehicles=vehicles)

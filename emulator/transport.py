@@ -9,6 +9,10 @@ Every readable datagram is drained at once when the socket becomes readable. Rep
 immediately, one frame per datagram; periodic telemetry is packed several frames to a
 datagram (MAVLink is a byte stream: receivers parse every frame in a datagram), which saves
 most of the system calls of a large swarm.
+
+With link faults (emulator.link_faults), each frame, in either direction, first asks the link
+gate its fate: dropped, delivered now, or delivered after a delay (loop.call_later), maybe
+twice.
 """
 
 from __future__ import annotations

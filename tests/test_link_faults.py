@@ -71,6 +71,11 @@ def test_command_line_options() -> None:
                                         outages=((10.0, 20.0),))
     assert faults.downlink.clean
     assert link_faults_from_args(parser.parse_args([])) is None
+    session = LinkFaults.from_json({"seed": 2, "vehicles": {"d1": {"uplink": {"loss": 0.5}}}})
+    merged = link_faults_from_args(parser.parse_args(["--link-latency-ms", "40"]), session)
+    assert merged is not None and merged.seed == 2
+    assert merged.vehicles["d1"][0] == LinkProfile(loss=0.5, latency_ms=40.0, jitter_ms=20.0)
+    assert merged.downlink.latency_ms == 40.0
     with pytest.raises(LinkFaultError, match="START:END"):
         link_faults_from_args(parser.parse_args(["--link-outage", "ten"]))
     with pytest.raises(LinkFaultError, match="loss must be"):
