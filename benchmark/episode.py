@@ -176,9 +176,11 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
 def _task_faults(session: Session, task: TaskSpec) -> TaskFaults | None:
     """The hidden faults a task schedules (benchmark.task_faults), if any."""
     raw_tasks = session.data.get("tasks")
-    index = session.tasks.index(task)
-    raw = raw_tasks[index] if isinstance(raw_tasks, list) and index < len(raw_tasks) else None
-    return task_faults(raw, [v.id for v in session.scenario.vehicles], f"tasks[{index}]")
+    index = next((i for i, t in enumerate(session.tasks) if t is task), None)
+    if index is None or not isinstance(raw_tasks, list) or index >= len(raw_tasks):
+        return None  # a task being drawn (generation), not one of the file's
+    return task_faults(raw_tasks[index], [v.id for v in session.scenario.vehicles],
+                       f"tasks[{index}]")
 
 
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
