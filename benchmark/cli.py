@@ -17,6 +17,7 @@ import argparse
 import re
 import sys
 from pathlib import Path
+from typing import Any
 
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
@@ -24,6 +25,7 @@ from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
+from emulator.link_faults import add_link_arguments, link_faults_from_args
 
 __all__ = ["add_parsers", "add_verbose_argument", "run_bench"]
 
@@ -74,6 +76,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     _add_inspector_argument(run)
     add_verbose_argument(run)
     add_mqtt_arguments(run, session=False)
+    add_link_arguments(run)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -144,7 +147,8 @@ def _run(args: argparse.Namespace) -> int:
                    out_dir=out, task_limit=limit, model=args.model, base_url=args.base_url,
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
                    clock=args.clock, backend=args.backend, ray_address=args.ray_address,
-                   mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0))
+                   mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0),
+                   link_faults=_link_faults_json(args))
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
@@ -185,6 +189,12 @@ def _run(args: argparse.Namespace) -> int:
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
+
+
+def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
+    """--link-* options as LinkFaults JSON for every session (None: each session's own)."""
+    faults = link_faults_from_args(args)
+    return None if faults is None else faults.to_json()
 
 
 def _report(args: argparse.Namespace) -> int:

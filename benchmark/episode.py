@@ -25,9 +25,11 @@ from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
 from benchmark.live_channel import LiveChannel, TaskWatch
 from benchmark.replay_data import encode_window
 from benchmark.session_file import Session, TaskSpec
+from benchmark.task_faults import TaskFaults, task_faults
 from benchmark.tool_log import LoggedTools
 from benchmark.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from emulator.clock import ClockConfig
+from emulator.link_faults import LinkFaults
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
@@ -36,7 +38,7 @@ from mavlink_gateway.pacing import Thinker, run_as
 
 __all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
            "record_key",
-           "reset_for_task", "run_session", "run_task",
+           "reset_for_task", "run_session", "run_task", "session_link_faults",
            "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
@@ -53,6 +55,7 @@ LOCKSTEP_TELEMETRY_HZ = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATU
                          "ATTITUDE": 0.5, "GPS_RAW_INT": 0.5, "VFR_HUD": 0.5}
 POSITION_MSGS_PER_S = 300.0  # all drones together: what the gateway's MAVSDK keeps up with
 RESET_SYNC_TIMEOUT_S = 20.0
+RESET_RESEND_S = 0.25
 PLAY_OUT_WALL_S = 120.0
 SETTLE_S = 1.0
 
@@ -70,6 +73,7 @@ class EpisodeOptions:
     physics_hz: float = 50.0
     agent_wall_timeout_s: float = 900.0  # a hung agent ends as an agent error
     clock: str = "lockstep"
+    link_faults: Mapping[str, Any] | None = None  # LinkFaults.to_json(); else the session's
 
     def __post_init__(self) -> None:
         if self.clock not in CLOCKS:
@@ -86,11 +90,24 @@ def _free_udp_port() -> int:
         return int(s.getsockname()[1])
 
 
+def session_link_faults(session: Session, given: Mapping[str, Any] | None = None
+                        ) -> LinkFaults | None:
+    """The link faults a session runs with: `given` (a run's options), else the session
+    file's ``link_faults``; None for a clean link."""
+    raw = given if given is not None else session.data.get("link_faults")
+    if raw is None:
+        return None
+    faults = LinkFaults.from_json(raw, f"{session.source}: link_faults",
+                                  [v.id for v in session.scenario.vehicles])
+    return None if faults.clean else faults
+
+
 @contextlib.asynccontextmanager
-async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep: bool = False
+async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep: bool = False,
+                        link_faults: LinkFaults | None = None,
                         ) -> AsyncIterator[tuple[Swarm, SwarmServices, Gateway]]:
     """A stepped (`lockstep`: lockstep) swarm for the session on 127.0.0.1 and a gateway
-    connected over MAVLink."""
+    connected over MAVLink (through `link_faults`, if any)."""
     scenario = session.scenario
     port = _free_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
@@ -98,7 +115,8 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
     rates = dict(LOCKSTEP_TELEMETRY_HZ if lockstep else BENCH_TELEMETRY_HZ)
     rates["GLOBAL_POSITION_INT"] = min(rates["GLOBAL_POSITION_INT"],
                                        max(5.0, POSITION_MSGS_PER_S / len(scenario.vehicles)))
-    async with Swarm(scenario, clock=clock, ports=ports, telemetry_hz=rates) as swarm:
+    async with Swarm(scenario, clock=clock, ports=ports, telemetry_hz=rates,
+                     link_faults=link_faults) as swarm:
         services = SwarmServices(swarm)
         async with await FleetConnection.connect(
             f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin,
@@ -117,7 +135,10 @@ async def reset_for_task(swarm: Swarm, services: SwarmServices, gateway: Gateway
 
 async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
     fleet = swarm.fleet
+    for link in gateway.drones.values():
+        link.failure = None  # the operator's reset repaired every failed drone
     deadline = time.monotonic() + RESET_SYNC_TIMEOUT_S
+    resend = time.monotonic() + RESET_RESEND_S
     while True:
         lagging = []
         for ap in fleet.autopilots:
@@ -131,6 +152,9 @@ async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
             return
         if time.monotonic() > deadline:
             raise RuntimeError(f"telemetry of {lagging} did not show the reset")
+        if time.monotonic() > resend:  # lost on a lossy link: send the new state again
+            swarm.send_all_telemetry()
+            resend = time.monotonic() + RESET_RESEND_S
         await asyncio.sleep(0.005)
 
 
@@ -150,6 +174,16 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
     # A goal ends once reached, not at a standstill: let every drone come to rest.
     await swarm.advance(SETTLE_S)
     return swarm.fleet.now_s
+
+
+def _task_faults(session: Session, task: TaskSpec) -> TaskFaults | None:
+    """The hidden faults a task schedules (benchmark.task_faults), if any."""
+    raw_tasks = session.data.get("tasks")
+    index = next((i for i, t in enumerate(session.tasks) if t is task), None)
+    if index is None or not isinstance(raw_tasks, list) or index >= len(raw_tasks):
+        return None  # a task being drawn (generation), not one of the file's
+    return task_faults(raw_tasks[index], [v.id for v in session.scenario.vehicles],
+                       f"tasks[{index}]")
 
 
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
@@ -212,8 +246,10 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
         return
     stack = contextlib.AsyncExitStack()
     try:
+        faults = session_link_faults(session, options.link_faults)
         swarm, services, gateway = await stack.enter_async_context(
-            swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep"))
+            swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep",
+                          link_faults=faults))
     except ValueError as error:  # the world cannot fly (a vehicle parameter out of range...)
         await stack.aclose()
         for task, key in zip(session.tasks, keys, strict=True):
@@ -238,6 +274,12 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
+            try:
+                _task_faults(session, task)
+            except ValueError as error:
+                emit(task_error_record(session, task, agent.name, options.trial,
+                                       f"{session.source}: {error}"))
+                continue
             emit(await run_task(session, task, agent, swarm, services, gateway, options,
                                 watch=watch))
 
@@ -258,6 +300,9 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     if watch is not None:
         watch.text, watch.tools = task.text, tools
     t0_s = services.clock_s()
+    faults = _task_faults(session, task)
+    if faults is not None:
+        faults.apply(swarm, t0_s)
     wall_agent = time.perf_counter()
     finish, error = await _run_agent(agent, agent_task, tools, options, services)
     agent_wall_s = time.perf_counter() - wall_agent
@@ -274,6 +319,8 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
         replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),
                           "budget": {"tool_calls": task.budget.tool_calls,
                                      "sim_time_s": task.budget.sim_time_s}}
+        if faults is not None:
+            faults.end(swarm, session_link_faults(session, options.link_faults))
         services.operator_land_all()  # before the clock may run again
     finally:
         swarm.release_clock(hold)

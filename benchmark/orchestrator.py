@@ -58,6 +58,9 @@ class RunPlan:
     ray_address: str = ""  # the Ray cluster to join (else Ray's own rules; see ray_backend)
     mavsdk_log: bool = False  # print MAVSDK's own log lines in the units (mavsdk_log.py)
     live_hz: float = 0.0  # > 0: sessions publish live frames (benchmark.live_channel)
+    # link faults for every session (emulator.link_faults.LinkFaults.to_json()), else each
+    # session file's own ``link_faults``, if any
+    link_faults: dict[str, Any] | None = None
 
     @property
     def results_path(self) -> Path:
@@ -119,7 +122,8 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
     agent = make_agent(plan.agent, session, plan)
-    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock)
+    options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock,
+                             link_faults=plan.link_faults)
     world = _world_of(path)
 
     def emit(record: dict[str, Any]) -> None:

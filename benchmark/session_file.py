@@ -13,7 +13,9 @@ A session file is one JSON object:
 - ``tasks``: ordered list of task objects: ``id``, ``template``, ``category``, ``difficulty``,
   ``text`` (what the agent is told), ``aliases`` (other phrasings), ``budget``
   ({tool_calls, sim_time_s}), and two hidden parts, ``checks`` (the check tree) and
-  ``oracle`` (the reference plan, or null).
+  ``oracle`` (the reference plan, or null); optionally a third, ``faults``
+  (benchmark.task_faults).
+- ``link_faults`` (optional): the session's link faults (emulator.link_faults).
 
 Loading never lets one bad task stop the others: a task whose fields or check tree are invalid
 is kept with its `error` set, and is recorded as a task error when run.

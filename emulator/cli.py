@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import json
 import math
 import multiprocessing
 import signal
@@ -15,6 +16,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from emulator.clock import ClockConfig
+from emulator.link_faults import (
+    LinkFaults,
+    add_link_arguments,
+    link_faults_from_args,
+)
 from emulator.reference_mapping import notes_to_show
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
@@ -45,6 +51,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                     help="ground-truth record written on exit (default: runs/<time>.truth.npz)")
     up.add_argument("--no-truth", action="store_true", help="do not write the ground truth")
     up.add_argument("--verbose", action="store_true", help="also print info logging")
+    add_link_arguments(up)
 
 
 def run_up(args: argparse.Namespace) -> int:
@@ -55,6 +62,23 @@ def run_up(args: argparse.Namespace) -> int:
     except (ScenarioError, ValueError, OSError) as error:
         print(f"mavswarm: {error}", file=sys.stderr)
         return 2
+
+
+def _link_faults(args: argparse.Namespace, scenario: Scenario | None) -> LinkFaults | None:
+    """The session file's ``link_faults`` (if any), with the --link options on top."""
+    base = None
+    if args.session is not None and scenario is not None:
+        try:
+            raw = json.loads(Path(args.session).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            raw = None  # load_scenario read it already: not reached in practice
+        if isinstance(raw, dict) and "link_faults" in raw:
+            base = LinkFaults.from_json(raw["link_faults"], f"{args.session}: link_faults",
+                                        [v.id for v in scenario.vehicles])
+    faults = link_faults_from_args(args, base)
+    if faults is not None and faults.clean:
+        return None
+    return faults
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
@@ -80,16 +104,18 @@ web console): called with the swarm and its network index (None for a single net
 
 async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
                  truth_out: Path | None, attachments: Sequence[Attachment] = (),
-                 network: int | None = None) -> None:
+                 network: int | None = None, link_faults: LinkFaults | None = None) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError):
             loop.add_signal_handler(sig, stop.set)
-    async with Swarm(scenario, clock=clock, ports=ports) as swarm:
+    async with Swarm(scenario, clock=clock, ports=ports, link_faults=link_faults) as swarm:
         mode = "stepped" if clock.stepped else f"{clock.speed:g}x real time"
         print(f"{label}{swarm.n} vehicles from {scenario.source}, {mode}, "
               f"physics {clock.physics_hz:g} Hz", flush=True)
+        if link_faults is not None:
+            print(f"{label}{swarm.faults.gate.describe()}", flush=True)
         for url in swarm.connection_urls():
             print(f"{label}  {url}", flush=True)
         async with contextlib.AsyncExitStack() as stack:
@@ -106,10 +132,12 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
 
 
 def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
-                 truth_out: Path | None, attachments: Sequence[Attachment], network: int) -> None:
+                 truth_out: Path | None, attachments: Sequence[Attachment], network: int,
+                 link_faults: LinkFaults | None) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(scenario, clock, ports, label, truth_out, attachments, network))
+        asyncio.run(_serve(scenario, clock, ports, label, truth_out, attachments, network,
+                           link_faults))
 
 
 def _truth_path(args: argparse.Namespace) -> Path | None:
@@ -130,13 +158,14 @@ def _up(args: argparse.Namespace) -> int:
     if args.session is None and total is not None and total > MAX_VEHICLES_PER_NETWORK:
         return _up_networks(args, clock, total)
     scenario = _scenario(args)
+    link_faults = _link_faults(args, scenario)
     bind = args.bind_port if args.bind_port is not None else (
         18570 if args.per_vehicle_ports else 14580)
     ports = PortPlan(bind_host=args.bind_host, bind_port=bind, api_port=args.api_port,
                      gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(_serve(scenario, clock, ports, "", args.truth_out,
-                           tuple(getattr(args, "attachments", ()))))
+                           tuple(getattr(args, "attachments", ())), None, link_faults))
     return 0
 
 
@@ -145,6 +174,7 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
     if args.per_vehicle_ports:
         raise ValueError("--per-vehicle-ports is limited to 250 vehicles")
     count = math.ceil(total / MAX_VEHICLES_PER_NETWORK)
+    link_faults = _link_faults(args, None)
     bind = args.bind_port if args.bind_port is not None else 14580
     procs = []
     for j in range(count):
@@ -155,7 +185,8 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
         truth = args.truth_out.with_suffix(f".net{j}.npz") if args.truth_out else None
         proc = multiprocessing.Process(
             target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth,
-                                       tuple(getattr(args, "attachments", ())), j),
+                                       tuple(getattr(args, "attachments", ())), j,
+                                       link_faults),
             name=f"mavswarm-net{j}",
         )
         proc.start()

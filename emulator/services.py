@@ -15,6 +15,7 @@ from typing import Any
 
 from emulator.flight.battery import MESSAGE_COST_PCT
 from emulator.flight.operator import place_on_ground, set_battery
+from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch
 from emulator.perception import Perception
 from emulator.radio import Message, Radio
@@ -125,6 +126,13 @@ class SwarmServices:
             set_battery(ap, ap.spec.battery_pct)
         self.radio.clear()
         self._swarm.send_all_telemetry()
+
+    def operator_set_link_faults(self, settings: Mapping[str, Any]) -> None:
+        """Operator: link faults from now on (a session file's ``link_faults`` object; see
+        emulator.link_faults); recorded in the ground truth. Bad settings raise
+        LinkFaultError (a ValueError) naming the field, and change nothing."""
+        self._swarm.set_link_faults(LinkFaults.from_json(settings, "link_faults",
+                                                         list(self.drone_ids)))
 
     def operator_clear_messages(self) -> None:
         """Operator reset: every drone's inbox emptied."""

@@ -16,6 +16,7 @@ import numpy as np
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
+from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch, WatchBoard
 from emulator.mavlink.frames import FramePart, frame_batch
 from emulator.mavlink.streams import StreamSchedule
@@ -23,6 +24,7 @@ from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
+from emulator.swarm_faults import SwarmFaults
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
@@ -103,7 +105,8 @@ class Swarm:
 
     def __init__(self, scenario: Scenario, *, clock: ClockConfig | None = None,
                  ports: PortPlan | None = None,
-                 telemetry_hz: Mapping[str, float] | None = None) -> None:
+                 telemetry_hz: Mapping[str, float] | None = None,
+                 link_faults: LinkFaults | None = None) -> None:
         self.clock = clock or ClockConfig()
         self.ports = ports or PortPlan()
         self.ports.check(len(scenario.vehicles))
@@ -126,6 +129,9 @@ class Swarm:
         for link in self.links:
             for component, sequences in self.telemetry.sequences.items():
                 link.encoder(component).share_sequence(sequences, link.k)
+        self.faults = SwarmFaults(self.fleet, link_faults)
+        for link in self.links:
+            link.on_mavlink_signal = self.faults.mavlink_signal_changed
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
@@ -161,6 +167,7 @@ class Swarm:
                     dests.append((p.api_host, p.gcs_port))
                 port = p.bind_port + i if p.per_vehicle else p.bind_port
                 endpoint = UdpEndpoint(group, dests, time.monotonic, self._wake.set)
+                endpoint.gate = self.faults.gate
                 endpoint.open(p.bind_host, port)
                 self.endpoints.append(endpoint)
                 self._endpoint_of.extend([endpoint] * len(group))
@@ -234,6 +241,12 @@ class Swarm:
             internal_errors=self._telemetry_errors
             + sum(e.stats.handler_errors for e in self.endpoints),
         )
+
+    def set_link_faults(self, faults: LinkFaults) -> None:
+        """Change the link faults from now on (an operator at run time); recorded in the
+        ground truth."""
+        self.faults.configure(faults)
+        self._wake.set()
 
     def export_truth(self, path: str | Path) -> Path:
         """The ground truth, with the scenario attached as `scenario` (session-file JSON)."""
@@ -313,6 +326,9 @@ class Swarm:
 
     def _send_bursts(self) -> None:
         bursts, self._bursts = self._bursts, {}
+        if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
+            for k in bursts:
+                self.links[k].resend_mission_reached()
         ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
         schedule = self.streams
         on = np.isfinite(schedule.period_s[ks])
@@ -332,7 +348,8 @@ class Swarm:
         limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
         targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
         targets += self.watches.advance_targets()
-        ahead = [t for t in targets if t > now + 1e-9]
+        targets.append(self.faults.next_event_s())  # never step past a fault's time
+        ahead = [t for t in targets if t > now + 1e-9 and math.isfinite(t)]
         if ahead:
             to_target = math.ceil((min(ahead) - now) / dt - 1e-9)
             limit = to_target if limit == 0 else min(limit, to_target)
@@ -358,12 +375,14 @@ class Swarm:
                 deadline = wall + STEP_BUDGET_S
                 while self._should_step() and time.monotonic() < deadline:
                     fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
+                    self.faults.fire_due()
                     self._release_waiters()
                     self.watches.check()
             else:
                 assert self._pacer is not None
                 for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
                     fleet.step()
+                    self.faults.fire_due()
                 self._release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:

@@ -9,6 +9,10 @@ Every readable datagram is drained at once when the socket becomes readable. Rep
 immediately, one frame per datagram; periodic telemetry is packed several frames to a
 datagram (MAVLink is a byte stream: receivers parse every frame in a datagram), which saves
 most of the system calls of a large swarm.
+
+With link faults (emulator.link_faults), each frame, in either direction, first asks the link
+gate its fate: dropped, delivered now, or delivered after a delay (loop.call_later), maybe
+twice.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import socket
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
+from emulator.link_faults import DOWNLINK, UPLINK, LinkGate
 from emulator.mavlink.codec import DatagramDecoder
 from emulator.mavlink.vehicle_link import VehicleLink
 
@@ -59,6 +64,7 @@ class UdpEndpoint:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._batch = bytearray()
         self.batching = False
+        self.gate: LinkGate | None = None  # link faults (emulator.link_faults), if any
 
     def open(self, host: str, port: int) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -135,6 +141,24 @@ class UdpEndpoint:
                     self._deliver(addressed, m, now)
 
     def _deliver(self, link: VehicleLink, m, now: float) -> None:
+        gate = self.gate
+        if gate is not None and gate.active:
+            fate = gate.fate(link.k, UPLINK, m.get_msgId())
+            if fate is not None:
+                for delay_s in fate:
+                    if delay_s > 0.0 and self._loop is not None:
+                        self._loop.call_later(delay_s, self._deliver_late, link, m)
+                    else:
+                        self._handle(link, m, now)
+                return
+        self._handle(link, m, now)
+
+    def _deliver_late(self, link: VehicleLink, m) -> None:
+        if self._sock is not None:
+            self._handle(link, m, self._wall_clock())
+            self._on_receive()
+
+    def _handle(self, link: VehicleLink, m, now: float) -> None:
         # The I/O edge: a handler bug is logged with its traceback and counted, and the
         # socket keeps serving every other vehicle.
         try:
@@ -144,8 +168,21 @@ class UdpEndpoint:
             log.exception("vehicle %d failed to handle %s", link.system_id, m.get_type())
 
     # ------------------------------------------------------------------- send
-    def emit(self, _k: int, data: bytes) -> None:
+    def emit(self, k: int, data: bytes) -> None:
         self.stats.frames_out += 1
+        gate = self.gate
+        if gate is not None and gate.active:
+            fate = gate.fate(k, DOWNLINK, _frame_msg_id(data))
+            if fate is not None:
+                for delay_s in fate:
+                    if delay_s > 0.0 and self._loop is not None:
+                        self._loop.call_later(delay_s, self._send, data)
+                    else:
+                        self._send_now(data)
+                return
+        self._send_now(data)
+
+    def _send_now(self, data: bytes) -> None:
         if self.batching:
             if len(self._batch) + len(data) > MAX_BATCH_BYTES:
                 self.flush()
@@ -180,3 +217,10 @@ class UdpEndpoint:
     def _refresh_targets(self) -> None:
         self._targets = tuple(dict.fromkeys(self._fixed + tuple(self._peers)))
         self.stats.peers = set(self._peers)
+
+
+def _frame_msg_id(frame: bytes) -> int:
+    """The message id of one encoded MAVLink frame (v2: 24 bits at offset 7; v1: offset 5)."""
+    if frame[:1] == b"\xfd" and len(frame) >= 10:
+        return int.from_bytes(frame[7:10], "little")
+    return frame[5] if len(frame) > 5 else -1

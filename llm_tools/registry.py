@@ -22,7 +22,8 @@ OUTPUT_SCHEMA: dict[str, Any] = {
     "type": "object",
     "properties": {
         "status": {"type": "string",
-                   "enum": ["ok", "partial", "blocked", "rejected", "timeout", "error"]},
+                   "enum": ["ok", "partial", "blocked", "rejected", "timeout", "unknown",
+                            "failed", "error"]},
         "message": {"type": "string"},
     },
     "required": ["status", "message"],

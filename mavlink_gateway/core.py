@@ -15,22 +15,40 @@ from mavlink_gateway.lockstep_wait import (
     ARRIVED_SPEED_M_S,
     FAILSAFE_TEXTS,
     OBSTACLE_TEXT,
+    judge_failure,
     wait_instant,
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
 
-__all__ = ["GatewayCore", "Refusal"]
+__all__ = ["GatewayCore", "NoAnswer", "Refusal"]
 
 POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry arrives
 STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
 WALL_MARGIN_S = 60.0
 LANDED_Z_M = 0.3  # the ground is z = 0 of the local frame everywhere
 FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.5 Hz)
+# A command MAVSDK got no answer to (it retransmits 3 times itself) is sent again this many
+# times in all; the vehicle acts on a command once (emulator.mavlink.command_dedup).
+COMMAND_TRIES = 3
+SILENT_WALL_S = 5.0  # a drone whose telemetry stopped this long ago is tried only once
+# MAVSDK results that mean "no answer came", not "the vehicle said no"
+NO_ANSWER_RESULTS = frozenset({"TIMEOUT", "CONNECTION_ERROR", "NO_SYSTEM", "UNKNOWN", "BUSY"})
+# MAVSDK results given both for a refusal and for no answer (a parameter write that timed out)
+AMBIGUOUS_RESULTS = frozenset({"PARAMETER_ERROR"})
 
 
 class Refusal(Exception):
     """A precondition failed: the primitive is refused and nothing is sent."""
+
+
+class NoAnswer(Exception):
+    """A command got no answer: whether the drone acted cannot be known."""
+
+
+def no_answer_outcome(link: DroneLink, name: str, error: NoAnswer) -> Outcome:
+    return Outcome(Status.UNKNOWN, f"{name}: {error}; the drone may or may not have acted "
+                   f"(state as last seen)", link.state())
 
 
 def _number(name: str, value: object) -> float:
@@ -88,11 +106,16 @@ class GatewayCore:
             return Outcome(Status.REJECTED,
                            f"drone {link.drone_id} is busy with {current}: wait for it to end",
                            link.state())
+        if link.failure is not None:
+            return Outcome(Status.FAILED, f"{name}: drone {link.drone_id} is out of the task: "
+                           f"{link.failure}", link.state())
         self._busy[link.drone_id] = name
         try:
             return await body(link)
         except Refusal as refusal:
             return Outcome(Status.REJECTED, f"{name} refused: {refusal}", link.state())
+        except NoAnswer as error:
+            return no_answer_outcome(link, name, error)
         finally:
             del self._busy[link.drone_id]
 
@@ -119,22 +142,47 @@ class GatewayCore:
             raise Refusal(f"{name} {coordinate:g} m is beyond the 100 km map limit")
         return coordinate
 
-    async def _mavsdk(self, link: DroneLink, what: str, call: Awaitable[Any]) -> None:
-        """Await a MAVSDK call; a refusal by the autopilot becomes a Refusal with its reason."""
-        texts = len(link.status_texts)
-        try:
-            await call
-        except Exception as error:  # MAVSDK raises one error class per plugin
-            # The autopilot's STATUSTEXT follows its ACK: wait for it, not for a fixed time.
-            deadline = time.monotonic() + STATUSTEXT_WAIT_S
-            while len(link.status_texts) == texts:
-                left = deadline - time.monotonic()
-                if left <= 0.0:
-                    break
-                await link.wait_update(link.updates, left)
-            reason = next(iter(link.status_texts[texts:]), None)
-            detail = reason or str(error)
-            raise Refusal(f"the autopilot refused {what}: {detail}") from None
+    async def _mavsdk(self, link: DroneLink, what: str, call: Callable[[], Awaitable[Any]]
+                      ) -> None:
+        """Run a MAVSDK call (`call()` makes it); a refusal by the autopilot becomes a Refusal
+        with its reason. A call that got no answer is made again (the vehicle acts on a
+        command once, so a repeat is answered as the first was) up to COMMAND_TRIES times in
+        all, then raises NoAnswer: the outcome cannot be known, and is never called a
+        refusal."""
+        tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
+        for attempt in range(1, tries + 1):
+            texts = len(link.status_texts)
+            try:
+                await call()
+                return
+            except Refusal:
+                raise
+            except Exception as error:  # MAVSDK raises one error class per plugin
+                result = getattr(getattr(error, "result", None), "name", "UNKNOWN")
+                if result in AMBIGUOUS_RESULTS:  # a refusal comes with the autopilot's text
+                    await self._refusal_text(link, texts)
+                    if len(link.status_texts) == texts:
+                        result = "TIMEOUT"
+                if result in NO_ANSWER_RESULTS:
+                    if attempt == tries:
+                        raise NoAnswer(f"no answer from {link.drone_id} to {what} after "
+                                       f"{attempt} tr{'y' if attempt == 1 else 'ies'} "
+                                       f"(the link is lossy or down)") from None
+                    continue
+                await self._refusal_text(link, texts)
+                reason = next(iter(link.status_texts[texts:]), None)
+                detail = reason or str(error)
+                raise Refusal(f"the autopilot refused {what}: {detail}") from None
+
+    @staticmethod
+    async def _refusal_text(link: DroneLink, texts: int) -> None:
+        """The autopilot's STATUSTEXT follows its ACK: wait for it, not for a fixed time."""
+        deadline = time.monotonic() + STATUSTEXT_WAIT_S
+        while len(link.status_texts) == texts:
+            left = deadline - time.monotonic()
+            if left <= 0.0:
+                break
+            await link.wait_update(link.updates, left)
 
     # ----------------------------------------------------------------- waits
     async def _wait(self, link: DroneLink, budget_s: float, what: str,
@@ -180,6 +228,9 @@ class GatewayCore:
             if outcome is not None:
                 return outcome
             new_texts = link.status_texts[texts:]
+            failure = judge_failure(link, what, texts)
+            if failure is not None:
+                return failure
             for text in new_texts:
                 if text.startswith(FAILSAFE_TEXTS):
                     return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())

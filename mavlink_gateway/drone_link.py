@@ -11,12 +11,14 @@ import asyncio
 import contextlib
 import enum
 import math
+import time
 from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass
 from typing import Any
 
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.camera import CameraAsync
+from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
@@ -24,7 +26,7 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
 
-__all__ = ["DroneLink", "DroneProfile"]
+__all__ = ["FAILURE_TEXTS", "UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
 
 HOVER_SPEED_M_S = 0.5
 # EXTENDED_SYS_STATE (landed state, in air) is 1 Hz by default (PX4 and the emulator): a
@@ -35,6 +37,12 @@ LANDED_STATE_HZ = 10.0
 # `DroneLink.seen` tell a wait whether every cached value was refreshed since some moment.
 PERIODIC = ("position", "velocity", "heading", "battery", "in_air", "landed_state", "armed",
             "flight_mode")
+# STATUSTEXTs of failures that take a drone out of the task (emulator.flight.failures, PX4)
+FAILURE_TEXTS = ("Motor failure", "GPS lost")
+REPAIRED_TEXT = "Failures cleared"
+# No telemetry at all for this long (every stream is at least 0.5 Hz): the drone is
+# unreachable, and its state is as last seen.
+UNREACHABLE_WALL_S = 5.0
 
 
 def _value_key(value: Any) -> Any:
@@ -78,6 +86,10 @@ class DroneLink:
         self.mission = MissionRawAsync(system)
         self.camera = CameraAsync(system)
         self.param = ParamAsync(system)
+        self.direct = MavlinkDirectAsync(system)
+        self.capture_sequence = 0  # the camera protocol's capture sequence number, per drone
+        self.failure: str | None = None  # a failure the drone reported (FAILURE_TEXTS)
+        self.last_update_wall_s = time.monotonic()
         self.position_m: tuple[float, float, float] | None = None
         self.velocity_m_s = (0.0, 0.0, 0.0)
         self.heading_deg = 0.0
@@ -117,8 +129,7 @@ class DroneLink:
         follow("armed", t.subscribe_armed(), lambda v: setattr(self, "armed", bool(v)))
         follow("flight_mode", t.subscribe_flight_mode(), lambda v: setattr(self, "mode", v.name))
         follow("home", t.subscribe_home(), self._on_home)
-        follow("status_text", t.subscribe_status_text(),
-               lambda s: self.status_texts.append(s.text))
+        follow("status_text", t.subscribe_status_text(), self._on_status_text)
         follow("mission_progress", self.mission.subscribe_mission_progress(),
                lambda p: setattr(self, "mission_progress", (p.current, p.total)))
         follow("capture", self.camera.subscribe_capture_info(), self.captures.append)
@@ -136,6 +147,7 @@ class DroneLink:
         async def run() -> None:
             async for value in stream:
                 apply(value)
+                self.last_update_wall_s = time.monotonic()
                 self.updates += 1
                 self.seen[name] = self.seen.get(name, 0) + 1
                 value_key = _value_key(value)
@@ -182,6 +194,17 @@ class DroneLink:
             if waiter in self._update_waiters:
                 self._update_waiters.remove(waiter)
 
+    def _on_status_text(self, s: Any) -> None:
+        self.status_texts.append(s.text)
+        if s.text.startswith(FAILURE_TEXTS) and self.failure is None:
+            self.failure = s.text
+        elif s.text.startswith(REPAIRED_TEXT):
+            self.failure = None
+
+    def silent_for_s(self) -> float:
+        """Wall seconds since the last telemetry message of any kind."""
+        return time.monotonic() - self.last_update_wall_s
+
     def _on_landed_state(self, v: Any) -> None:
         # A vehicle that leaves the ground is armed. `armed` otherwise comes with the 1 Hz
         # HEARTBEAT, which would hold a take-off's outcome back by up to a second; the next
@@ -219,7 +242,18 @@ class DroneLink:
         return math.sqrt(sum(v * v for v in self.velocity_m_s))
 
     @property
+    def reported_state(self) -> str:
+        """`flight_state`, or "unreachable" (no telemetry for UNREACHABLE_WALL_S) or "failed"
+        (the drone reported a failure that takes it out)."""
+        if self.silent_for_s() > UNREACHABLE_WALL_S:
+            return "unreachable"
+        if self.failure is not None:
+            return "failed"
+        return self.flight_state
+
+    @property
     def flight_state(self) -> str:
+        """on_ground, taking_off, hovering, flying or landing, by telemetry."""
         if self.landed_state == "ON_GROUND" or not self.in_air:
             return "on_ground"
         if self.landed_state == "TAKING_OFF":
@@ -234,7 +268,7 @@ class DroneLink:
         return DroneState(
             drone=self.drone_id, x_m=x, y_m=y, altitude_m=z - home_z,
             heading_deg=self.heading_deg, battery_pct=self.battery_pct,
-            flight_state=self.flight_state, armed=self.armed, mode=self.mode.lower(),
+            flight_state=self.reported_state, armed=self.armed, mode=self.mode.lower(),
             home_x_m=hx, home_y_m=hy,
         )
 

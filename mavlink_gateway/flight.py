@@ -48,9 +48,9 @@ class FlightPrimitives(GatewayCore):
             x, y, _ = link.position_m or (0.0, 0.0, 0.0)
             texts = len(link.status_texts)
             await self._mavsdk(link, "the takeoff altitude",
-                               link.action.set_takeoff_altitude(altitude))
-            await self._mavsdk(link, "arming", link.action.arm())
-            await self._mavsdk(link, "takeoff", link.action.takeoff())
+                               lambda: link.action.set_takeoff_altitude(altitude))
+            await self._mavsdk(link, "arming", lambda: link.action.arm())
+            await self._mavsdk(link, "takeoff", lambda: link.action.takeoff())
             home_z = link.home_m[2] if link.home_m else 0.0
             target = (x, y, home_z + altitude)
 
@@ -73,7 +73,7 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             height = link.state().altitude_m
             texts = len(link.status_texts)
-            await self._mavsdk(link, "landing", link.action.land())
+            await self._mavsdk(link, "landing", lambda: link.action.land())
 
             def done() -> Outcome | None:
                 if self._landed(link):
@@ -97,8 +97,12 @@ class FlightPrimitives(GatewayCore):
             raise Refusal(f"({x:.0f}, {y:.0f}) is more than 10 km from home")
         start = link.position_m or target
         lat, lon, alt = link.geodetic(x, y, home[2] + z)
+        # Home's altitude arrives in whole millimetres, then as float32 (HOME_POSITION or
+        # the GPS origin): the same home can differ by 3e-5 m. A millimetre altitude makes
+        # the same command of the same move on every run.
+        alt = round(alt, 3)
         texts = len(link.status_texts)
-        await self._mavsdk(link, what, link.action.goto_location(lat, lon, alt, yaw_deg))
+        await self._mavsdk(link, what, lambda: link.action.goto_location(lat, lon, alt, yaw_deg))
         goal = (x, y, home[2] + z)
 
         def done() -> Outcome | None:
@@ -162,7 +166,7 @@ class FlightPrimitives(GatewayCore):
             start = link.position_m or (0.0, 0.0, 0.0)
             home = link.home_m or (0.0, 0.0, 0.0)
             texts = len(link.status_texts)
-            await self._mavsdk(link, "return to launch", link.action.return_to_launch())
+            await self._mavsdk(link, "return to launch", lambda: link.action.return_to_launch())
 
             def done() -> Outcome | None:
                 if self._landed(link):
@@ -178,7 +182,7 @@ class FlightPrimitives(GatewayCore):
     async def set_home(self, drone: str) -> Outcome:
         async def body(link: DroneLink) -> Outcome:
             x, y, _ = link.position_m or (0.0, 0.0, 0.0)
-            await self._mavsdk(link, "set home", link.action.set_home(True, 0.0, 0.0, 0.0))
+            await self._mavsdk(link, "set home", lambda: link.action.set_home(True, 0.0, 0.0, 0.0))
 
             def done() -> Outcome | None:
                 home = link.home_m
@@ -196,9 +200,9 @@ class FlightPrimitives(GatewayCore):
     async def _fly_mission(self, link: DroneLink, items: list[MissionItem], what: str,
                            budget_s: float, goal: tuple[float, float, float]) -> Outcome:
         texts = len(link.status_texts)
-        await self._mavsdk(link, f"the {what} mission", link.mission.upload_mission(items))
+        await self._mavsdk(link, f"the {what} mission", lambda: link.mission.upload_mission(items))
         link.mission_progress = (0, len(items))
-        await self._mavsdk(link, f"the {what} mission start", link.mission.start_mission())
+        await self._mavsdk(link, f"the {what} mission start", lambda: link.mission.start_mission())
         total = len(items)
 
         async def done() -> Outcome | None:
@@ -220,7 +224,7 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             if not isinstance(waypoints, Sequence) or not 1 <= len(waypoints) <= MAX_WAYPOINTS:
                 raise Refusal(f"waypoints must be a list of 1 to {MAX_WAYPOINTS} points")
-            start_alt = link.state().altitude_m
+            start_alt = round(link.state().altitude_m, 3)  # mm: see _goto
             points: list[tuple[float, float, float]] = []
             for i, wp in enumerate(waypoints):
                 if not isinstance(wp, Sequence) or len(wp) not in (2, 3):
@@ -259,7 +263,7 @@ class FlightPrimitives(GatewayCore):
             if not 0.0 < duration <= MAX_HOVER_S:
                 raise Refusal(f"duration_s must be within (0, {MAX_HOVER_S:g}], got {duration:g}")
             x, y, z = link.position_m or (0.0, 0.0, 0.0)
-            altitude = link.state().altitude_m
+            altitude = round(link.state().altitude_m, 3)  # mm: see _goto
             item = MissionItem(0, FRAME_RELATIVE_ALT_INT, NAV_LOITER_TIME, 1, 1, duration, 0.0,
                                0.0, math.nan, 0, 0, altitude, 0)
             outcome = await self._fly_mission(link, [item], "hover", duration + 30.0, (x, y, z))

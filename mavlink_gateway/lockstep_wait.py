@@ -15,18 +15,22 @@ import math
 import time
 from collections.abc import Awaitable, Callable
 
-from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.drone_link import FAILURE_TEXTS, DroneLink
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_gateway.pacing import current_thinker
 
-__all__ = ["judge_stop", "settle_telemetry", "wait_instant", "wait_lockstep", "wait_world"]
+__all__ = ["judge_failure", "judge_stop", "settle_telemetry", "wait_instant", "wait_lockstep",
+           "wait_world"]
 
 SETTLE_WALL_S = 5.0  # a link that shows no settled state by then is judged as it is
 TEXT_GRACE_S = 0.2  # a halt that explains nothing: time for a STATUSTEXT still on its way
 POLL_S = 0.01
 OBSTACLE_TEXT = "Obstacle"
-FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost")
+FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost",
+                  "Data link lost")
+REBURST_WALL_S = 0.15  # telemetry lost on the way: ask the swarm for the stopped state again
+REJUDGE_ROUNDS = 2  # a halt that shows no outcome is looked at again this many times
 # The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole
 # cm/s per axis, which can read a little higher. A stepped clock stops right then.
 ARRIVED_SPEED_M_S = 0.5
@@ -34,24 +38,47 @@ ARRIVED_SPEED_M_S = 0.5
 Done = Callable[[], Outcome | Awaitable[Outcome | None] | None]
 
 
-async def settle_telemetry(link: DroneLink) -> None:
-    """Wait until every periodic stream of `link` shows the state of the stopped clock."""
+async def settle_telemetry(link: DroneLink, services: Services | None = None) -> bool:
+    """Wait until every periodic stream of `link` shows the state of the stopped clock; False
+    if no telemetry at all came meanwhile (the drone is silent). Telemetry lost on the way
+    (a lossy link) is asked for again every REBURST_WALL_S."""
     mark = dict(link.seen)
-    deadline = time.monotonic() + SETTLE_WALL_S
+    updates = link.updates
+    start = time.monotonic()
+    deadline, reburst = start + SETTLE_WALL_S, start + REBURST_WALL_S
     while not link.settled_since(mark) and time.monotonic() < deadline:
         await link.wait_update(link.updates, POLL_S)
+        if services is not None and time.monotonic() > reburst:
+            services.refresh_telemetry(link.drone_id)
+            reburst = time.monotonic() + REBURST_WALL_S
+    return link.updates != updates
+
+
+def judge_failure(link: DroneLink, what: str, texts: int) -> Outcome | None:
+    """A failure that takes the drone out (a motor, its GPS), reported since `texts`."""
+    failure = next((t for t in link.status_texts[texts:] if t.startswith(FAILURE_TEXTS)), None)
+    if failure is None:
+        return None
+    return Outcome(Status.FAILED, f"{what} ended: {failure}; the drone is out of the task",
+                   link.state())
 
 
 async def _done(done: Done) -> Outcome | None:
     outcome = done()
     if inspect.isawaitable(outcome):
-        outcome = await outcome
+        try:
+            outcome = await outcome
+        except Exception:  # a MAVSDK query that got no answer: not judged this time
+            return None
     return outcome
 
 
 def judge_stop(link: DroneLink, what: str, texts: int, watch_obstacles: bool
                ) -> Outcome | None:
-    """A failsafe or an obstacle stop seen in settled telemetry, else None."""
+    """A failure, a failsafe or an obstacle stop seen in settled telemetry, else None."""
+    failure = judge_failure(link, what, texts)
+    if failure is not None:
+        return failure
     new_texts = link.status_texts[texts:]
     for text in new_texts:
         if text.startswith(FAILSAFE_TEXTS):
@@ -76,17 +103,28 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
     try:
         while True:
             await watch.halted()
-            await settle_telemetry(link)
+            if not await settle_telemetry(link, services):
+                return Outcome(Status.UNKNOWN, f"{what}: {link.drone_id} stopped answering (no "
+                               f"telemetry for {SETTLE_WALL_S:g} s); its state is as last seen",
+                               link.state())
             outcome = await _done(done) or judge_stop(link, what, texts, watch_obstacles)
             if outcome is None and not watch.at_deadline:
                 await _text_grace(link)
                 outcome = judge_stop(link, what, texts, watch_obstacles)
+            for _ in range(REJUDGE_ROUNDS if outcome is None and not watch.at_deadline else 0):
+                # Telemetry that showed nothing may be stale (messages lost on the way): the
+                # clock stands still, so ask for the state again before letting it run on.
+                services.refresh_telemetry(link.drone_id)
+                await settle_telemetry(link, services)
+                outcome = await _done(done) or judge_stop(link, what, texts, watch_obstacles)
+                if outcome is not None:
+                    break
             if outcome is not None:
                 return outcome
             if watch.at_deadline:
                 held = await hold(link)  # the clock stands still: HOLD acts at the deadline
                 services.refresh_telemetry(link.drone_id)
-                await settle_telemetry(link)
+                await settle_telemetry(link, services)
                 outcome = await _done(done)
                 if outcome is not None:
                     return outcome

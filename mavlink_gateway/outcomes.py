@@ -16,6 +16,8 @@ class Status(StrEnum):
     BLOCKED = "blocked"  # stopped by the world: an obstacle, a battery failsafe
     REJECTED = "rejected"  # refused before anything was sent: nothing changed
     TIMEOUT = "timeout"  # the simulated-time budget ran out
+    UNKNOWN = "unknown"  # no answer came (a lossy link, a silent drone): it may have acted
+    FAILED = "failed"  # the drone reported a failure (a motor, its GPS): it is out
 
 
 @dataclass(frozen=True, slots=True)
@@ -28,7 +30,9 @@ class DroneState:
     altitude_m: float
     heading_deg: float
     battery_pct: float
-    flight_state: str  # on_ground, taking_off, hovering, flying, landing
+    # on_ground, taking_off, hovering, flying, landing; failed (a motor or GPS failure
+    # reported), unreachable (no telemetry for a while: the state is as last seen)
+    flight_state: str
     armed: bool
     mode: str
     home_x_m: float = math.nan

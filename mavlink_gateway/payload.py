@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import json
 from typing import Any
+
+from mavsdk.plugins.mavlink_direct import MavlinkMessage
 
 from mavlink_gateway.core import Refusal, _number
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.flight import FlightPrimitives
 from mavlink_gateway.interfaces import Sensed, SensedWorld
-from mavlink_gateway.lockstep_wait import wait_world
+from mavlink_gateway.lockstep_wait import wait_instant, wait_world
 from mavlink_gateway.outcomes import Outcome, Status
 
 __all__ = ["PayloadPrimitives", "perception_dict"]
@@ -17,6 +20,12 @@ CAMERA_ID = 100
 CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targets
 FULL_PCT = 99.5
 MAX_WAIT_S = 3600.0
+IMAGE_START_CAPTURE = 2000
+MAV_RESULT_ACCEPTED = 0
+PHOTO_TRIES = 4
+PHOTO_REPORT_WALL_S = 0.6  # wall time a capture report may take before it is asked again
+
+MAV_RESULTS = {1: "temporarily rejected", 2: "denied", 3: "unsupported", 4: "failed"}
 
 
 def _entity(e: Sensed) -> dict[str, Any]:
@@ -39,7 +48,11 @@ class PayloadPrimitives(FlightPrimitives):
         async def body(link: DroneLink) -> Outcome:
             self._require_air(link)
             before = len(link.captures)
-            await self._mavsdk(link, "the photo", link.camera.take_photo(CAMERA_ID))
+            # One capture sequence number per photo: a repeat of the command (its ACK or the
+            # capture report was lost) takes no second photo, and the camera reports the
+            # photo again (emulator.mavlink.camera).
+            link.capture_sequence += 1
+            sequence = link.capture_sequence
 
             def done() -> Outcome | None:
                 if len(link.captures) > before:
@@ -50,10 +63,32 @@ class PayloadPrimitives(FlightPrimitives):
                                    f"({x:.1f}, {y:.1f})", link.state(), {"photo": info.index})
                 return None
 
-            return await self._wait(link, 10.0, "take_photo", done, watch_obstacles=False,
-                                    instant=True)
+            for _ in range(PHOTO_TRIES):
+                await self._mavsdk(link, "the photo", lambda: self._capture(link, sequence))
+                outcome = await wait_instant(link, "take_photo", done, PHOTO_REPORT_WALL_S)
+                if outcome.status is not Status.TIMEOUT:
+                    return outcome
+            return Outcome(Status.UNKNOWN, f"take_photo: the camera of {link.drone_id} accepted "
+                           f"the photo but its report did not arrive after {PHOTO_TRIES} tries "
+                           "(the link is lossy); the photo was probably taken", link.state())
 
         return await self._run("take_photo", drone, body)
+
+    @staticmethod
+    async def _capture(link: DroneLink, sequence: int) -> None:
+        """IMAGE_START_CAPTURE (one image, with its capture sequence number) to the camera;
+        a refusal by the camera is a Refusal; MAVSDK's errors (no answer) pass through."""
+        fields = {"target_system": link.profile.system_id, "target_component": CAMERA_ID,
+                  "command": IMAGE_START_CAPTURE, "confirmation": 0, "param1": 0.0,
+                  "param2": 0.0, "param3": 1.0, "param4": float(sequence), "param5": 0.0,
+                  "param6": 0.0, "param7": 0.0}
+        command = MavlinkMessage("COMMAND_LONG", 0, 0, link.profile.system_id, CAMERA_ID,
+                                 json.dumps(fields))
+        ack = await link.direct.send_command(command)
+        result = json.loads(ack.fields_json or "{}").get("result")
+        if result != MAV_RESULT_ACCEPTED:
+            raise Refusal(f"the camera refused the photo: "
+                          f"{MAV_RESULTS.get(result, f'MAV_RESULT {result}')}")
 
     async def charge(self, drone: str) -> Outcome:
         """Land on a charging station this drone senses and charge to full."""
@@ -75,7 +110,7 @@ class PayloadPrimitives(FlightPrimitives):
                 if not moved.ok:
                     return moved
                 texts = len(link.status_texts)
-                await self._mavsdk(link, "landing", link.action.land())
+                await self._mavsdk(link, "landing", lambda: link.action.land())
             start_pct = link.battery_pct
 
             def done() -> Outcome | None:

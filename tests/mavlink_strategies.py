@@ -20,6 +20,8 @@ items followed by AUTO.MISSION, offboard set-points followed by OFFBOARD. Parame
 are absurd or a parameter's range minimum: the floors are where a vehicle would crawl.
 SIM_HOVER_ENDUR is left out: its only effect is how fast the battery drains, and a battery
 legitimately drained by a short endurance refuses to arm by design, which is not damage.
+SYS_FAILURE_EN is left out too: it lets MAV_CMD_INJECT_FAILURE fail a motor or the GPS, after
+which a vehicle refuses to arm by design; with it at 0 every injection is refused.
 """
 
 from __future__ import annotations
@@ -47,7 +49,8 @@ ABSURD_FLOATS = (
     1.0, -1.0, -2.0, 2.0, 3.0, 4.0, 6.0, 1e30, -1e30, 2.0**31, -(2.0**31), 4294967295.0,
 )
 FLOORS = tuple(sorted({float(d.minimum) for d in PARAM_DEFINITIONS}))
-PARAM_NAMES = tuple(d.name.encode() for d in PARAM_DEFINITIONS if d.name != "SIM_HOVER_ENDUR")
+PARAM_NAMES = tuple(d.name.encode() for d in PARAM_DEFINITIONS
+                    if d.name not in ("SIM_HOVER_ENDUR", "SYS_FAILURE_EN"))
 INT_RANGES = {
     "uint8_t": (0, 255), "int8_t": (-128, 127), "uint16_t": (0, 65535),
     "int16_t": (-32768, 32767), "uint32_t": (0, 2**32 - 1), "int32_t": (-(2**31), 2**31 - 1),
@@ -223,7 +226,7 @@ BASELINES: dict[int, tuple[float, ...]] = {
     192: (math.nan, 1.0, math.nan, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 12.0),
     224: (0.0,), 300: (0.0, 0.0), 400: (1.0,), 410: (), 511: (33.0, 1e5), 512: (33.0,),
     520: (1.0,), 521: (1.0,), 522: (), 525: (), 527: (), 530: (0.0, 0.0),
-    2000: (0.0, 0.0, 1.0), 2001: (),
+    2000: (0.0, 0.0, 1.0), 2001: (), 420: (4.0, 0.0, 0.0),
 }
 SWEEP_VALUES = tuple(dict.fromkeys((*ABSURD_FLOATS, *FLOORS)))
 

@@ -72,9 +72,15 @@ CLASSES = {name: mavlink.mavlink_map[getattr(mavlink, f"MAVLINK_MSG_ID_{name}")]
 TYPE_NAMES = list(HANDLED)
 TYPE_WEIGHTS = [HANDLED[n] for n in TYPE_NAMES]
 # SIM_HOVER_ENDUR only sets how fast the battery drains: a legitimately short endurance
-# empties it during the storm, and an empty battery refuses to arm by design.
-PARAM_NAMES = [d.name.encode() for d in PARAM_DEFINITIONS if d.name != "SIM_HOVER_ENDUR"]
-COMMANDS = [*sorted(HANDLERS), 16, 17, 20, 21, 22, 176, 183, 185, 246, 31000]
+# empties it during the storm, and an empty battery refuses to arm by design. The faults'
+# parameters and command (data-link loss, failure injection: a failed motor refuses to arm by
+# design) are left out so the seeded storm stays the one it was; the storm of
+# tests/test_hardening_mavlink.py covers them.
+FAULT_PARAMS = ("COM_DL_LOSS_T", "NAV_DLL_ACT", "SYS_FAILURE_EN")
+PARAM_NAMES = [d.name.encode() for d in PARAM_DEFINITIONS
+               if d.name != "SIM_HOVER_ENDUR" and d.name not in FAULT_PARAMS]
+COMMANDS = [*sorted(c for c in HANDLERS if c != 420), 16, 17, 20, 21, 22, 176, 183, 185, 246,
+            31000]
 
 F32_MAX = 3.4028234663852886e38
 SPECIAL_FLOATS = [

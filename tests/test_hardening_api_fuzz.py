@@ -44,7 +44,7 @@ pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
 FUZZ = settings(derandomize=True, database=None, deadline=None, print_blob=True,
                 suppress_health_check=list(HealthCheck))
-STATUSES = {"ok", "partial", "blocked", "rejected", "timeout", "error"}
+STATUSES = {"ok", "partial", "blocked", "rejected", "timeout", "unknown", "failed", "error"}
 MAX_ANSWER_CHARS = 50_000
 TOOL_NAMES = [s.name for s in default_registry().specs()]
 COMMANDS = ["take_off", "land", "move_to", "move_towards", "move_along_path", "hover",
@@ -149,7 +149,12 @@ def test_rest_fuzz_never_5xx_and_refusals_change_nothing() -> None:
 
         check()
         r = loop.run_until_complete(client.get(f"/sessions/{sid}/drones"))
-        assert r.status_code == 200 and r.json()["status"] == "ok"
+        # still serving; the fuzz may have called `finish` with valid arguments (which of its
+        # examples it draws depends on the literals of the code base), and then the task's
+        # tools are rightly refused
+        answer = r.json()
+        assert r.status_code == 200 and (answer["status"] == "ok" or answer["message"].endswith(
+            "the task is already finished")), r.text[:400]
 
 
 def test_registry_fuzz_never_raises_and_errors_change_nothing() -> None:

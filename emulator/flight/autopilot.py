@@ -17,6 +17,7 @@ from emulator.flight import dynamics as dy
 from emulator.flight.autopilot_mission import MissionRunner
 from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY_LOW
 from emulator.flight.camera import ImageCapture, capture_image
+from emulator.flight.failures import VehicleFailures
 from emulator.flight.limits import (
     SpeedKind,
     check_altitude,
@@ -74,6 +75,7 @@ class Autopilot:
         self._timer_action: Callable[[], None] | None = None
         self._timer_busy = False
         self.offboard = OffboardControl(self)
+        self.failures = VehicleFailures(self)
         dyn = fleet.dyn
         dyn.position_m[k] = spec.position_m
         dyn.yaw_deg[k] = wrap_heading_deg(spec.heading_deg)
@@ -125,8 +127,10 @@ class Autopilot:
         bat.hover_endurance_s[k] = p["SIM_HOVER_ENDUR"]
 
     def set_param(self, name: str, value: float) -> float:
+        before = self.params[name]
         stored = self.params.set(name, value)
-        self.apply_params()
+        if stored != before:  # the same value again (a retransmitted PARAM_SET) changes nothing
+            self.apply_params()
         return stored
 
     def _event(self, kind: str, **data: object) -> None:
@@ -302,6 +306,7 @@ class Autopilot:
     def arm(self) -> None:
         if self.armed:
             return
+        self.failures.check_arming()
         if self.fleet.bat.level[self.k] >= BATTERY_CRITICAL:
             raise CommandRefused(f"Arming denied: battery {self.battery_pct:.0f}% too low")
         self.fleet.armed[self.k] = True

@@ -40,6 +40,13 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
     fleet.guard.forget(k)
     ap.landed_state = LandedState.ON_GROUND
     ap.mode = FlightMode.HOLD
+    repaired = ap.failures.any
+    if repaired:
+        ap._event("operator_repair", failures=[name for name in ("gps", "motor", "mavlink")
+                                               if getattr(ap.failures, f"{name}_off")])
+    ap.failures.clear()
+    if repaired:
+        ap.listener.on_statustext(6, "Failures cleared by the operator")
     ap._event("operator_place", position_m=[x_m, y_m, 0.0])
     ap._update_charging()
     ap.listener.on_operator_reset()

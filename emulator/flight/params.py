@@ -81,6 +81,11 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("CAL_GYRO0_ID", 1310988, 0, 2**31 - 1, "gyro calibration id", is_int=True),
     _p("CAL_MAG0_ID", 197388, 0, 2**31 - 1, "magnetometer calibration id", is_int=True),
     _p("COM_RC_IN_MODE", 4, 0, 4, "RC input mode (4 = none needed)", is_int=True),
+    _p("COM_DL_LOSS_T", 10.0, 5.0, 300.0, "data link loss time-out (simulated s)"),
+    _p("NAV_DLL_ACT", 0, 0, 3, "data link loss action: 0 none, 1 hold, 2 return, 3 land",
+       is_int=True),
+    _p("SYS_FAILURE_EN", 0, 0, 1, "accept MAV_CMD_INJECT_FAILURE (failure injection)",
+       is_int=True),
 )
 
 _BY_NAME: dict[str, ParamDefinition] = {d.name: d for d in PARAM_DEFINITIONS}

@@ -15,6 +15,7 @@ class CommandRefused(Exception):
 class Severity:
     """MAV_SEVERITY levels used in STATUSTEXT."""
 
+    EMERGENCY = 0
     CRITICAL = 2
     ERROR = 3
     WARNING = 4

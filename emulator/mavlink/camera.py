@@ -34,10 +34,16 @@ def _fixed(text: str, size: int) -> list[int]:
 
 
 class CameraComponent:
-    """A nadir still camera: one capture per IMAGE_START_CAPTURE, geotagged."""
+    """A nadir still camera: one capture per IMAGE_START_CAPTURE, geotagged.
+
+    A single capture may carry a capture sequence number (param 4, from 1): a command that
+    repeats the last sequence number is a retransmission, so it takes no second photo and the
+    camera sends that photo's CAMERA_IMAGE_CAPTURED again (its first copy may have been lost)."""
 
     def __init__(self, link: VehicleLink) -> None:
         self.link = link
+        self._last_sequence = 0.0
+        self._last_captured: mavlink.MAVLink_message | None = None
 
     def _send(self, message: mavlink.MAVLink_message) -> None:
         self.link.send(message, component_id=CAMERA_COMPONENT_ID)
@@ -72,6 +78,13 @@ class CameraComponent:
             total = a.p3 if math.isfinite(a.p3) else 1.0
             if total != 1.0:
                 return Result.DENIED, "Camera: only single captures (total images = 1)"
+            sequence = a.p4 if math.isfinite(a.p4) and a.p4 >= 1.0 else 0.0
+            if sequence and sequence == self._last_sequence:
+                captured = self._last_captured
+                if captured is not None:
+                    link.after_ack(lambda: self._send(captured))
+                return Result.ACCEPTED, None
+            self._last_sequence = sequence
             link.after_ack(link.ap.take_photo)
             return Result.ACCEPTED, None
         if a.command == 2001:  # IMAGE_STOP_CAPTURE
@@ -99,8 +112,9 @@ class CameraComponent:
         yaw = math.radians(capture.yaw_deg)
         q = [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
         rel_mm = round((capture.position_m[2] - ap.home_m[2]) * 1000.0)
-        self._send(mavlink.MAVLink_camera_image_captured_message(
+        self._last_captured = mavlink.MAVLink_camera_image_captured_message(
             int(capture.t_s * 1000.0), 0, 0, round(lat * 1e7), round(lon * 1e7),
             round(alt * 1000.0), rel_mm, q, capture.index, 1,
             f"mavswarm://{ap.vehicle_id}/image_{capture.index:04d}.jpg".encode(),
-        ))
+        )
+        self._send(self._last_captured)

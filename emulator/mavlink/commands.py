@@ -229,6 +229,32 @@ def _camera(link: VehicleLink, a: CommandArgs) -> Outcome:
     return link.camera.handle_command(a)
 
 
+# MAV_CMD_INJECT_FAILURE: FAILURE_UNIT -> what emulator.flight.failures models
+FAILURE_UNITS = {4: "gps", 100: "battery", 101: "motor", 105: "mavlink"}
+FAILURE_OK, FAILURE_OFF = 0, 1
+
+
+def _inject_failure(link: VehicleLink, a: CommandArgs) -> Outcome:
+    ap = link.ap
+    if ap.params["SYS_FAILURE_EN"] != 1.0:
+        return Result.DENIED, "Failure injection disabled: set SYS_FAILURE_EN to 1"
+    unit = FAILURE_UNITS.get(int(a.p1)) if _finite(a.p1) else None
+    kind = int(a.p2) if _finite(a.p2) else -1
+    if unit is None or kind not in (FAILURE_OK, FAILURE_OFF) or (
+            kind == FAILURE_OK and unit not in ("gps", "mavlink")):
+        return Result.UNSUPPORTED, None
+    if kind == FAILURE_OK:
+        ap.failures.restore(unit, "injection")
+        return Result.ACCEPTED, None
+
+    def fail() -> None:  # after the ACK: a vehicle whose MAVLink goes off still answers this
+        ap.failures.fail(unit, "injection")
+        if unit == "mavlink" and link.on_mavlink_signal is not None:
+            link.on_mavlink_signal(ap)
+    link.after_ack(fail)
+    return Result.ACCEPTED, None
+
+
 HANDLERS: dict[int, Callable[[VehicleLink, CommandArgs], Outcome]] = {
     400: _arm,
     22: _takeoff,
@@ -245,6 +271,7 @@ HANDLERS: dict[int, Callable[[VehicleLink, CommandArgs], Outcome]] = {
     512: _request_message,
     520: _autopilot_capabilities,
     410: _get_home,
+    420: _inject_failure,
     2000: _camera,
     2001: _camera,
     521: _camera,

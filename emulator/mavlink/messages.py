@@ -177,8 +177,9 @@ def gps_raw_int(ap: Autopilot, time_usec: int) -> mavlink.MAVLink_message:
     v = f.dyn.velocity_m_s[k]
     ground = math.hypot(float(v[0]), float(v[1]))
     cog = round(math.degrees(math.atan2(v[0], v[1])) * 100.0) % 36000 if ground > 0.1 else 0
+    fix, satellites = (0, 0) if ap.failures.gps_off else (3, 14)
     return mavlink.MAVLink_gps_raw_int_message(
-        time_usec, 3, lat, lon, alt, 80, 120, round(ground * 100.0), cog, 14,
+        time_usec, fix, lat, lon, alt, 80, 120, round(ground * 100.0), cog, satellites,
         alt, 500, 800, 100, 0, 0,
     )
 

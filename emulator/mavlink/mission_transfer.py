@@ -48,6 +48,9 @@ class MissionTransfer:
     def __init__(self, link: VehicleLink) -> None:
         self.link = link
         self._upload: _Upload | None = None
+        # (peer, last seq, result) of the upload that ended last: its last item sent again
+        # means the ACK was lost, and gets the same ACK again (as PX4 does)
+        self._ended: tuple[tuple[int, int], int, int] | None = None
 
     @property
     def uploading(self) -> bool:
@@ -75,6 +78,7 @@ class MissionTransfer:
             return
         if self._upload is not None:
             self.link.statustext(Severity.INFO, "Mission upload restarted")
+        self._ended = None
         if m.count == 0:
             self._upload = None
             self.link.ap.mission.clear()
@@ -88,6 +92,10 @@ class MissionTransfer:
         if getattr(m, "mission_type", 0) != MISSION_TYPE_MISSION:
             return
         if up is None:
+            ended = self._ended
+            if ended is not None and ended[:2] == (peer, m.seq):
+                self._ack(peer, ended[2])  # a repeat of the last item: the ACK was lost
+                return
             self._ack(peer, MissionResult.DENIED)
             return
         if peer != up.peer:  # PX4: "partner id mismatch", the item is ignored
@@ -109,6 +117,7 @@ class MissionTransfer:
             code, reason = validate_item_limits(item, ap.params)
         if code != MissionResult.ACCEPTED:
             self._upload = None
+            self._ended = (peer, m.seq, code)
             self._ack(peer, code)
             self.link.statustext(Severity.WARNING, reason)
             return
@@ -118,6 +127,7 @@ class MissionTransfer:
             self._request(len(up.items))
             return
         self._upload = None
+        self._ended = (peer, m.seq, MissionResult.ACCEPTED)
         ap.mission.replace(up.items)
         self._ack(peer, MissionResult.ACCEPTED)
 

@@ -17,6 +17,7 @@ from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
 from emulator.mavlink.camera import CAMERA_COMPONENT_ID, CAMERA_MESSAGES, CameraComponent
 from emulator.mavlink.codec import Encoder, mavlink
+from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import CommandArgs, Result, execute_command
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import apply_global_setpoint, apply_local_setpoint
@@ -63,6 +64,10 @@ class VehicleLink:
         self.missions = MissionTransfer(self)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
+        self.dedup = CommandDedup()
+        self.last_reached: int | None = None  # the last MISSION_ITEM_REACHED of this mission
+        # told when this vehicle's MAVLink goes off or comes back (the swarm's link faults)
+        self.on_mavlink_signal: Callable[[Autopilot], None] | None = None
         ap.listener = self
 
     # ---------------------------------------------------------------- sending
@@ -139,7 +144,15 @@ class VehicleLink:
         self.statustext(severity, text)
 
     def on_mission_item_reached(self, seq: int) -> None:
+        self.last_reached = seq
         self.send(mavlink.MAVLink_mission_item_reached_message(seq))
+
+    def resend_mission_reached(self) -> None:
+        """MISSION_ITEM_REACHED comes once per item: on a lossy link the swarm repeats the
+        last one with the vehicle's telemetry at a lockstep halt, or a client could never
+        learn that its mission finished."""
+        if self.last_reached is not None:
+            self.send(mavlink.MAVLink_mission_item_reached_message(self.last_reached))
 
     def on_mission_current(self) -> None:
         self.send(msgs.mission_current(self.ap))
@@ -157,6 +170,7 @@ class VehicleLink:
 
     def on_operator_reset(self) -> None:
         """An operator moved the vehicle or refilled its battery: report the new state now."""
+        self.dedup.forget()
         self.on_state_changed()
         for msg_id in _OPERATOR_RESET_STREAMS:
             self.send_once(msg_id)
@@ -185,19 +199,45 @@ class VehicleLink:
             2000, 2001, 521, 522, 525, 527, 530, 512
         ):
             result, reason = Result.UNSUPPORTED, None
+        elif args.command in STATEFUL_COMMANDS:
+            key, step = command_key(m), self.ap.fleet.step_count
+            repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s,
+                                            self._state_key())
+            if repeated is not None:  # a retransmission: the first copy's answer again
+                self._after_ack.clear()
+                self._ack(m, args.command, repeated, target_component)
+                return
+            result, reason = execute_command(self, args)
+            self._answer(m, args.command, result, reason, target_component)
+            self.dedup.answered(self._peer(m), key, step, self.wall_now_s, result,
+                                self._state_key())
+            return
         else:
             result, reason = execute_command(self, args)
-        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
-        src_system, src_component = self._peer(m)
-        self.send(mavlink.MAVLink_command_ack_message(
-            args.command, result, 0, 0, src_system, src_component
-        ), component)
+        self._answer(m, args.command, result, reason, target_component)
+
+    def _answer(self, m, command: int, result: int, reason: str | None,
+                target_component: int) -> None:
+        self._ack(m, command, result, target_component)
         if reason:
             self.statustext(Severity.WARNING if result else Severity.INFO, reason)
         actions, self._after_ack = self._after_ack, []
         if result == Result.ACCEPTED:
             for action in actions:
                 action()
+
+    def _state_key(self) -> tuple[object, ...]:
+        """What a command changes: mode, arming, landed state, goal, whether a goal runs."""
+        ap, fleet = self.ap, self.ap.fleet
+        return (ap.mode, ap.armed, ap.landed_state, fleet.dyn.goal_m[self.k].tobytes(),
+                bool(fleet.busy[self.k]))
+
+    def _ack(self, m, command: int, result: int, target_component: int) -> None:
+        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
+        src_system, src_component = self._peer(m)
+        self.send(mavlink.MAVLink_command_ack_message(
+            command, result, 0, 0, src_system, src_component
+        ), component)
 
     def _command_long(self, m) -> None:
         self._on_command(m, CommandArgs.from_long(m))
@@ -232,6 +272,7 @@ class VehicleLink:
         self.send(self._param_value(name))
 
     def _param_set(self, m) -> None:
+        self.dedup.forget()
         name = m.param_id
         try:
             d = ParamStore.definition(name)
@@ -251,6 +292,8 @@ class VehicleLink:
 
     # ---------------------------------------------------------------- missions
     def _mission_count(self, m) -> None:
+        self.last_reached = None
+        self.dedup.forget()  # a command after this one is no retransmission of one before
         self.missions.on_count(m, self._peer(m), self.wall_now_s)
 
     def _mission_item_int(self, m) -> None:
@@ -269,9 +312,12 @@ class VehicleLink:
         self.missions.on_request(m, self._peer(m), wants_int=False)
 
     def _mission_clear_all(self, m) -> None:
+        self.last_reached = None
+        self.dedup.forget()
         self.missions.on_clear_all(m, self._peer(m))
 
     def _mission_set_current(self, m) -> None:
+        self.dedup.forget()
         self.missions.on_set_current(m)
 
     # ------------------------------------------------------------------ others
