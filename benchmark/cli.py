@@ -24,8 +24,8 @@ from benchmark.episode import CLOCKS
 from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
-from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 from emulator.link_faults import add_link_arguments, link_faults_from_args
+from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 
 __all__ = ["add_parsers", "add_verbose_argument", "run_bench"]
 
