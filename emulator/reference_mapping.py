@@ -10,8 +10,11 @@ turned into our terms; each mapping returns a note saying what it did.
 - **Home altitude.** The reference puts home at the starting position, altitude included, so a
   drone spawned in the air has its home in the air, and `return_home` teleports there. Our
   home is where a vehicle lands: its altitude is the ground (z = 0).
-- **Moving targets** keep their type and position; the reference's velocity and path are read
-  but the target stands still until moving targets are simulated.
+- **Moving targets** move with the reference's velocity, path and bounce rules
+  (emulator.target_motion), in simulated time and continuously: where the reference moves them
+  once a wall-clock second and puts one back when a step lands inside an obstacle, ours turn
+  round where they meet the obstacle, and follow their path exactly (the reference counts a
+  waypoint reached within 0.5 m).
 """
 
 from __future__ import annotations
@@ -45,10 +48,10 @@ def home_altitude_m(raw_z_m: float, where: str) -> tuple[float, str | None]:
     return 0.0, None
 
 
-def moving_target_note(where: str) -> str:
-    """The note for a `moving` target, which stands still here."""
-    return (f"{where}: a moving target; it stands at its position (its velocity and path are "
-            "not simulated)")
+def moving_target_note(where: str, mode: str) -> str:
+    """The note for a `moving` target: how it moves here."""
+    return (f"{where}: a moving target ({mode} mode); it moves in simulated time and turns "
+            "round where it meets an obstacle (the reference steps once a wall-clock second)")
 
 
 def notes_to_show(notes: tuple[str, ...] | list[str], limit: int = 5) -> list[str]:

@@ -21,6 +21,7 @@ import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
 from emulator.reference_mapping import capacity_mah, home_altitude_m, moving_target_note
+from emulator.target_motion import MotionSpec, motion_spec
 from emulator.world import CALM, OBSTACLE_KINDS, TARGET_KINDS, Obstacle, Target, Wind, World
 
 __all__ = [
@@ -244,12 +245,25 @@ def _target(e: _Entity, index: int, notes: list[str]) -> tuple[Target, Point3]:
         if kind == "waypoint":
             amount = e.number("charge_amount", DEFAULT_CHARGE_AMOUNT_PCT, above=0.0)
             rate = amount / CHARGE_AMOUNT_PERIOD_S
-        target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate)
-        if kind == "moving":
-            notes.append(moving_target_note(e.label))
+        motion = _motion(e, position) if kind == "moving" else None
+        target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate,
+                             motion=motion)
+        if motion is not None:
+            notes.append(moving_target_note(e.label, motion.mode))
     if given[2] < 0.0:
         e.fail("position.z", f"must be >= 0, got {given[2]:g}")
     return target, given
+
+
+def _motion(e: _Entity, position: Point3) -> MotionSpec:
+    """A moving target's velocity, path and duration (entities.md 3.3)."""
+    velocity = e.point("velocity", None) if e.data.get("velocity") is not None else None
+    raw_path = e.get("moving_path", [])
+    if not isinstance(raw_path, list):
+        e.fail("moving_path", f"must be a list of {{x, y}} points, got {_show(raw_path)}")
+    path = [e.as_point(f"moving_path[{k}]", p) for k, p in enumerate(raw_path)]
+    duration = e.number("moving_duration", 10.0)
+    return motion_spec(position, velocity, path, duration)
 
 
 def _obstacle(e: _Entity, index: int) -> Obstacle:
