@@ -26,8 +26,9 @@ MAX_PATH_POINTS = 100
 PLAN_CLEARANCE_M = 8.0
 TEAM_OPS = ("sweep", "visit_targets")
 # Meeting a moving target: the share of top speed assumed and the slack added to a flight.
-MEET_SPEED_SHARE = 0.6
+MEET_SPEED_SHARE = 0.8
 MEET_SLACK_S = 8.0
+CRUISE_M_S = 8.0  # the autopilot's MPC_XY_CRUISE: move_to flies at most this fast
 MIN_HOVER_S = 0.2
 HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
@@ -215,11 +216,12 @@ class OracleAgent:
     async def _meet(self, tools: AgentTools, d: str, target: str, altitude_m: float,
                     zone: tuple[float, float, float] | None = None) -> float:
         """Fly to where the target will be (inside the zone, if given) and hover there until
-        it arrives; returns the simulated time of the meeting."""
+        it arrives; returns the simulated time of the meeting (when the drone came late, the
+        time it arrived)."""
         await self._ensure_airborne(tools, d, altitude_m)
         now = tools.clock_s
         here = self._position(d)
-        speed = self._specs[d].max_speed_m_s
+        speed = min(self._specs[d].max_speed_m_s, CRUISE_M_S)
 
         def flight_s(goal: tuple[float, float]) -> float:
             legs = self._legs(here, (goal[0], goal[1], altitude_m))
@@ -240,7 +242,7 @@ class OracleAgent:
         wait_s = meet_s - tools.clock_s
         if wait_s > MIN_HOVER_S:
             self._check(d, "wait for the target", await tools.hover(d, wait_s))
-        return meet_s
+        return max(meet_s, tools.clock_s)
 
     async def _follow(self, tools: AgentTools, d: str, target: str, altitude_m: float,
                       until_s: float) -> None:
