@@ -1,4 +1,4 @@
-"""The shipped benchmark suite (75 generated sessions under `benchmark/sessions/`) and its
+"""The shipped benchmark suite (100 generated sessions under `benchmark/sessions/`) and its
 named subsets, and generation of the whole suite."""
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def _generate_one(key: tuple[str, str, int], out_dir: Path, verify: bool) -> Pat
 def generate_suite(out_dir: Path, *, only: Sequence[str] | None = None, verify: bool = True,
                    workers: int = 1, backend: str = "local",
                    ray_address: str = "") -> list[Path]:
-    """Generate the suite's session files (all 75, or the ids in `only`) into out_dir, in
+    """Generate the suite's session files (all 100, or the ids in `only`) into out_dir, in
     `workers` local processes or, with backend "ray", as Ray tasks (benchmark/backends.py)."""
     keys = list(all_session_keys())
     if only:

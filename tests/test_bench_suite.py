@@ -1,4 +1,4 @@
-"""The shipped suite: 75 sessions of 20 tasks that load cleanly, cover the check endpoints,
+"""The shipped suite: 100 sessions of 20 tasks that load cleanly, cover the check endpoints,
 and regenerate byte for byte from their seeds."""
 
 from __future__ import annotations
@@ -16,14 +16,16 @@ from benchmark.validators import endpoints_used, leaf_count
 
 def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     paths, limit = suite_paths("full")
-    assert limit is None and len(paths) == 75
+    assert limit is None and len(paths) == 100
     assert [p.stem for p in paths] == [session_id(*k) for k in all_session_keys()]
     endpoints: set[str] = set()
     categories: Counter[str] = Counter()
+    families: Counter[str] = Counter()
     checks = 0
     for path in paths:
         session = load_session(path)
         assert len(session.tasks) == 20, path
+        families[session.family] += 1
         for task in session.tasks:
             assert task.error is None, task.error
             assert task.oracle is not None and task.budget is not None
@@ -31,11 +33,14 @@ def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
             checks += leaf_count(task.checks)
             endpoints |= endpoints_used(task.checks)
             categories[task.category] += 1
-    assert len(endpoints) >= 21, sorted(endpoints)
+    assert len(endpoints) >= 23, sorted(endpoints)
+    assert {"moving_target_tracked", "moving_target_reached_in_zone"} <= endpoints
     assert set(categories) == {"basic_operations", "navigation", "search",
                                "multi_drone_coordination", "delivery", "communication",
-                               "battery_management"}
-    assert checks >= 4 * 1500
+                               "battery_management", "target_tracking"}
+    assert families == dict.fromkeys(("area_search", "area_assignment_and_patrol",
+                                      "target_assignment", "target_tracking"), 25)
+    assert checks >= 4 * 2000
 
 
 def test_unverified_generation_reproduces_a_shipped_session() -> None:

@@ -3,6 +3,7 @@ where they truly are."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -149,3 +150,15 @@ def test_a_drone_flying_with_the_target_keeps_it_tracked() -> None:
     # 5 t - 200 > sqrt(21^2 - 10^2), at t 43.69.
     leaf = check(ctx, "moving_target_tracked", target_id="m", drone_id="d1", min_duration=50)
     assert leaf.passed and leaf.value == pytest.approx(43.69 + 10.0, abs=0.05)
+
+
+def test_target_tracking_progress_counts_what_is_tracked_at_the_end() -> None:
+    truth, scenario = _chase_context()
+    tracking = dataclasses.replace(scenario, task_type="target_tracking")  # type: ignore[type-var]
+    # d1 had the target in range until t 25: tracked until t 35, stale afterwards.
+    assert check(context(truth, tracking, 0.0, 30.0), "task_progress",  # type: ignore[arg-type]
+                 expected_progress=1.0).passed
+    late = context(truth, tracking, 0.0, 40.0)  # type: ignore[arg-type]
+    leaf = check(late, "task_progress", expected_progress=0.5)
+    assert (leaf.result, leaf.value) == (False, 0.0)
+    assert check(late, "task_done").passed  # every target was reached at some time

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.validators.context import CheckContext
-from benchmark.validators.coverage import coverage, task_done, task_progress
+from benchmark.validators.coverage import TRACKING_WINDOW_S, coverage, task_done, task_progress
 from benchmark.validators.endpoint import Endpoint, Outcome, Params, Runner, Validator, target_kind
 from benchmark.validators.geometry import point_segment_distance
 from benchmark.validators.params import REQUIRED, ParamSpec, entity, integer, number
@@ -14,8 +14,6 @@ from benchmark.validators.reach import target_rows, visits
 __all__ = ["TARGET_ENDPOINTS", "TRACKING_WINDOW_S", "tracking_periods"]
 
 _RATIO_EPS = 1e-9
-TRACKING_WINDOW_S = 10.0
-"""A reach of a moving target keeps it tracked this long (the reference's window)."""
 
 
 def _reaching_drones(ctx: CheckContext, target_id: str) -> int:
