@@ -241,6 +241,12 @@ class MovingTargets:
         self.ids = tuple(ids)
         self._legs = [TargetLegs(s, entry) for s in specs]
         self._index = {ident: k for k, ident in enumerate(self.ids)}
+        m = len(self._legs)
+        # Each target's leg at the latest instant asked for: positions there are one
+        # vectorised expression until some target's next leg starts.
+        self._leg_t0, self._leg_next_t = np.zeros(m), np.full(m, -np.inf)
+        self._leg_p0, self._leg_v = np.zeros((m, 3)), np.zeros((m, 3))
+        self._fresh_from, self._fresh_until = math.inf, -math.inf
         self.now_s = 0.0
         self.position_m = self.positions_at(0.0)
 
@@ -250,22 +256,33 @@ class MovingTargets:
     def legs(self, target_id: str) -> TargetLegs:
         return self._legs[self._index[target_id]]
 
+    def _refresh(self, t_s: float, stale: np.ndarray) -> None:
+        for k in np.flatnonzero(stale):
+            legs = self._legs[k]
+            if legs.built_until_s <= t_s:
+                legs.extend(t_s + LOOKAHEAD_S)
+            t0, p0, v = legs.arrays()
+            i = max(int(np.searchsorted(t0, t_s, side="right")) - 1, 0)
+            self._leg_t0[k], self._leg_p0[k], self._leg_v[k] = t0[i], p0[i], v[i]
+            self._leg_next_t[k] = t0[i + 1] if i + 1 < t0.size else legs.built_until_s
+        if self._legs:
+            self._fresh_from = float(self._leg_t0.max())
+            self._fresh_until = float(self._leg_next_t.min())
+
     def positions_at(self, t_s: float) -> np.ndarray:
         """Every target's position (M, 3) at t_s."""
-        t = np.array([t_s])
-        if not self._legs:
-            return np.zeros((0, 3))
-        return np.vstack([legs.positions(t) for legs in self._legs])
+        t = float(t_s)
+        if not self._fresh_from <= t < self._fresh_until:
+            stale = (t < self._leg_t0) | (t >= self._leg_next_t)
+            if stale.any():
+                self._refresh(t, stale)
+        return self._leg_p0 + self._leg_v * np.maximum(t - self._leg_t0, 0.0)[:, None]
 
     def advance(self, now_s: float, dt_s: float) -> np.ndarray:
-        """One physics step from now_s: legs are built ahead and the positions at now_s + dt_s
+        """One physics step (or dt_s of them) from now_s: the positions at now_s + dt_s
         become the current ones (returned)."""
-        t = now_s + dt_s
-        if t + 1e-12 >= min((lg.built_until_s for lg in self._legs), default=math.inf):
-            for legs in self._legs:
-                legs.extend(t + LOOKAHEAD_S)
-        self.now_s = t
-        self.position_m = self.positions_at(t)
+        self.now_s = now_s + dt_s
+        self.position_m = self.positions_at(self.now_s)
         return self.position_m
 
     def current(self) -> dict[str, Point3]:

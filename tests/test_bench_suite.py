@@ -59,3 +59,20 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
     lines: list[str] = []
     again = dump_session(generate_session("area_search", "easy", 1, progress=lines.append))
     assert again == shipped, lines
+
+
+def test_a_tracking_session_redraws_from_its_seed() -> None:
+    """Every first draw of target_tracking-easy-1 passed the oracle, so drawing alone gives
+    the shipped file."""
+    shipped = (SESSIONS_DIR / "target_tracking-easy-1.json").read_text()
+    again = dump_session(generate_session("target_tracking", "easy", 1, verify=False))
+    assert again == shipped
+
+
+@pytest.mark.mavsdk
+def test_the_oracle_proves_the_first_tracking_tasks_again() -> None:
+    """The first tasks of a tracking session, flown again by the oracle: the same tasks."""
+    shipped = load_session(SESSIONS_DIR / "target_tracking-easy-2.json").data["tasks"][:3]
+    lines: list[str] = []
+    again = generate_session("target_tracking", "easy", 2, tasks=3, progress=lines.append)
+    assert again["tasks"] == shipped, lines
