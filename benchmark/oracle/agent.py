@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from functools import partial
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
@@ -32,6 +33,21 @@ CRUISE_M_S = 8.0  # the autopilot's MPC_XY_CRUISE: move_to flies at most this fa
 MIN_HOVER_S = 0.2
 HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
+TRANSFER_RETRIES = 2
+TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+
+
+async def _retried(call: Callable[[], Awaitable[Outcome]]) -> Outcome:
+    """A move whose mission or command the link lost on the way (a transfer time-out under
+    load) is sent again, as any client would; other outcomes are final."""
+    outcome = await call()
+    for _ in range(TRANSFER_RETRIES):
+        lost = outcome.status is Status.REJECTED and any(
+            word in outcome.message for word in TRANSFER_LOST)
+        if not lost:
+            break
+        outcome = await call()
+    return outcome
 
 
 class OracleError(RuntimeError):
@@ -250,7 +266,7 @@ class OracleAgent:
         while tools.clock_s < until_s + FOLLOW_EXTRA_S:
             aim_s = tools.clock_s + HOP_S
             x, y = self._pursuit.xy(target, aim_s)
-            self._check(d, "follow", await tools.move_to(d, x, y, altitude_m))
+            self._check(d, "follow", await _retried(partial(tools.move_to, d, x, y, altitude_m)))
             wait_s = aim_s - tools.clock_s
             if wait_s > MIN_HOVER_S:
                 self._check(d, "follow", await tools.hover(d, wait_s))
@@ -274,7 +290,7 @@ class OracleAgent:
         await self._ensure_airborne(tools, d, goal[2])
         waypoints = self._legs(self._position(d), goal)
         if len(waypoints) == 1:
-            self._check(d, "move", await tools.move_to(d, *goal))
+            self._check(d, "move", await _retried(partial(tools.move_to, d, *goal)))
         else:
             await self._fly_waypoints(tools, d, waypoints)
 
@@ -296,4 +312,4 @@ class OracleAgent:
                              waypoints: list[tuple[float, float, float]]) -> None:
         for k in range(0, len(waypoints), MAX_PATH_POINTS):
             chunk = [list(w) for w in waypoints[k:k + MAX_PATH_POINTS]]
-            self._check(d, "path", await tools.move_along_path(d, chunk))
+            self._check(d, "path", await _retried(partial(tools.move_along_path, d, chunk)))
