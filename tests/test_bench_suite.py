@@ -8,7 +8,7 @@ from collections import Counter
 import pytest
 
 from benchmark.generate import generate_session
-from benchmark.scenarios import all_session_keys, session_id
+from benchmark.scenarios import LEVELS, SESSION_INDICES, all_session_keys, session_id
 from benchmark.session_file import dump_session, load_session
 from benchmark.suite import SESSIONS_DIR, suite_paths
 from benchmark.validators import endpoints_used, leaf_count
@@ -61,12 +61,15 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
     assert again == shipped, lines
 
 
-def test_a_tracking_session_redraws_from_its_seed() -> None:
-    """Every first draw of target_tracking-easy-1 passed the oracle, so drawing alone gives
-    the shipped file."""
-    shipped = (SESSIONS_DIR / "target_tracking-easy-1.json").read_text()
-    again = dump_session(generate_session("target_tracking", "easy", 1, verify=False))
-    assert again == shipped
+def test_every_tracking_session_redraws_from_its_seed() -> None:
+    """Every first draw of the 25 target_tracking sessions passed the oracle, so drawing alone
+    gives the shipped files."""
+    for level in LEVELS:
+        for index in SESSION_INDICES:
+            name = f"target_tracking-{level}-{index}"
+            again = dump_session(generate_session("target_tracking", level, index,
+                                                  verify=False))
+            assert again == (SESSIONS_DIR / f"{name}.json").read_text(), name
 
 
 @pytest.mark.mavsdk
