@@ -14,7 +14,8 @@ turned into our terms; each mapping returns a note saying what it did.
   (emulator.target_motion), in simulated time and continuously: where the reference moves them
   once a wall-clock second and puts one back when a step lands inside an obstacle, ours turn
   round where they meet the obstacle, and follow their path exactly (the reference counts a
-  waypoint reached within 0.5 m).
+  waypoint reached within 0.5 m). A note names each moving target whose track meets an
+  obstacle.
 """
 
 from __future__ import annotations
@@ -49,9 +50,10 @@ def home_altitude_m(raw_z_m: float, where: str) -> tuple[float, str | None]:
 
 
 def moving_target_note(where: str, mode: str) -> str:
-    """The note for a `moving` target: how it moves here."""
-    return (f"{where}: a moving target ({mode} mode); it moves in simulated time and turns "
-            "round where it meets an obstacle (the reference steps once a wall-clock second)")
+    """The note for a `moving` target whose track meets an obstacle."""
+    return (f"{where}: a moving target ({mode} mode) whose track meets an obstacle; it turns "
+            "round where it meets it (the reference steps once a wall-clock second and puts it "
+            "back after a step into the obstacle)")
 
 
 def notes_to_show(notes: tuple[str, ...] | list[str], limit: int = 5) -> list[str]:

@@ -9,6 +9,7 @@ naming the file, the entity (list index and id) and the field.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections.abc import Mapping
@@ -21,7 +22,7 @@ import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
 from emulator.reference_mapping import capacity_mah, home_altitude_m, moving_target_note
-from emulator.target_motion import MotionSpec, motion_spec
+from emulator.target_motion import EntryFn, MotionSpec, motion_spec, obstacle_entry
 from emulator.world import CALM, OBSTACLE_KINDS, TARGET_KINDS, Obstacle, Target, Wind, World
 
 __all__ = [
@@ -248,8 +249,6 @@ def _target(e: _Entity, index: int, notes: list[str]) -> tuple[Target, Point3]:
         motion = _motion(e, position) if kind == "moving" else None
         target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate,
                              motion=motion)
-        if motion is not None:
-            notes.append(moving_target_note(e.label, motion.mode))
     if given[2] < 0.0:
         e.fail("position.z", f"must be >= 0, got {given[2]:g}")
     return target, given
@@ -264,6 +263,20 @@ def _motion(e: _Entity, position: Point3) -> MotionSpec:
     path = [e.as_point(f"moving_path[{k}]", p) for k, p in enumerate(raw_path)]
     duration = e.number("moving_duration", 10.0)
     return motion_spec(position, velocity, path, duration)
+
+
+def _meets_obstacle(motion: MotionSpec, entry: EntryFn) -> bool:
+    """Whether a moving target's track (velocity: its first run; path: from its position
+    along the path) runs into an obstacle, where our turning round differs from the
+    reference's."""
+    start = np.array(motion.start_m)
+    if motion.mode == "velocity":
+        points = [start, start + np.array(motion.velocity_m_s) * motion.duration_s]
+    elif motion.mode == "path":
+        points = [start, *(np.array(p) for p in motion.path_m)]
+    else:
+        return False
+    return any(entry(a, b) is not None for a, b in itertools.pairwise(points))
 
 
 def _obstacle(e: _Entity, index: int) -> Obstacle:
@@ -356,6 +369,10 @@ def scenario_from_dict(data: Mapping[str, object], *, source: str = "<dict>") ->
     notes: list[str] = []
     placed = [_target(e, k, notes) for k, e in enumerate(target_entities)]
     targets = [t for t, _ in placed]
+    entry = obstacle_entry(obstacles)
+    notes.extend(moving_target_note(e.label, t.motion.mode)
+                 for e, t in zip(target_entities, targets, strict=True)
+                 if t.motion is not None and _meets_obstacle(t.motion, entry))
     _check_unique(target_entities, [t.id for t in targets])
     vehicles = [_drone(e, k, notes) for k, e in enumerate(drone_entities)]
     _check_unique(drone_entities, [v.id for v in vehicles])

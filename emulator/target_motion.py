@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 import shapely
 
-__all__ = ["EPS_SPEED_M_S", "LOOKAHEAD_S", "MOTION_MODES", "MotionSpec", "MovingTargets",
-           "TargetLegs", "motion_spec", "moving_targets_of", "obstacle_entry"]
+__all__ = ["EPS_SPEED_M_S", "LOOKAHEAD_S", "MOTION_MODES", "EntryFn", "MotionSpec",
+           "MovingTargets", "TargetLegs", "motion_spec", "moving_targets_of", "obstacle_entry"]
 
 MOTION_MODES = ("velocity", "path", "stationary")
 EPS_SPEED_M_S = 1e-9
