@@ -162,3 +162,21 @@ def test_target_tracking_progress_counts_what_is_tracked_at_the_end() -> None:
     leaf = check(late, "task_progress", expected_progress=0.5)
     assert (leaf.result, leaf.value) == (False, 0.0)
     assert check(late, "task_done").passed  # every target was reached at some time
+
+
+def test_multiuav_plat_target_records_give_a_moving_target_where_it_is_now() -> None:
+    from types import SimpleNamespace
+
+    from benchmark.server.compat_entities import entity_records
+    fleet = _fleet_with_mover()
+    for _ in range(100):  # 2 s at 4 m/s
+        fleet.step()
+    data = {"targets": [{"id": "m", "name": "Mover", "type": "moving",
+                         "position": {"x": 100.0, "y": 0.0, "z": 0.0},
+                         "velocity": {"x": 0.0, "y": 4.0, "z": 0.0}}]}
+    live = SimpleNamespace(session=SimpleNamespace(data=data),
+                           swarm=SimpleNamespace(fleet=fleet))
+    record = entity_records(live, "targets")["m"]  # type: ignore[arg-type]
+    assert record["position"] == {"x": 100.0, "y": 8.0, "z": 0.0}
+    assert record["velocity"] == {"x": 0.0, "y": 4.0, "z": 0.0}
+    assert data["targets"][0]["position"]["y"] == 0.0  # the session file is left alone
