@@ -43,6 +43,11 @@ class BudgetedTools:
         return self._gw.services.clock_s() - self._t0_s
 
     @property
+    def clock_s(self) -> float:
+        """The simulated time now."""
+        return self._gw.services.clock_s()
+
+    @property
     def drone_ids(self) -> list[str]:
         return list(self._gw.drones)
 

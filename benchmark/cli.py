@@ -38,7 +38,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     bench.set_defaults(run=run_bench)
     bsub = bench.add_subparsers(dest="bench_command", required=True)
 
-    gen = bsub.add_parser("generate", help="generate the 75 seeded sessions with their tasks")
+    gen = bsub.add_parser("generate", help="generate the 100 seeded sessions with their tasks")
     gen.add_argument("--out", type=Path, default=Path("runs/suite"), help="output folder")
     gen.add_argument("--only", nargs="+", metavar="ID",
                      help="session ids to generate (e.g. area_search-easy-1)")
@@ -60,7 +60,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="LLM agents: price per million completion tokens")
     group = run.add_mutually_exclusive_group()
     group.add_argument("--suite", choices=SUITES, default="smoke",
-                       help="smoke: 3 easy sessions, 6 tasks each; full: 75 sessions, 1500 tasks")
+                       help="smoke: 3 easy sessions, 6 tasks each; full: 100 sessions, 2000 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
     run.add_argument("--workers", type=int, default=1, help="sessions run at once")

@@ -51,6 +51,7 @@ CATEGORY_WEIGHTS = {
     "area_search": {"search": 4.0},
     "area_assignment_and_patrol": {"search": 3.0, "navigation": 2.0},
     "target_assignment": {"multi_drone_coordination": 3.0, "search": 2.0},
+    "target_tracking": {"target_tracking": 12.0},
 }
 
 

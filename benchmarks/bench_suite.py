@@ -5,6 +5,7 @@ evaluation overheads.
     ./dev bench bench_suite                       # counts only
     ./dev bench bench_suite --run --workers 2     # full 1500-task oracle run, timed
     ./dev bench bench_suite --run --suite smoke
+    ./dev bench bench_suite --family target_tracking --run --agent noop
 """
 
 from __future__ import annotations
@@ -53,8 +54,13 @@ def main() -> None:
     parser.add_argument("--run", action="store_true", help="run the suite and time it")
     parser.add_argument("--agent", default="oracle")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--family", default="", help="only the sessions of this family")
     args = parser.parse_args()
     paths, limit = suite_paths(args.suite)
+    if args.family:
+        paths = tuple(p for p in paths if p.stem.startswith(f"{args.family}-"))
+        if not paths:
+            parser.error(f"no session of family {args.family!r} in suite {args.suite!r}")
     _counts(paths, limit)
     if not args.run:
         return
@@ -69,6 +75,12 @@ def main() -> None:
     resets = [r["overhead_s"]["reset"] * 1000 for r in records]
     evals = [r["overhead_s"]["evaluate"] * 1000 for r in records]
     agent = [r["wall_time_s"] for r in records]
+    families: Counter[str] = Counter()
+    family_passed: Counter[str] = Counter()
+    for r in records:
+        families[r["family"]] += 1
+        family_passed[r["family"]] += bool(r["passed"])
+    print("by family:", ", ".join(f"{f} {family_passed[f]}/{n}" for f, n in families.items()))
     print(f"{args.agent} on {args.suite}: {len(records)} tasks, {passed} passed, "
           f"{len(outcome.errors)} errors, wall {wall_s:.1f} s with {args.workers} workers "
           f"({wall_s / max(len(records), 1):.2f} s per task)")

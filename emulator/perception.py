@@ -16,6 +16,7 @@ from types import MappingProxyType
 import numpy as np
 import shapely
 
+from emulator.target_motion import MovingTargets
 from emulator.world import World
 
 __all__ = ["VEHICLE_KIND", "Perception", "SensedEntity", "Sensor"]
@@ -73,12 +74,16 @@ class _Layer:
 class Sensor:
     """Perception queries over one world; the spatial indexes are built once."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, *, moving: MovingTargets | None = None) -> None:
         self._world = world
+        self._moving = moving
+        still = [t for t in world.targets if moving is None or t.id not in moving.ids]
         self._targets = _Layer(
-            [t.geometry for t in world.targets],
-            [(t.id, t.kind, t.position_m) for t in world.targets],
+            [t.geometry for t in still],
+            [(t.id, t.kind, t.position_m) for t in still],
         )
+        radii = {t.id: t.radius_m for t in world.targets}
+        self._moving_radius_m = np.array([radii[i] for i in moving.ids]) if moving else None
         self._obstacles = _Layer(
             [o.footprint for o in world.obstacles],
             [(o.id, o.kind, (o.center_m[0], o.center_m[1], 0.0)) for o in world.obstacles],
@@ -111,7 +116,23 @@ class Sensor:
                     ident, VEHICLE_KIND, d, (float(other[0]), float(other[1]), float(other[2]))))
         nearby.sort(key=lambda s: (s.distance_m, s.id))
         return Perception(
-            targets=self._targets.within(point, perceived_radius_m),
+            targets=self._with_moving(self._targets.within(point, perceived_radius_m), x, y,
+                                      perceived_radius_m),
             obstacles=self._obstacles.within(point, perceived_radius_m),
             vehicles=tuple(nearby),
         )
+
+    def _with_moving(self, found: tuple[SensedEntity, ...], x: float, y: float,
+                     radius_m: float) -> tuple[SensedEntity, ...]:
+        """Add the moving targets where they are now (their disc's distance)."""
+        moving = self._moving
+        if moving is None or self._moving_radius_m is None:
+            return found
+        xyz = moving.position_m
+        d = np.maximum(np.hypot(xyz[:, 0] - x, xyz[:, 1] - y) - self._moving_radius_m, 0.0)
+        extra = [SensedEntity(moving.ids[k], "moving", float(d[k]),
+                              (float(xyz[k, 0]), float(xyz[k, 1]), float(xyz[k, 2])))
+                 for k in np.flatnonzero(d <= radius_m)]
+        if not extra:
+            return found
+        return tuple(sorted((*found, *extra), key=lambda s: (s.distance_m, s.id)))

@@ -14,8 +14,12 @@ turned into our terms; each mapping returns a note saying what it did.
   `perceived_radius` and `task_radius`; ours become the autopilot parameters `MPC_XY_VEL_MAX`,
   `GF_MAX_VER_DIST`, `SIM_SENS_RAD` and `SIM_TASK_RAD`, whose ranges are PX4-like. A value
   outside its parameter's range is flown at the nearest end of the range.
-- **Moving targets** keep their type and position; the reference's velocity and path are read
-  but the target stands still until moving targets are simulated.
+- **Moving targets** move with the reference's velocity, path and bounce rules
+  (emulator.target_motion), in simulated time and continuously: where the reference moves them
+  once a wall-clock second and puts one back when a step lands inside an obstacle, ours turn
+  round where they meet the obstacle, and follow their path exactly (the reference counts a
+  waypoint reached within 0.5 m). A note names each moving target whose track meets an
+  obstacle.
 """
 
 from __future__ import annotations
@@ -62,10 +66,11 @@ def home_altitude_m(raw_z_m: float, where: str) -> tuple[float, str | None]:
     return 0.0, None
 
 
-def moving_target_note(where: str) -> str:
-    """The note for a `moving` target, which stands still here."""
-    return (f"{where}: a moving target; it stands at its position (its velocity and path are "
-            "not simulated)")
+def moving_target_note(where: str, mode: str) -> str:
+    """The note for a `moving` target whose track meets an obstacle."""
+    return (f"{where}: a moving target ({mode} mode) whose track meets an obstacle; it turns "
+            "round where it meets it (the reference steps once a wall-clock second and puts it "
+            "back after a step into the obstacle)")
 
 
 def notes_to_show(notes: tuple[str, ...] | list[str], limit: int = 5) -> list[str]:

@@ -9,6 +9,7 @@ naming the file, the entity (list index and id) and the field.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections.abc import Mapping
@@ -26,6 +27,7 @@ from emulator.reference_mapping import (
     moving_target_note,
     within_param,
 )
+from emulator.target_motion import EntryFn, MotionSpec, motion_spec, obstacle_entry
 from emulator.world import CALM, OBSTACLE_KINDS, TARGET_KINDS, Obstacle, Target, Wind, World
 
 __all__ = [
@@ -259,12 +261,37 @@ def _target(e: _Entity, index: int, notes: list[str]) -> tuple[Target, Point3]:
         if kind == "waypoint":
             amount = e.number("charge_amount", DEFAULT_CHARGE_AMOUNT_PCT, above=0.0)
             rate = amount / CHARGE_AMOUNT_PERIOD_S
-        target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate)
-        if kind == "moving":
-            notes.append(moving_target_note(e.label))
+        motion = _motion(e, position) if kind == "moving" else None
+        target = Target.disc(ident, name, kind, position, radius, charge_rate_pct_s=rate,
+                             motion=motion)
     if given[2] < 0.0:
         e.fail("position.z", f"must be >= 0, got {given[2]:g}")
     return target, given
+
+
+def _motion(e: _Entity, position: Point3) -> MotionSpec:
+    """A moving target's velocity, path and duration (entities.md 3.3)."""
+    velocity = e.point("velocity", None) if e.data.get("velocity") is not None else None
+    raw_path = e.get("moving_path", [])
+    if not isinstance(raw_path, list):
+        e.fail("moving_path", f"must be a list of {{x, y}} points, got {_show(raw_path)}")
+    path = [e.as_point(f"moving_path[{k}]", p) for k, p in enumerate(raw_path)]
+    duration = e.number("moving_duration", 10.0)
+    return motion_spec(position, velocity, path, duration)
+
+
+def _meets_obstacle(motion: MotionSpec, entry: EntryFn) -> bool:
+    """Whether a moving target's track (velocity: its first run; path: from its position
+    along the path) runs into an obstacle, where our turning round differs from the
+    reference's."""
+    start = np.array(motion.start_m)
+    if motion.mode == "velocity":
+        points = [start, start + np.array(motion.velocity_m_s) * motion.duration_s]
+    elif motion.mode == "path":
+        points = [start, *(np.array(p) for p in motion.path_m)]
+    else:
+        return False
+    return any(entry(a, b) is not None for a, b in itertools.pairwise(points))
 
 
 def _obstacle(e: _Entity, index: int) -> Obstacle:
@@ -357,6 +384,10 @@ def scenario_from_dict(data: Mapping[str, object], *, source: str = "<dict>") ->
     notes: list[str] = []
     placed = [_target(e, k, notes) for k, e in enumerate(target_entities)]
     targets = [t for t, _ in placed]
+    entry = obstacle_entry(obstacles)
+    notes.extend(moving_target_note(e.label, t.motion.mode)
+                 for e, t in zip(target_entities, targets, strict=True)
+                 if t.motion is not None and _meets_obstacle(t.motion, entry))
     _check_unique(target_entities, [t.id for t in targets])
     vehicles = [_drone(e, k, notes) for k, e in enumerate(drone_entities)]
     _check_unique(drone_entities, [v.id for v in vehicles])

@@ -21,12 +21,13 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["TRAJECTORY_COLUMNS", "TruthEvent", "TruthHistory", "TruthLog", "TruthRecorder"]
+__all__ = ["TRAJECTORY_COLUMNS", "TargetRows", "TruthEvent", "TruthHistory", "TruthLog",
+           "TruthRecorder"]
 
 FORMAT_VERSION = 1
 TRAJECTORY_COLUMNS: tuple[str, ...] = ("t_s", "x_m", "y_m", "z_m", "yaw_deg", "battery_pct")
@@ -98,6 +99,14 @@ class TruthEvent:
         return {"t_s": self.t_s, "vehicle_id": self.vehicle_id, "kind": self.kind, "data": data}
 
 
+class TargetRows(Protocol):
+    """What records moving targets: their ids and exact (t, x, y, z) rows over a window."""
+
+    ids: tuple[str, ...]
+
+    def rows(self, target_id: str, t0_s: float, t1_s: float) -> np.ndarray: ...
+
+
 class TruthHistory(ABC):
     """Queries shared by the live :class:`TruthRecorder` and a loaded :class:`TruthLog`."""
 
@@ -121,6 +130,30 @@ class TruthHistory(ABC):
     @abstractmethod
     def end_t_s(self) -> float:
         """Time of the latest recorded step; NaN when no step was recorded."""
+
+    @property
+    def moving_target_ids(self) -> tuple[str, ...]:
+        """Ids of the moving targets whose trajectories are recorded."""
+        return ()
+
+    def _target_rows(self, target_id: str, t0_s: float, t1_s: float) -> np.ndarray:
+        raise KeyError(f"no trajectory of target {target_id!r} is recorded")
+
+    def target_trajectory(self, target_id: str, t0_s: float | None = None,
+                          t1_s: float | None = None) -> np.ndarray:
+        """Rows (t_s, x_m, y_m, z_m) of a moving target over [t0_s, t1_s] (clipped to what was
+        recorded): both ends and every change of its velocity between, so that linear
+        interpolation between rows is its exact motion. KeyError for an unrecorded target."""
+        if target_id not in self.moving_target_ids:
+            raise KeyError(f"no trajectory of target {target_id!r} is recorded")
+        end = self.end_t_s
+        if math.isnan(end):
+            return np.zeros((0, 4))
+        t0 = max(_as_time(t0_s, "t0_s", 0.0), 0.0)
+        t1 = min(_as_time(t1_s, "t1_s", end), end)
+        if t1 < t0:
+            return np.zeros((0, 4))
+        return self._target_rows(target_id, t0, t1)
 
     @abstractmethod
     def _samples(self, index: int) -> np.ndarray:
@@ -218,6 +251,11 @@ class TruthHistory(ABC):
         end_t_s = None if math.isnan(self.end_t_s) else self.end_t_s
         meta: dict[str, Any] = {"vehicle_ids": list(self.vehicle_ids), "end_t_s": end_t_s}
         meta.update(columns=list(TRAJECTORY_COLUMNS), keyframe_s=self.keyframe_s)
+        targets = self.moving_target_ids
+        if targets and end_t_s is not None:
+            meta["moving_target_ids"] = list(targets)
+            for i, target_id in enumerate(targets):
+                arrays[f"target_{i:05d}"] = self.target_trajectory(target_id)
         arrays["meta_json"] = np.str_(json.dumps(meta))
         arrays["events_json"] = np.str_(json.dumps([e.to_json() for e in self._events]))
         arrays["format_version"] = np.array(FORMAT_VERSION)
@@ -248,6 +286,7 @@ class TruthLog(TruthHistory):
         *,
         end_t_s: float = math.nan,
         keyframe_s: float = 1.0,
+        target_trajectories: Mapping[str, npt.ArrayLike] | None = None,
     ) -> None:
         super().__init__(vehicle_ids, keyframe_s)
         if len(trajectories) != len(self.vehicle_ids):
@@ -256,10 +295,27 @@ class TruthLog(TruthHistory):
         for event in events:
             self._add_event(event)
         self._end_t_s = float(end_t_s)
+        self._targets = {k: np.array(v, dtype=np.float64).reshape(-1, 4)
+                         for k, v in (target_trajectories or {}).items()}
 
     @property
     def end_t_s(self) -> float:
         return self._end_t_s
+
+    @property
+    def moving_target_ids(self) -> tuple[str, ...]:
+        return tuple(self._targets)
+
+    def _target_rows(self, target_id: str, t0_s: float, t1_s: float) -> np.ndarray:
+        rows = self._targets[target_id]
+        if rows.shape[0] == 0:
+            return rows.copy()
+        inner = rows[(rows[:, 0] > t0_s) & (rows[:, 0] < t1_s)]
+        ends = np.array([t0_s, t1_s]) if t1_s > t0_s else np.array([t0_s])
+        xyz = np.column_stack([np.interp(ends, rows[:, 0], rows[:, c]) for c in (1, 2, 3)])
+        out = np.vstack((np.column_stack((ends[:1], xyz[:1])), inner,
+                         np.column_stack((ends[1:], xyz[1:]))))
+        return out
 
     def _samples(self, index: int) -> np.ndarray:
         return self._trajectories[index]
@@ -282,8 +338,11 @@ class TruthLog(TruthHistory):
             ids = meta["vehicle_ids"]
             trajectories = [archive[f"trajectory_{i:05d}"] for i in range(len(ids))]
             events = [TruthEvent(**e) for e in json.loads(str(archive["events_json"]))]
+            targets = {t: archive[f"target_{i:05d}"]
+                       for i, t in enumerate(meta.get("moving_target_ids", []))}
         end_t_s = math.nan if meta["end_t_s"] is None else meta["end_t_s"]
-        return cls(ids, trajectories, events, end_t_s=end_t_s, keyframe_s=meta["keyframe_s"])
+        return cls(ids, trajectories, events, end_t_s=end_t_s, keyframe_s=meta["keyframe_s"],
+                   target_trajectories=targets)
 
 
 class TruthRecorder(TruthHistory):
@@ -305,10 +364,24 @@ class TruthRecorder(TruthHistory):
         self._end_t_s = -math.inf
         self._first_t_s = math.nan
         self._next_keyframe_t_s = -math.inf
+        self._moving: TargetRows | None = None
 
     @property
     def end_t_s(self) -> float:
         return math.nan if self._end_t_s == -math.inf else self._end_t_s
+
+    def attach_targets(self, moving: TargetRows) -> None:
+        """Record the moving targets of `moving` too: their motion is decided by their start,
+        so the recorder asks it for their exact rows up to the latest recorded step."""
+        self._moving = moving
+
+    @property
+    def moving_target_ids(self) -> tuple[str, ...]:
+        return () if self._moving is None else tuple(self._moving.ids)
+
+    def _target_rows(self, target_id: str, t0_s: float, t1_s: float) -> np.ndarray:
+        assert self._moving is not None
+        return self._moving.rows(target_id, t0_s, t1_s)
 
     @property
     def nbytes(self) -> int:
@@ -422,7 +495,9 @@ class TruthRecorder(TruthHistory):
     def snapshot(self) -> TruthLog:
         """An independent read-only copy of everything recorded so far."""
         ids, rows = self.vehicle_ids, [self._samples(i) for i in range(self._n)]
-        return TruthLog(ids, rows, self._events, end_t_s=self.end_t_s, keyframe_s=self.keyframe_s)
+        targets = {t: self.target_trajectory(t) for t in self.moving_target_ids}
+        return TruthLog(ids, rows, self._events, end_t_s=self.end_t_s, keyframe_s=self.keyframe_s,
+                        target_trajectories=targets)
 
     @classmethod
     def load(cls, path: str | Path) -> TruthLog:

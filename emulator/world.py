@@ -15,6 +15,7 @@ import numpy as np
 import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
+from emulator.target_motion import MotionSpec
 
 __all__ = [
     "CALM", "CURVE_SEGMENTS", "OBSTACLE_KINDS", "RAW_STOP_BEFORE_M", "TARGET_KINDS",
@@ -117,8 +118,12 @@ class Target:
     position_m: Point3
     radius_m: float
     charge_rate_pct_s: float | None = None
+    motion: MotionSpec | None = None
+    """How a 'moving' target moves (emulator.target_motion); None: it stands at position_m."""
 
     def __post_init__(self) -> None:
+        if self.motion is not None and self.kind != "moving":
+            raise ValueError(f"target {self.id}: only 'moving' targets have a motion")
         if self.kind not in TARGET_KINDS:
             raise ValueError(f"target {self.id}: kind must be one of {TARGET_KINDS}")
         _check_polygon(self.geometry, f"target {self.id} geometry")
@@ -138,13 +143,20 @@ class Target:
     def is_charging_station(self) -> bool:
         return self.kind == "waypoint"
 
+    @property
+    def is_moving(self) -> bool:
+        return self.kind == "moving"
+
     @classmethod
     def disc(cls, id: str, name: str, kind: str, position_m: Sequence[float], radius_m: float,
-             *, charge_rate_pct_s: float | None = None) -> Target:
-        """A disc target (any kind but 'polygon'); radius 0 gets a MIN_TARGET_DISC_M disc."""
+             *, charge_rate_pct_s: float | None = None,
+             motion: MotionSpec | None = None) -> Target:
+        """A disc target (any kind but 'polygon'); radius 0 gets a MIN_TARGET_DISC_M disc.
+        A moving target's position_m and geometry are where it starts."""
         x, y, z = (float(v) for v in position_m)
         geometry = disc_polygon((x, y), max(float(radius_m), MIN_TARGET_DISC_M))
-        return cls(id, name, kind, geometry, (x, y, z), float(radius_m), charge_rate_pct_s)
+        return cls(id, name, kind, geometry, (x, y, z), float(radius_m), charge_rate_pct_s,
+                   motion)
 
     @classmethod
     def polygon(cls, id: str, name: str, vertices_m: Sequence[Sequence[float]], *,

@@ -1,4 +1,4 @@
-"""The shipped suite: 75 sessions of 20 tasks that load cleanly, cover the check endpoints,
+"""The shipped suite: 100 sessions of 20 tasks that load cleanly, cover the check endpoints,
 and regenerate byte for byte from their seeds."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from collections import Counter
 import pytest
 
 from benchmark.generate import generate_session
-from benchmark.scenarios import all_session_keys, session_id
+from benchmark.scenarios import LEVELS, SESSION_INDICES, all_session_keys, session_id
 from benchmark.session_file import dump_session, load_session
 from benchmark.suite import SESSIONS_DIR, suite_paths
 from benchmark.validators import endpoints_used, leaf_count
@@ -16,14 +16,16 @@ from benchmark.validators import endpoints_used, leaf_count
 
 def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     paths, limit = suite_paths("full")
-    assert limit is None and len(paths) == 75
+    assert limit is None and len(paths) == 100
     assert [p.stem for p in paths] == [session_id(*k) for k in all_session_keys()]
     endpoints: set[str] = set()
     categories: Counter[str] = Counter()
+    families: Counter[str] = Counter()
     checks = 0
     for path in paths:
         session = load_session(path)
         assert len(session.tasks) == 20, path
+        families[session.family] += 1
         for task in session.tasks:
             assert task.error is None, task.error
             assert task.oracle is not None and task.budget is not None
@@ -31,11 +33,14 @@ def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
             checks += leaf_count(task.checks)
             endpoints |= endpoints_used(task.checks)
             categories[task.category] += 1
-    assert len(endpoints) >= 21, sorted(endpoints)
+    assert len(endpoints) >= 23, sorted(endpoints)
+    assert {"moving_target_tracked", "moving_target_reached_in_zone"} <= endpoints
     assert set(categories) == {"basic_operations", "navigation", "search",
                                "multi_drone_coordination", "delivery", "communication",
-                               "battery_management"}
-    assert checks >= 4 * 1500
+                               "battery_management", "target_tracking"}
+    assert families == dict.fromkeys(("area_search", "area_assignment_and_patrol",
+                                      "target_assignment", "target_tracking"), 25)
+    assert checks >= 4 * 2000
 
 
 def test_unverified_generation_reproduces_a_shipped_session() -> None:
@@ -54,3 +59,23 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
     lines: list[str] = []
     again = dump_session(generate_session("area_search", "easy", 1, progress=lines.append))
     assert again == shipped, lines
+
+
+def test_every_tracking_session_redraws_from_its_seed() -> None:
+    """Every first draw of the 25 target_tracking sessions passed the oracle, so drawing alone
+    gives the shipped files."""
+    for level in LEVELS:
+        for index in SESSION_INDICES:
+            name = f"target_tracking-{level}-{index}"
+            again = dump_session(generate_session("target_tracking", level, index,
+                                                  verify=False))
+            assert again == (SESSIONS_DIR / f"{name}.json").read_text(), name
+
+
+@pytest.mark.mavsdk
+def test_the_oracle_proves_the_first_tracking_tasks_again() -> None:
+    """The first tasks of a tracking session, flown again by the oracle: the same tasks."""
+    shipped = load_session(SESSIONS_DIR / "target_tracking-easy-2.json").data["tasks"][:3]
+    lines: list[str] = []
+    again = generate_session("target_tracking", "easy", 2, tasks=3, progress=lines.append)
+    assert again["tasks"] == shipped, lines

@@ -51,7 +51,8 @@ def test_reference_values_are_mapped_with_a_note() -> None:
     assert "battery_capacity 74 is a MultiUAV-Plat size label; flown as 7400 mAh" in notes
     assert "battery_capacity 250000 mAh is above 100000" in notes
     assert "home_position.z 9 m" in notes
-    assert "(id 77aa88bb): a moving target" in notes
+    assert "77aa88bb" not in notes  # a moving target clear of obstacles moves as there
+    assert scenario.world.target("77aa88bb").motion.mode == "velocity"
     ours = scenario_from_dict(small_session([]), source="ours.json")
     assert not ours.notes
 

@@ -30,6 +30,7 @@ from benchmark.scenarios import (
     session_id,
     session_seed,
 )
+from benchmark.scenarios.families import TRACKING_TARGETS
 from benchmark.scenarios.placement import Layout, ShapeTemplate, clearance_m
 from emulator.scenario import CHARGE_AMOUNT_PERIOD_S, WIND_DIRECTIONS_DEG, scenario_from_dict
 
@@ -51,11 +52,11 @@ TOP_KEYS = ["schema", "id", "family", "level", "index", "seed", "name", "descrip
 
 @pytest.fixture(scope="module")
 def worlds() -> dict[tuple[str, str, int], Session]:
-    """All 75 sessions, generated once (the generation time is checked here too)."""
+    """All 100 sessions, generated once (the generation time is checked here too)."""
     start = time.perf_counter()
     result = {key: generate_world(*key) for key in all_session_keys()}
     elapsed = time.perf_counter() - start
-    assert elapsed < 8.0, f"generating the 75 worlds took {elapsed:.1f} s"
+    assert elapsed < 10.0, f"generating the 100 worlds took {elapsed:.1f} s"
     return result
 
 
@@ -68,10 +69,11 @@ def _dump(session: Session) -> str:
 
 def test_session_keys_and_ids() -> None:
     keys = all_session_keys()
-    assert len(keys) == 75 and len(set(keys)) == 75
+    assert len(keys) == 100 and len(set(keys)) == 100
     assert keys[0] == ("area_search", "easy", 1)
     assert keys[5] == ("area_search", "intermediate", 1)
-    assert keys[-1] == ("target_assignment", "extreme", 5)
+    assert keys[74] == ("target_assignment", "extreme", 5)
+    assert keys[-1] == ("target_tracking", "extreme", 5)
     assert {f for f, _, _ in keys} == set(FAMILIES) and {lv for _, lv, _ in keys} == set(LEVELS)
     assert session_id("target_assignment", "hard", 3) == "target_assignment-hard-3"
 
@@ -80,7 +82,7 @@ def test_session_seed_is_sha256_of_the_key() -> None:
     digest = hashlib.sha256(b"mavswarm/area_search/easy/1").digest()
     assert session_seed("area_search", "easy", 1) == int.from_bytes(digest[:8], "big") >> 11
     seeds = {session_seed(*key) for key in all_session_keys()}
-    assert len(seeds) == 75
+    assert len(seeds) == 100
     assert all(0 <= s < 2**53 for s in seeds)
 
 
@@ -106,7 +108,7 @@ def test_different_keys_give_different_worlds(
     def layout(session: Session) -> str:
         return json.dumps([session["drones"], session["targets"], session["obstacles"]])
 
-    assert len({layout(w) for w in worlds.values()}) == 75
+    assert len({layout(w) for w in worlds.values()}) == 100
     a, b = worlds["area_search", "easy", 1], worlds["area_search", "easy", 2]
     assert a["seed"] != b["seed"] and a["drones"] != b["drones"]
 
@@ -117,7 +119,7 @@ def test_different_keys_give_different_worlds(
 @pytest.mark.parametrize(("family", "level", "index", "named"), [
     ("area_serch", "easy", 1, "'area_serch'"),
     ("", "easy", 1, "''"),
-    ("target_tracking", "easy", 1, "'target_tracking'"),
+    ("target_trackin", "easy", 1, "'target_trackin'"),
     ("area_search", "Easy", 1, "'Easy'"),
     ("area_search", "impossible", 1, "'impossible'"),
     ("area_search", "easy", 0, "got 0"),
@@ -135,7 +137,8 @@ def test_bad_keys_raise_value_error_naming_the_value(family: Any, level: Any, in
 
 def test_level_spec_table_and_bad_level() -> None:
     assert LEVELS == ("easy", "intermediate", "moderate", "hard", "extreme")
-    assert FAMILIES == ("area_search", "area_assignment_and_patrol", "target_assignment")
+    assert FAMILIES == ("area_search", "area_assignment_and_patrol", "target_assignment",
+                        "target_tracking")
     for level, (drones, fixed, area, obstacles, side) in TABLE.items():
         spec = level_spec(level)
         assert (spec.drone_count, spec.target_assignment_target_count, spec.area_target_count,
@@ -165,9 +168,15 @@ def test_all_75_have_the_layout_and_exact_counts(
         assert f"{side} x {side} m" in w["description"]
         assert w["name"].endswith(f", {level}, #{index}")
         assert len(w["drones"]) == drones and len(w["obstacles"]) == obstacles
-        assert len(w["targets"]) == (fixed if family == "target_assignment" else area)
         kinds = Counter(t["type"] for t in w["targets"])
         assert kinds["waypoint"] == stations
+        if family == "target_tracking":
+            main = TRACKING_TARGETS[level]
+            assert len(w["targets"]) == main + stations
+            assert kinds["moving"] == round(0.7 * main) and kinds["fixed"] == main - kinds[
+                "moving"]
+            continue
+        assert len(w["targets"]) == (fixed if family == "target_assignment" else area)
         if family == "target_assignment":
             assert kinds["fixed"] == fixed - stations
         else:
@@ -182,6 +191,12 @@ def test_target_names_follow_the_family(worlds: dict[tuple[str, str, int], Sessi
                 "target_assignment": "Target"}
     for (family, _, _), w in worlds.items():
         main = [t for t in w["targets"] if t["type"] != "waypoint"]
+        if family == "target_tracking":
+            movers = [t["name"] for t in main if t["type"] == "moving"]
+            fixed = [t["name"] for t in main if t["type"] == "fixed"]
+            assert movers == [f"Moving Target {k}" for k in range(1, len(movers) + 1)]
+            assert fixed == [f"Fixed Target {k}" for k in range(1, len(fixed) + 1)]
+            continue
         stations = [t for t in w["targets"] if t["type"] == "waypoint"]
         assert [t["name"] for t in main] == [f"{expected[family]} {k}"
                                              for k in range(1, len(main) + 1)]
@@ -250,6 +265,9 @@ def test_target_shapes_and_sizes(worlds: dict[tuple[str, str, int], Session]) ->
                 assert 8.0 <= t["radius"] <= 12.0 and 20.0 <= t["charge_amount"] <= 50.0
             elif t["type"] == "fixed":
                 assert 3.0 <= t["radius"] <= 10.0
+            elif t["type"] == "moving":
+                assert 3.0 <= t["radius"] <= 8.0 and 5.0 <= t["moving_duration"] <= 60.0
+                assert ("velocity" in t) != ("moving_path" in t)
             elif t["type"] == "circle":
                 assert low - 0.05 <= t["radius"] <= high + 0.05
             else:

@@ -172,11 +172,12 @@ def test_catalogue_keys_and_labels() -> None:
 
 def test_fits_follow_the_families() -> None:
     for view in _views():
-        area_family = view.family != "target_assignment"
+        area_family = view.family not in ("target_assignment", "target_tracking")
         for k in AREA_ONLY:
             assert BY_KEY[k].fits(view) == area_family, (k, view.family)
-        assert BY_KEY["visit_all_targets"].fits(view) == (not area_family)
-        six = not area_family and len(view.points) >= 6
+        assignment = view.family == "target_assignment"
+        assert BY_KEY["visit_all_targets"].fits(view) == assignment
+        six = assignment and len(view.points) >= 6
         assert BY_KEY["split_inspection"].fits(view) == six
         for k in ("photo_at_point", "inspect_target", "formation_pair", "fleet_launch",
                   "sweep_line", "cross_check_targets"):

@@ -48,7 +48,7 @@ ON_GROUND = leaf("drone_on_ground", drone_id="d1")  # false: d1 is airborne
 
 
 def test_registry_lists_every_endpoint_with_kind_and_description() -> None:
-    assert len(ENDPOINTS) == 40
+    assert len(ENDPOINTS) == 41  # the reference's 40 and moving_target_reached_in_zone
     kinds = {e.kind for e in ENDPOINTS.values()}
     assert kinds == {"state", "history", "targets"}
     assert all(name == e.name and e.description for name, e in ENDPOINTS.items())

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from functools import partial
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
 from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
 from benchmark.oracle.planner import NoPath, PathPlanner
+from benchmark.oracle.pursuit import Pursuit
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
 
@@ -24,6 +26,28 @@ MAX_PATH_POINTS = 100
 # Paths keep this far from obstacles, so tracking errors never meet the 2 m stop margin.
 PLAN_CLEARANCE_M = 8.0
 TEAM_OPS = ("sweep", "visit_targets")
+# Meeting a moving target: the share of top speed assumed and the slack added to a flight.
+MEET_SPEED_SHARE = 0.8
+MEET_SLACK_S = 8.0
+CRUISE_M_S = 8.0  # the autopilot's MPC_XY_CRUISE: move_to flies at most this fast
+MIN_HOVER_S = 0.2
+HOP_S = 4.0  # following: aim this far ahead of the target
+FOLLOW_EXTRA_S = 2.0
+TRANSFER_RETRIES = 2
+TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+
+
+async def _retried(call: Callable[[], Awaitable[Outcome]]) -> Outcome:
+    """A move whose mission or command the link lost on the way (a transfer time-out under
+    load) is sent again, as any client would; other outcomes are final."""
+    outcome = await call()
+    for _ in range(TRANSFER_RETRIES):
+        lost = outcome.status is Status.REJECTED and any(
+            word in outcome.message for word in TRANSFER_LOST)
+        if not lost:
+            break
+        outcome = await call()
+    return outcome
 
 
 class OracleError(RuntimeError):
@@ -44,6 +68,7 @@ class OracleAgent:
         self._plans = dict(plans)
         self._planner = PathPlanner(scenario.world, clearance_m=PLAN_CLEARANCE_M)
         self._specs = {v.id: v for v in scenario.vehicles}
+        self._pursuit = Pursuit(scenario.world)
         self.failures: list[str] = []
 
     def set_plan(self, task_id: str, plan: Sequence[Sequence[Op]] | None) -> None:
@@ -190,8 +215,61 @@ class OracleAgent:
         elif kind == "reach":
             x, y = self._target_point(op["target"])
             await self._goto(tools, d, (x, y, float(op["altitude_m"])))
+        elif kind == "track":
+            alt = float(op["altitude_m"])
+            met_s = await self._meet(tools, d, op["target"], alt)
+            await self._follow(tools, d, op["target"], alt, met_s + float(op["duration_s"]))
+        elif kind == "intercept":
+            zx, zy, zr = (float(v) for v in op["zone"])
+            await self._meet(tools, d, op["target"], float(op["altitude_m"]), zone=(zx, zy, zr))
+        elif kind == "photo_target":
+            await self._meet(tools, d, op["target"], float(op["altitude_m"]))
+            self._check(d, "photo", await tools.take_photo(d))
         else:
             raise OracleError(f"unknown plan operation {kind!r}")
+
+    # ------------------------------------------------------------- moving targets
+    async def _meet(self, tools: AgentTools, d: str, target: str, altitude_m: float,
+                    zone: tuple[float, float, float] | None = None) -> float:
+        """Fly to where the target will be (inside the zone, if given) and hover there until
+        it arrives; returns the simulated time of the meeting (when the drone came late, the
+        time it arrived)."""
+        await self._ensure_airborne(tools, d, altitude_m)
+        now = tools.clock_s
+        here = self._position(d)
+        speed = min(self._specs[d].max_speed_m_s, CRUISE_M_S)
+
+        def flight_s(goal: tuple[float, float]) -> float:
+            legs = self._legs(here, (goal[0], goal[1], altitude_m))
+            length = sum(math.dist(a, b) for a, b in zip([here, *legs[:-1]], legs,
+                                                          strict=True))
+            return length / (MEET_SPEED_SHARE * speed) + MEET_SLACK_S
+
+        def lower_s(goal: tuple[float, float]) -> float:
+            straight = math.dist(here, (goal[0], goal[1], altitude_m))
+            return straight / (MEET_SPEED_SHARE * speed) + MEET_SLACK_S
+
+        try:
+            meet_s = self._pursuit.meeting(target, now, flight_s, lower_s, zone)
+        except ValueError as error:
+            raise OracleError(f"{d}: {error}") from None
+        x, y = self._pursuit.xy(target, meet_s)
+        await self._goto(tools, d, (x, y, altitude_m))
+        wait_s = meet_s - tools.clock_s
+        if wait_s > MIN_HOVER_S:
+            self._check(d, "wait for the target", await tools.hover(d, wait_s))
+        return max(meet_s, tools.clock_s)
+
+    async def _follow(self, tools: AgentTools, d: str, target: str, altitude_m: float,
+                      until_s: float) -> None:
+        """Stay on the target until until_s: aim at where it will be HOP_S later, wait."""
+        while tools.clock_s < until_s + FOLLOW_EXTRA_S:
+            aim_s = tools.clock_s + HOP_S
+            x, y = self._pursuit.xy(target, aim_s)
+            self._check(d, "follow", await _retried(partial(tools.move_to, d, x, y, altitude_m)))
+            wait_s = aim_s - tools.clock_s
+            if wait_s > MIN_HOVER_S:
+                self._check(d, "follow", await tools.hover(d, wait_s))
 
     def _position(self, d: str) -> tuple[float, float, float]:
         s = self._state[d]
@@ -212,7 +290,7 @@ class OracleAgent:
         await self._ensure_airborne(tools, d, goal[2])
         waypoints = self._legs(self._position(d), goal)
         if len(waypoints) == 1:
-            self._check(d, "move", await tools.move_to(d, *goal))
+            self._check(d, "move", await _retried(partial(tools.move_to, d, *goal)))
         else:
             await self._fly_waypoints(tools, d, waypoints)
 
@@ -234,4 +312,4 @@ class OracleAgent:
                              waypoints: list[tuple[float, float, float]]) -> None:
         for k in range(0, len(waypoints), MAX_PATH_POINTS):
             chunk = [list(w) for w in waypoints[k:k + MAX_PATH_POINTS]]
-            self._check(d, "path", await tools.move_along_path(d, chunk))
+            self._check(d, "path", await _retried(partial(tools.move_along_path, d, chunk)))

@@ -1,8 +1,9 @@
 """The three scenario families of the benchmark and what kind of targets each one has.
 
 The two area families (``area_search``, ``area_assignment_and_patrol``) have circle and polygon
-area targets; ``target_assignment`` has small ``fixed`` targets. Every family also has its
-level's charging stations (``waypoint`` targets).
+area targets; ``target_assignment`` has small ``fixed`` targets; ``target_tracking`` has
+``moving`` targets (70 %, rounded) and ``fixed`` ones, TRACKING_TARGETS by level. Every family
+also has its level's charging stations (``waypoint`` targets).
 """
 
 from __future__ import annotations
@@ -11,9 +12,14 @@ from dataclasses import dataclass
 
 from benchmark.scenarios.levels import level_spec
 
-__all__ = ["FAMILIES", "FAMILY_SPECS", "FamilySpec", "family_spec", "target_count"]
+__all__ = ["FAMILIES", "FAMILY_SPECS", "MOVING_SHARE", "TRACKING_TARGETS", "FamilySpec",
+           "family_spec", "moving_count", "target_count"]
 
-FAMILIES: tuple[str, ...] = ("area_search", "area_assignment_and_patrol", "target_assignment")
+FAMILIES: tuple[str, ...] = ("area_search", "area_assignment_and_patrol", "target_assignment",
+                             "target_tracking")
+# target_tracking: targets other than charging stations, by level, and the moving share.
+TRACKING_TARGETS = {"easy": 4, "intermediate": 6, "moderate": 8, "hard": 10, "extreme": 12}
+MOVING_SHARE = 0.7
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,6 +40,8 @@ FAMILY_SPECS: dict[str, FamilySpec] = {
         "area_assignment_and_patrol", "Patrol Zone", True),
     "target_assignment": FamilySpec(
         "target_assignment", "Target assignment", "target_assignment", "Target", False),
+    "target_tracking": FamilySpec(
+        "target_tracking", "Target tracking", "target_tracking", "Target", False),
 }
 
 
@@ -46,4 +54,14 @@ def family_spec(family: str) -> FamilySpec:
 
 def target_count(family: str, level: str) -> int:
     """Targets of a session of this family and level, charging stations included."""
-    return level_spec(level).target_count(family_spec(family).area_targets)
+    spec = level_spec(level)
+    if family_spec(family).family == "target_tracking":
+        return TRACKING_TARGETS[level] + spec.charging_station_count
+    return spec.target_count(family_spec(family).area_targets)
+
+
+def moving_count(family: str, level: str) -> int:
+    """Moving targets of a session of this family and level."""
+    if family_spec(family).family != "target_tracking":
+        return 0
+    return max(1, round(MOVING_SHARE * TRACKING_TARGETS[level]))

@@ -15,7 +15,13 @@ import random
 from collections.abc import Callable
 from typing import Any
 
-from benchmark.scenarios.families import FAMILIES, FamilySpec, family_spec
+from benchmark.scenarios.families import (
+    FAMILIES,
+    TRACKING_TARGETS,
+    FamilySpec,
+    family_spec,
+    moving_count,
+)
 from benchmark.scenarios.levels import LEVELS, LevelSpec, level_spec
 from benchmark.scenarios.placement import (
     MAP_MARGIN_M,
@@ -64,6 +70,10 @@ AREA_POLYGON_SHAPES: tuple[str, ...] = ("square", "rectangle", "convex")
 OBSTACLE_SHAPE_WEIGHTS = {"circle": 3, "square": 2, "ellipse": 2, "point": 1, "rectangle": 2,
                           "convex": 2}
 POINT_OBSTACLE_RADIUS_M = (2.0, 5.0)
+MOVING_TARGET_RADIUS_M = (3.0, 8.0)
+MOVING_SPEED_M_S = (1.0, 3.0)
+MOVING_DURATION_S = (8.0, 20.0)
+PATH_MODE_EVERY = 3  # every third moving target follows a path, the others a velocity
 WALL_PROBABILITY = 0.7  # share of obstacles with height 0 (blocking every altitude)
 BUILDING_HEIGHT_M = (15.0, 60.0)
 # Obstacle names by (shape, blocks every altitude).
@@ -103,7 +113,7 @@ def session_seed(family: str, level: str, index: int) -> int:
 
 
 def all_session_keys() -> tuple[tuple[str, str, int], ...]:
-    """The 75 (family, level, index) keys: family-major, then level, then index."""
+    """The 100 (family, level, index) keys: family-major, then level, then index."""
     return tuple((f, lv, i) for f in FAMILIES for lv in LEVELS for i in SESSION_INDICES)
 
 
@@ -216,6 +226,35 @@ def _disc_target(rng: random.Random, layout: Layout, name: str, kind: str) -> di
     return target
 
 
+def _moving_target(rng: random.Random, layout: Layout, name: str, path_mode: bool
+                   ) -> dict[str, Any]:
+    """A moving target whose whole track (a segment, or a three-point path) and disc lie in a
+    placed disc, so obstacles keep their clearance from everywhere it goes."""
+    radius = round(rng.uniform(*MOVING_TARGET_RADIUS_M), 1)
+    speed = rng.uniform(*MOVING_SPEED_M_S)
+    duration = round(rng.uniform(*MOVING_DURATION_S), 1)
+    half = speed * duration / 2.0
+    spot = layout.place(rng, "target", lambda _s: ShapeTemplate.disc(half + radius + 1.0),
+                        label=name)
+    (cx, cy), angle = spot.center_m, rng.uniform(0.0, 2.0 * math.pi)
+    ux, uy = math.cos(angle), math.sin(angle)
+    start = (round(cx - half * ux, 1), round(cy - half * uy, 1))
+    target: dict[str, Any] = {"name": name, "type": "moving", "position": _xyz(start),
+                              "radius": radius}
+    if path_mode:
+        bend = rng.uniform(-0.5, 0.5) * half
+        middle = (round(cx - bend * uy, 1), round(cy + bend * ux, 1))
+        end = (round(cx + half * ux, 1), round(cy + half * uy, 1))
+        points = [start, middle, end]
+        length = math.dist(start, middle) + math.dist(middle, end)
+        target["moving_path"] = [_xyz(p) for p in points]
+        target["moving_duration"] = round(length / speed, 1)
+    else:
+        target["velocity"] = {"x": round(speed * ux, 2), "y": round(speed * uy, 2), "z": 0.0}
+        target["moving_duration"] = duration
+    return target
+
+
 def _obstacles(rng: random.Random, spec: LevelSpec, layout: Layout) -> list[dict[str, Any]]:
     weights = [OBSTACLE_SHAPE_WEIGHTS[s] for s in spec.obstacle_shapes]
     counters: dict[str, int] = {}
@@ -267,6 +306,8 @@ def generate_world(family: str, level: str, index: int) -> Session:
     corner, base = _base(rng, spec)
     drones = _drones(rng, spec, layout, base)
     stations = spec.charging_station_count
+    if fam.family == "target_tracking":
+        return _tracking_world(family, level, index, rng, layout, drones, environment, corner)
     main = spec.target_count(fam.area_targets) - stations
     names = [f"{fam.target_name} {k}" for k in range(1, main + 1)]
     targets = [_area_target(rng, spec, layout, n) for n in names] if fam.area_targets else []
@@ -276,11 +317,45 @@ def generate_world(family: str, level: str, index: int) -> Session:
     targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
                 for k in range(1, stations + 1)]
     targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
+    return _session(fam, spec, index, seed, _description(fam, spec, corner, main, stations),
+                    environment, drones, targets, obstacles)
+
+
+def _tracking_world(family: str, level: str, index: int, rng: random.Random, layout: Layout,
+                    drones: list[dict[str, Any]], environment: dict[str, Any], corner: str
+                    ) -> Session:
+    """target_tracking: moving targets' tracks placed before the obstacles, fixed targets and
+    charging stations after them."""
+    fam, spec = _check_key(family, level, index)
+    movers = moving_count(family, level)
+    fixed = TRACKING_TARGETS[level] - movers
+    targets = [_moving_target(rng, layout, f"Moving Target {k}", k % PATH_MODE_EVERY == 0)
+               for k in range(1, movers + 1)]
+    obstacles = _obstacles(rng, spec, layout)
+    targets += [_disc_target(rng, layout, f"Fixed Target {k}", "fixed")
+                for k in range(1, fixed + 1)]
+    stations = spec.charging_station_count
+    targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
+                for k in range(1, stations + 1)]
+    targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
+    station_text = "charging station" if stations == 1 else "charging stations"
+    description = (f"A {spec.map_width_m} x {spec.map_height_m} m map with {spec.drone_count} "
+                   f"drones at a base in the {corner} corner, {movers} moving targets, {fixed} "
+                   f"fixed target{'' if fixed == 1 else 's'}, {stations} {station_text} and "
+                   f"{spec.obstacle_count} obstacles.")
+    return _session(fam, spec, index, session_seed(family, level, index), description,
+                    environment, drones, targets, obstacles)
+
+
+def _session(fam: FamilySpec, spec: LevelSpec, index: int, seed: int, description: str,
+             environment: dict[str, Any], drones: list[dict[str, Any]],
+             targets: list[dict[str, Any]], obstacles: list[dict[str, Any]]) -> Session:
+    family, level = fam.family, spec.level
     return {
         "schema": SCHEMA, "id": session_id(family, level, index), "family": family,
         "level": level, "index": index, "seed": seed,
         "name": f"{fam.title}, {level}, #{index}",
-        "description": _description(fam, spec, corner, main, stations),
+        "description": description,
         "task_type": fam.task_type, "map_size_m": [spec.map_width_m, spec.map_height_m],
         "safety_margin_m": SAFETY_MARGIN_M,
         "origin": {"latitude_deg": DEFAULT_ORIGIN.latitude_deg,

@@ -19,9 +19,17 @@ _FLIGHT = {"on_ground": "idle"}
 
 
 def entity_records(live: LiveSession, kind: str) -> dict[str, Mapping[str, Any]]:
-    """The session file's records of `kind` ("drones", "targets" or "obstacles") by id."""
-    return {record["id"]: record for record in live.session.data.get(kind, [])
-            if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
+    """The session file's records of `kind` ("drones", "targets" or "obstacles") by id; a
+    moving target's `position` is where it is now."""
+    records = {record["id"]: record for record in live.session.data.get(kind, [])
+               if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
+    moving = live.swarm.fleet.targets if kind == "targets" else None
+    if moving is not None:
+        for ident, (x, y, z) in moving.current().items():
+            if ident in records:
+                records[ident] = {**records[ident], "position": {
+                    "x": round(x, 2), "y": round(y, 2), "z": round(z, 2)}}
+    return records
 
 
 def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:

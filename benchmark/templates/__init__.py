@@ -9,6 +9,7 @@ from benchmark.templates import (
     delivery,
     navigation,
     search,
+    tracking,
 )
 from benchmark.templates.base import CATEGORIES, SessionView, TaskDraft, Template, TemplateUnfit
 
@@ -18,6 +19,7 @@ __all__ = ["CATALOGUE", "CATEGORIES", "SessionView", "TaskDraft", "Template", "T
 CATALOGUE: tuple[Template, ...] = (
     *basic.TEMPLATES, *navigation.TEMPLATES, *search.TEMPLATES, *coordination.TEMPLATES,
     *assignment.TEMPLATES, *delivery.TEMPLATES, *communication.TEMPLATES, *battery.TEMPLATES,
+    *tracking.TEMPLATES,
 )
 
 _BY_KEY = {t.key: t for t in CATALOGUE}

@@ -24,6 +24,12 @@ run in order. Operations (all lengths in metres, angles in degrees):
 - ``{"op": "sweep", "drones": [...], "target", "altitude_m"}``: cover an area target together
 - ``{"op": "visit_targets", "drones": [...], "targets": [...], "altitude_m"}``: share the
   targets out and reach each one
+- ``{"op": "track", "drone", "target", "duration_s", "altitude_m"}``: meet a moving target
+  where it will be and follow it for duration_s
+- ``{"op": "intercept", "drone", "target", "zone": [x, y, radius], "altitude_m"}``: meet a
+  moving target at a time it is inside the zone
+- ``{"op": "photo_target", "drone", "target", "altitude_m"}``: meet a moving target and
+  photograph it
 """
 
 from __future__ import annotations
@@ -54,7 +60,7 @@ __all__ = [
 ]
 
 CATEGORIES = ("basic_operations", "navigation", "search", "multi_drone_coordination",
-              "delivery", "communication", "battery_management")
+              "delivery", "communication", "battery_management", "target_tracking")
 
 
 class TemplateUnfit(Exception):
@@ -98,10 +104,12 @@ class Template:
     point_targets: int = 0
     stations: int = 0
     families: tuple[str, ...] = ()  # empty: every family
+    moving_targets: int = 0
 
     def fits(self, view: SessionView) -> bool:
         return (len(view.drones) >= self.drones and len(view.areas) >= self.area_targets
                 and len(view.points) >= self.point_targets
+                and len(view.movers) >= self.moving_targets
                 and len(view.stations) >= self.stations
                 and (not self.families or view.family in self.families))
 
@@ -117,13 +125,15 @@ class SessionView:
     drones: list[VehicleSpec] = field(init=False)
     areas: list[Target] = field(init=False)
     points: list[Target] = field(init=False)
+    movers: list[Target] = field(init=False)
     stations: list[Target] = field(init=False)
 
     def __post_init__(self) -> None:
         world = self.scenario.world
         self.drones = list(self.scenario.vehicles)
         self.areas = [t for t in world.targets if t.is_area]
-        self.points = [t for t in world.targets if t.kind in ("fixed", "moving")]
+        self.points = [t for t in world.targets if t.kind == "fixed"]
+        self.movers = [t for t in world.targets if t.kind == "moving"]
         self.stations = [t for t in world.targets if t.is_charging_station]
         blocked = [o.footprint for o in world.obstacles]
         self._blocked = shapely.union_all(blocked) if blocked else shapely.Polygon()

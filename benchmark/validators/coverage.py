@@ -20,6 +20,7 @@ __all__ = [
     "AREA_TASK_TYPES",
     "DONE_COVERAGE",
     "SIMPLIFY_M",
+    "TRACKING_WINDOW_S",
     "corridor_lines",
     "coverage",
     "reached_by_any",
@@ -84,12 +85,26 @@ def _counted_targets(ctx: CheckContext) -> list[str]:
     return [t.id for t in ctx.scenario.world.targets if not t.is_charging_station]
 
 
+TRACKING_WINDOW_S = 10.0
+"""A reach of a moving target keeps it tracked this long (the reference's window)."""
+
+
+def _tracked_now(ctx: CheckContext, target_id: str) -> bool:
+    """Tracked at the window's end (MultiUAV-Plat's target_tracking progress)."""
+    slack = TRACKING_WINDOW_S if ctx.target(target_id).is_moving else 0.0
+    return any(v.end_s + slack >= ctx.t1_s - 1e-9
+               for d in ctx.drone_ids for v in visits(ctx, d, target_id))
+
+
 def task_progress(ctx: CheckContext) -> float:
     """Progress ratio of the scenario's task type over the window.
 
     Area families: floor(100 * mean coverage) / 100 (1.0 without targets); target_assignment:
-    floor(100 * reached / count) / 100 (0 without targets); other task types: the fraction of
-    targets reached (0 without targets).
+    floor(100 * reached / count) / 100 (0 without targets); target_tracking: floor(100 *
+    currently tracked / count) / 100, a moving target being tracked when some drone had it in
+    range within TRACKING_WINDOW_S of the window's end and another target when a drone has it
+    in range at the end (0 without targets); other task types: the fraction of targets reached
+    (0 without targets).
     """
     ids = _counted_targets(ctx)
     if ctx.scenario.task_type in AREA_TASK_TYPES:
@@ -99,6 +114,9 @@ def task_progress(ctx: CheckContext) -> float:
         return math.floor(100.0 * mean + 1e-9) / 100.0
     if not ids:
         return 0.0
+    if ctx.scenario.task_type == "target_tracking":
+        tracked = sum(_tracked_now(ctx, t) for t in ids)
+        return (100 * tracked // len(ids)) / 100.0
     reached = sum(reached_by_any(ctx, t) for t in ids)
     if ctx.scenario.task_type == "target_assignment":
         return (100 * reached // len(ids)) / 100.0

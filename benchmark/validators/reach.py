@@ -18,7 +18,7 @@ from benchmark.validators.context import AIRBORNE_M, CheckContext
 from benchmark.validators.geometry import Footprint
 from benchmark.validators.track import Track
 
-__all__ = ["FlightPath", "Visit", "flight_path", "footprint", "visits"]
+__all__ = ["FlightPath", "Visit", "flight_path", "footprint", "target_rows", "visits"]
 
 _BLOCK = 128
 _EPS_M = 1e-9
@@ -123,6 +123,54 @@ class FlightPath:
         lasts = np.append(firsts[1:] - 1, k.size - 1)
         return [(int(k[f]), int(k[e])) for f, e in zip(firsts, lasts, strict=True)]
 
+    def relative_to(self, rows: np.ndarray) -> FlightPath:
+        """The path as seen from a moving point whose exact motion is the linear
+        interpolation of rows (t, x, y[, z]): each segment is cut where the point changes
+        velocity, and every vertex is the drone's position less the point's at that instant.
+        """
+        if not self.size or rows.shape[0] == 0:
+            return self
+        times = rows[:, 0]
+        lo = np.searchsorted(times, self.t0, side="right")
+        hi = np.searchsorted(times, self.t1, side="left")
+        cuts = np.maximum(hi - lo, 0)
+        pieces = cuts + 1
+        seg = np.repeat(np.arange(self.size), pieces)
+        first = np.concatenate(([0], np.cumsum(pieces)[:-1]))
+        rank = np.arange(seg.size) - np.repeat(first, pieces)
+        # Start time of each piece: the segment start, then the cuts inside it.
+        cut_index = np.repeat(lo, pieces) + rank - 1
+        start_t = np.where(rank == 0, self.t0[seg], times[np.clip(cut_index, 0, None)])
+        last = rank == pieces[seg] - 1
+        end_t = np.where(last, self.t1[seg], times[np.clip(cut_index + 1, 0, times.size - 1)])
+        span = self.t1[seg] - self.t0[seg]
+        safe = np.where(span > 0.0, span, 1.0)
+
+        def drone_at(t: np.ndarray) -> np.ndarray:
+            f = np.where(span > 0.0, (t - self.t0[seg]) / safe, 0.0)[:, None]
+            return self.a[seg] + f * (self.b[seg] - self.a[seg])
+
+        def point_at(t: np.ndarray) -> np.ndarray:
+            return np.column_stack([np.interp(t, times, rows[:, c]) for c in (1, 2)])
+
+        a = drone_at(start_t) - point_at(start_t)
+        b = drone_at(end_t) - point_at(end_t)
+        connected = np.ones(seg.size - 1, dtype=bool) if seg.size > 1 else np.zeros(0, bool)
+        boundary = np.flatnonzero(last[:-1])
+        connected[boundary] = self.connected[seg[boundary]]
+        return FlightPath.from_segments(a, b, start_t, end_t, connected)
+
+    @classmethod
+    def from_segments(cls, a: np.ndarray, b: np.ndarray, t0: np.ndarray, t1: np.ndarray,
+                      connected: np.ndarray) -> FlightPath:
+        starts = np.arange(0, a.shape[0], _BLOCK)
+        if starts.size:
+            block_lo = np.minimum.reduceat(np.minimum(a, b), starts, axis=0)
+            block_hi = np.maximum.reduceat(np.maximum(a, b), starts, axis=0)
+        else:
+            block_lo = block_hi = np.zeros((0, 2))
+        return cls(a, b, t0, t1, connected, block_lo, block_hi)
+
     def coordinates(self, first: int, last: int) -> np.ndarray:
         """Polyline vertices of the connected segments first..last."""
         return np.vstack((self.a[first:last + 1], self.b[last:last + 1]))
@@ -135,17 +183,41 @@ def flight_path(ctx: CheckContext, drone_id: str) -> FlightPath:
 
 
 def footprint(ctx: CheckContext, target_id: str) -> Footprint:
-    """The target's footprint for distance queries (cached on the context)."""
-    return ctx.cached(("footprint", target_id),
-                      lambda: Footprint.of_target(ctx.target(target_id)))
+    """The target's footprint for distance queries (cached on the context); a moving target's
+    is where it stands at the end of the window (current-state checks look at that instant).
+    """
+    def make() -> Footprint:
+        shape = Footprint.of_target(ctx.target(target_id))
+        rows = target_rows(ctx, target_id)
+        if rows is None or rows.shape[0] == 0:
+            return shape
+        return Footprint((float(rows[-1, 1]), float(rows[-1, 2])), shape.bound_radius_m,
+                         shape.disc_radius_m, None, None)
+    return ctx.cached(("footprint", target_id), make)
+
+
+def target_rows(ctx: CheckContext, target_id: str) -> np.ndarray | None:
+    """A moving target's exact (t, x, y, z) rows over the window, or None for a target that
+    does not move (or whose motion the ground truth does not hold)."""
+    if target_id not in ctx.history.moving_target_ids:
+        return None
+    return ctx.cached(("target_rows", target_id),
+                      lambda: ctx.history.target_trajectory(target_id, ctx.t0_s, ctx.t1_s))
 
 
 def visits(ctx: CheckContext, drone_id: str, target_id: str) -> tuple[Visit, ...]:
-    """The drone's separate visits to the target in the window, in time order."""
+    """The drone's separate visits to the target in the window, in time order. A moving
+    target is met where it was at each instant: the drone's path relative to it against its
+    disc."""
     def make() -> tuple[Visit, ...]:
         path = flight_path(ctx, drone_id)
         radius = ctx.vehicle(drone_id).task_radius_m
-        mask = path.in_range(footprint(ctx, target_id), radius)
+        shape = footprint(ctx, target_id)
+        rows = target_rows(ctx, target_id)
+        if rows is not None:
+            path = path.relative_to(rows)
+            shape = Footprint((0.0, 0.0), shape.bound_radius_m, shape.disc_radius_m, None, None)
+        mask = path.in_range(shape, radius)
         return tuple(Visit(float(path.t0[f]), float(path.t1[e]))
                      for f, e in path.chains(mask))
     return ctx.cached(("visits", drone_id, target_id), make)

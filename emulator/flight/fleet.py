@@ -15,6 +15,7 @@ from emulator.flight.cruise import steady_steps
 from emulator.flight.dynamics import CONTROL_NONE, CONTROL_VELOCITY, FleetDynamics
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
+from emulator.target_motion import moving_targets_of
 from emulator.truth import TruthRecorder
 
 __all__ = ["BATTERY_EVERY_STEPS", "Fleet"]
@@ -39,8 +40,11 @@ class Fleet:
         n = len(specs)
         self.scenario = scenario
         self.world = scenario.world
-        self.sensor = Sensor(self.world)
         self.dt_s = 1.0 / physics_hz
+        # Moving targets (None without any): advanced by the physics step, sensed and recorded
+        # where they are.
+        self.targets = moving_targets_of(self.world.targets, self.world.obstacles)
+        self.sensor = Sensor(self.world, moving=self.targets)
         self.step_count = 0
         self.battery_every_steps = BATTERY_EVERY_STEPS
         self._leap_retry_step = 0
@@ -56,6 +60,8 @@ class Fleet:
         self.stop_on = np.zeros(n, dtype=bool)
         self.timer_s = np.full(n, math.inf)
         self.recorder = TruthRecorder([s.id for s in specs])
+        if self.targets is not None:
+            self.recorder.attach_targets(self.targets)
         self.guard = ClearanceGuard(self.world, n)
         self.autopilots = [Autopilot(k, spec, self) for k, spec in enumerate(specs)]
         self.index_by_id = {s.id: k for k, s in enumerate(specs)}
@@ -77,6 +83,8 @@ class Fleet:
         """Advance simulated time by one physics step."""
         dyn = self.dyn
         events = dyn.step(self.dt_s, self._guard if self.guard.enabled else None)
+        if self.targets is not None:
+            self.targets.advance(self.now_s, self.dt_s)
         self.step_count += 1
         levels = _NO_LEVELS
         if self.step_count % BATTERY_EVERY_STEPS == 0:
@@ -163,6 +171,8 @@ class Fleet:
                           dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
             start = i
         battery[start:] = self.bat.pct
+        if self.targets is not None:
+            self.targets.advance(self.now_s, count * dt)
         self.step_count += count
         dyn.position_m = positions[-1].copy()
         self.recorder.record_steps(steps * dt, positions, dyn.yaw_deg, battery,
