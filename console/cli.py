@@ -60,27 +60,24 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def extend_parsers(sub: argparse._SubParsersAction) -> None:
     """`up --web` and the console of `serve`."""
     up = sub.choices["up"]
-    up.add_argument("--web", action="store_true",
-                    help="serve the web console's live view of the swarm (prints the URL)")
-    up.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
-    up.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
-    up.add_argument("--web-key", help="--web: the operator key (default: generated)")
-    up.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
-                    help="--web: live updates per second")
+    _add_web_arguments(up, "serve the web console's live view of the swarm (prints the URL)")
     up.set_defaults(run=_run_up, run_up_next=up.get_default("run"))
     serve = sub.choices["serve"]
     serve.set_defaults(extend=console_for_hub)
     bench = sub.choices["bench"]
     bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
     run = bench_sub.choices["run"]
-    run.add_argument("--web", action="store_true",
-                     help="follow the sessions being run in the web console (prints the URL)")
-    run.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
-    run.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
-    run.add_argument("--web-key", help="--web: the operator key (default: generated)")
-    run.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
-                     help="--web: live updates per second")
+    _add_web_arguments(run, "follow the sessions being run in the web console (prints the URL)")
     bench.set_defaults(run=_run_bench)
+
+
+def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument("--web", action="store_true", help=what)
+    parser.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
+    parser.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
+    parser.add_argument("--web-key", help="--web: the operator key (default: generated)")
+    parser.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
+                        help="--web: live updates per second")
 
 
 def _print(text: str) -> None:
