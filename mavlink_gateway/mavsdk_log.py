@@ -11,6 +11,7 @@ every process that talks MAVLink through the gateway is quiet unless it asked ot
 
 from __future__ import annotations
 
+import atexit
 import logging
 import threading
 
@@ -48,3 +49,18 @@ def set_mavsdk_log(enabled: bool | None = None) -> None:
         else:
             mavsdk.log_subscribe(_drop)
         _applied = _enabled
+
+
+def _unsubscribe_at_exit() -> None:
+    """Take the subscriber away before the interpreter shuts down: MAVSDK's threads go on
+    logging (a heartbeat timing out, say), and a call into a finalised interpreter would
+    crash the process."""
+    global _applied
+    with _lock:
+        if _applied is False:
+            logging.getLogger("mavsdk").setLevel(logging.CRITICAL + 1)
+            mavsdk.log_unsubscribe()
+            _applied = None
+
+
+atexit.register(_unsubscribe_at_exit)
