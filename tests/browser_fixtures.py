@@ -20,8 +20,19 @@ import pytest
 
 from tests.cli_fixtures import ROOT
 
-__all__ = ["ARTIFACTS", "DRONE_RGB", "LoopThread", "chromium_path", "drone_pixels_near",
-           "map_view", "open_page", "screen_of", "shot", "webgl_colours"]
+__all__ = [
+    "ARTIFACTS",
+    "CHROMIUM_ARGS",
+    "DRONE_RGB",
+    "LoopThread",
+    "chromium_path",
+    "drone_pixels_near",
+    "map_view",
+    "open_page",
+    "screen_of",
+    "shot",
+    "webgl_colours",
+]
 
 T = TypeVar("T")
 ARTIFACTS = ROOT / "artifacts" / "console"

@@ -1,4 +1,5 @@
-"""Shared fixtures: free UDP ports, running swarms, and a MAVSDK client that finds them."""
+"""Shared fixtures: free UDP ports, running swarms, a MAVSDK client that finds them, and a
+headless Chromium for the console pages."""
 
 from __future__ import annotations
 
@@ -7,13 +8,15 @@ import concurrent.futures
 import contextlib
 import time
 import weakref
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
+from typing import Any
 
 import pytest
 
 from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
+from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path
 from tests.ports import unused_udp_port
 
 _executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
@@ -94,3 +97,14 @@ async def mavsdk_systems(port: int, n: int, *, timeout_s: float = 10.0,
 def mavsdk_client() -> Callable[..., contextlib.AbstractAsyncContextManager[list]]:
     """`async with mavsdk_client(swarm.ports.api_port, n) as systems:` (see mavsdk_systems)."""
     return mavsdk_systems
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    """One headless Chromium (Debian's, through Playwright) per test module."""
+    from playwright.sync_api import sync_playwright
+    path = chromium_path()
+    with sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
+        yield launched
+        launched.close()

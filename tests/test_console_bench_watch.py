@@ -7,28 +7,17 @@ import json
 import os
 import subprocess
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
-from playwright.sync_api import sync_playwright
 
-from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path, open_page, shot
+from tests.browser_fixtures import open_page, shot
 from tests.cli_fixtures import MAVSWARM, ROOT, read_until
 from tests.ports import unused_tcp_port
 
 pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    path = chromium_path()
-    with sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
-        yield launched
-        launched.close()
 
 
 def test_bench_run_web_follows_the_session_picked(browser: Any, tmp_path: Path) -> None:

@@ -12,12 +12,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from playwright.sync_api import sync_playwright
 
 from benchmark.session_file import load_session
 from tests.browser_fixtures import (
-    CHROMIUM_ARGS,
-    chromium_path,
     map_view,
     open_page,
     screen_of,
@@ -27,15 +24,6 @@ from tests.cli_fixtures import MAVSWARM, ROOT, read_until, start_up
 from tests.ports import unused_tcp_port, unused_udp_port
 
 pytestmark = [pytest.mark.browser]
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    path = chromium_path()
-    with sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
-        yield launched
-        launched.close()
 
 
 @pytest.fixture

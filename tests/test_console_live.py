@@ -18,7 +18,6 @@ from typing import Any
 
 import httpx
 import pytest
-from playwright.sync_api import sync_playwright
 
 from benchmark.server.serve import serve_rest
 from console.cli import console_for_hub, swarm_console
@@ -27,7 +26,6 @@ from emulator.scenario import default_scenario
 from emulator.swarm import PortPlan, Swarm
 from tests.browser_fixtures import (
     LoopThread,
-    chromium_path,
     drone_pixels_near,
     open_page,
     shot,
@@ -40,17 +38,6 @@ pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
 
 KEY = "operator-key-for-tests"
 SPOTS = [(0.0, 0.0), (60.0, 0.0), (0.0, 70.0)]
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    path = chromium_path()
-    with sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=path,
-                                              args=["--no-sandbox", "--use-angle=swiftshader",
-                                                    "--enable-unsafe-swiftshader"])
-        yield launched
-        launched.close()
 
 
 @pytest.fixture(scope="module")

@@ -17,16 +17,13 @@ from typing import Any
 
 import httpx
 import pytest
-from playwright.sync_api import sync_playwright
 
 from emulator.clock import ClockConfig
 from emulator.scenario import default_scenario
 from emulator.swarm import PortPlan, Swarm
 from emulator.truth import TruthLog
 from tests.browser_fixtures import (
-    CHROMIUM_ARGS,
     LoopThread,
-    chromium_path,
     drone_pixels_near,
     map_view,
     open_page,
@@ -40,15 +37,6 @@ from tests.ports import unused_tcp_port, unused_udp_port
 pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
 
 SESSION = "area_search-easy-1-mini"
-
-
-@pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    path = chromium_path()
-    with sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
-        yield launched
-        launched.close()
 
 
 async def _fly(path: Path) -> None:

@@ -83,14 +83,7 @@ class FlightPath:
             t0, t1 = t[first:stop], t[first + 1:stop + 1]
         else:
             a, b, t0, t1 = xy[i0], xy[i1], t[i0], t[i1]
-        connected = i1[:-1] == i0[1:]
-        starts = np.arange(0, a.shape[0], _BLOCK)
-        if starts.size:
-            block_lo = np.minimum.reduceat(np.minimum(a, b), starts, axis=0)
-            block_hi = np.maximum.reduceat(np.maximum(a, b), starts, axis=0)
-        else:
-            block_lo = block_hi = np.zeros((0, 2))
-        return cls(a, b, t0, t1, connected, block_lo, block_hi)
+        return cls.from_segments(a, b, t0, t1, i1[:-1] == i0[1:])
 
     def in_range(self, shape: Footprint, radius_m: float) -> np.ndarray:
         """Mask of segments whose distance to the footprint is <= radius_m."""
