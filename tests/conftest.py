@@ -108,3 +108,23 @@ def browser() -> Iterator[Any]:
         launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
         yield launched
         launched.close()
+
+
+_exit_status: list[int] = []
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    _exit_status.append(int(exitstatus))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """Leave without interpreter finalisation once pytest is done: MAVSDK's native threads,
+    still running in this process, can crash a finalising interpreter (a segfault after
+    every test has passed). The exit status is pytest's own."""
+    import os
+    import sys
+    if _exit_status and not hasattr(sys, "_called_from_xdist"):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_exit_status[-1])
