@@ -15,13 +15,27 @@ from typing import Any
 
 from emulator.flight.battery import MESSAGE_COST_PCT
 from emulator.flight.operator import place_on_ground, set_battery
-from emulator.link_faults import LinkFaults
+from emulator.link_faults import DOWNLINK, UPLINK, LinkFaultError, LinkFaults
 from emulator.lockstep import Watch
 from emulator.perception import Perception
 from emulator.radio import Message, Radio
 from emulator.swarm import Swarm
 
-__all__ = ["SwarmServices"]
+__all__ = ["MAX_OUTAGE_WINDOWS", "SwarmServices"]
+
+MAX_OUTAGE_WINDOWS = 64
+"""Outage windows an operator may set per direction of a link (each schedules events)."""
+
+
+def _check_windows(faults: LinkFaults) -> None:
+    pairs = [("", faults.uplink, faults.downlink)] + [
+        (f"vehicles.{vid}.", up, down) for vid, (up, down) in faults.vehicles.items()]
+    for where, up, down in pairs:
+        for name, profile in (("uplink", up), ("downlink", down)):
+            if len(profile.outages) > MAX_OUTAGE_WINDOWS:
+                raise LinkFaultError(f"link_faults.{where}{name}.outages: "
+                                     f"{len(profile.outages)} windows; at most "
+                                     f"{MAX_OUTAGE_WINDOWS} per direction")
 
 
 class SwarmServices:
@@ -127,12 +141,48 @@ class SwarmServices:
         self.radio.clear()
         self._swarm.send_all_telemetry()
 
-    def operator_set_link_faults(self, settings: Mapping[str, Any]) -> None:
-        """Operator: link faults from now on (a session file's ``link_faults`` object; see
-        emulator.link_faults); recorded in the ground truth. Bad settings raise
-        LinkFaultError (a ValueError) naming the field, and change nothing."""
-        self._swarm.set_link_faults(LinkFaults.from_json(settings, "link_faults",
-                                                         list(self.drone_ids)))
+    def operator_link_faults(self) -> dict[str, Any]:
+        """The link faults in force (`LinkFaults.to_json()`: seed, the swarm-wide uplink and
+        downlink, and the vehicles with settings of their own)."""
+        return self._swarm.faults.gate.faults.to_json()
+
+    def operator_set_link_faults(self, settings: object) -> dict[str, Any]:
+        """Operator: link faults from now on (a session file's ``link_faults`` object, which
+        replaces every setting in force; see emulator.link_faults); recorded in the ground
+        truth. Bad settings raise LinkFaultError (a ValueError) naming the field, and change
+        nothing. Returns the settings now in force."""
+        faults = LinkFaults.from_json(settings, "link_faults", list(self.drone_ids))
+        _check_windows(faults)
+        self._swarm.set_link_faults(faults)
+        return faults.to_json()
+
+    def operator_vehicle_link(self, drone_id: str) -> dict[str, Any]:
+        """drone_id's link as it is in force: ``{"uplink": {...}, "downlink": {...}}``."""
+        k = self._autopilot(drone_id).k
+        gate = self._swarm.faults.gate
+        return {"uplink": gate.profile(k, UPLINK).to_json(),
+                "downlink": gate.profile(k, DOWNLINK).to_json()}
+
+    def operator_set_vehicle_link(self, drone_id: str, settings: object) -> dict[str, Any]:
+        """Operator: drone_id's own link settings from now on (a session file's
+        ``link_faults.vehicles`` entry: profile fields for both directions, ``uplink`` /
+        ``downlink`` objects for one, on top of the swarm-wide settings); the other vehicles
+        keep theirs. Validated as `operator_set_link_faults`; returns the vehicle's link."""
+        if drone_id not in self._fleet.index_by_id:
+            raise LinkFaultError(f"unknown drone {drone_id[:40]!r} (drones: "
+                                 f"{', '.join(self.drone_ids)})")
+        if not isinstance(settings, Mapping):
+            raise LinkFaultError(f"the link settings of {drone_id} must be an object of "
+                                 "loss, latency_ms, jitter_ms, duplicate, reorder, outages, "
+                                 "uplink, downlink")
+        current = self._swarm.faults.gate.faults.to_json()
+        vehicles = dict(current["vehicles"])
+        vehicles[drone_id] = settings
+        faults = LinkFaults.from_json({**current, "vehicles": vehicles}, "link",
+                                      list(self.drone_ids))
+        _check_windows(faults)
+        self._swarm.set_link_faults(faults)
+        return self.operator_vehicle_link(drone_id)
 
     def operator_clear_messages(self) -> None:
         """Operator reset: every drone's inbox emptied."""

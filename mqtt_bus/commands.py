@@ -15,7 +15,7 @@ import inspect
 import logging
 import re
 from collections.abc import Awaitable, Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 from agent_contract import AgentTools, BudgetExhausted, TaskBudget, tool_names
 from llm_tools.input_limits import InputError, parse_json
@@ -24,8 +24,8 @@ from mqtt_bus.connection import BusConnection
 from mqtt_bus.payloads import encode
 from mqtt_bus.topics import SessionTopics
 
-__all__ = ["MAX_REQUEST_BYTES", "OPERATOR_BUDGET", "CommandService", "CommandUnavailable",
-           "drone_tool_names"]
+__all__ = ["LINK_TOOLS", "MAX_REQUEST_BYTES", "OPERATOR_BUDGET", "CommandService",
+           "CommandUnavailable", "LinkControl", "drone_tool_names"]
 
 log = logging.getLogger("mavswarm.mqtt")
 
@@ -34,6 +34,18 @@ OPERATOR_BUDGET = TaskBudget(tool_calls=1_000_000_000, sim_time_s=365 * 86_400.0
 """Operators commanding over MQTT spend no agent's budget: theirs is never reached."""
 _REQUEST_ID = re.compile(r"^[\x21-\x7e]{1,64}$")
 _KEYS = ("id", "tool", "args")
+LINK_TOOLS = ("get_link", "set_link")
+"""Operator commands on a drone's link faults (not agent tools)."""
+
+
+class LinkControl(Protocol):
+    """Reads and sets a drone's link faults (emulator.services.SwarmServices); a bad
+    setting raises ValueError naming the field and changes nothing."""
+
+    def operator_vehicle_link(self, drone_id: str) -> dict[str, Any]: ...
+
+    def operator_set_vehicle_link(self, drone_id: str, settings: object
+                                  ) -> dict[str, Any]: ...
 
 
 class CommandUnavailable(Exception):
@@ -59,17 +71,20 @@ class CommandService:
 
     `tools_for(drone)`: the operator's tools for that drone (may raise CommandUnavailable);
     `refusal()`: why no command may run now (a benchmark task is running for an agent), or
-    None."""
+    None; `link`: the swarm's link faults (`get_link`, `set_link`), None where the links are
+    real (a bridged fleet)."""
 
     def __init__(self, topics: SessionTopics, connection: BusConnection,
                  drone_ids: Sequence[str],
                  tools_for: Callable[[str], Awaitable[AgentTools]], *,
-                 refusal: Callable[[], str | None] | None = None) -> None:
+                 refusal: Callable[[], str | None] | None = None,
+                 link: LinkControl | None = None) -> None:
         self.topics = topics
         self.connection = connection
         self.drone_ids = tuple(drone_ids)
         self._tools_for = tools_for
         self._refusal = refusal
+        self._link = link
         self.registry = ToolRegistry(drone_tool_names())
         self._tasks: set[asyncio.Task[None]] = set()
         self.handled = 0
@@ -106,6 +121,9 @@ class CommandService:
         if refusal:
             return {"id": request_id, "drone": drone, "tool": tool, "status": "rejected",
                     "message": refusal}
+        if tool in LINK_TOOLS:
+            return {"id": request_id, "drone": drone, "tool": tool,
+                    **self._link_command(drone, tool, args)}
         try:
             tools = await self._tools_for(drone)
         except CommandUnavailable as error:
@@ -116,6 +134,22 @@ class CommandService:
         except BudgetExhausted as spent:
             result = {"status": "error", "message": str(spent)}
         return {"id": request_id, "drone": drone, "tool": tool, **result}
+
+    def _link_command(self, drone: str, tool: str, args: dict[str, Any]) -> dict[str, Any]:
+        if self._link is None:
+            return {"status": "rejected", "message": f"{tool}: this fleet's links are real "
+                    "radio links; link faults exist only in an emulated swarm"}
+        if tool == "get_link":
+            if args:
+                return {"status": "error", "message": "get_link takes no args; send "
+                        "\"args\": {}"}
+            return {"status": "ok", "message": f"{drone}'s link",
+                    "link": self._link.operator_vehicle_link(drone)}
+        try:
+            link = self._link.operator_set_vehicle_link(drone, args)
+        except ValueError as error:
+            return {"status": "error", "message": f"{error}; nothing was changed"}
+        return {"status": "ok", "message": f"{drone}'s link faults set", "link": link}
 
     def _parse(self, drone: str, payload: bytes
                ) -> tuple[tuple[str, str, dict[str, Any]] | None, dict[str, Any]]:
@@ -145,8 +179,9 @@ class CommandService:
             known = ", ".join(self.drone_ids[:3]) + (" ..." if len(self.drone_ids) > 3 else "")
             return None, _error(request_id, drone, f"unknown drone {drone!r} in the topic "
                                 f"(known: {known})", tool)
-        if not isinstance(tool, str) or self.registry.get(tool) is None:
-            names = ", ".join(s.name for s in self.registry.specs())
+        if not isinstance(tool, str) or (self.registry.get(tool) is None
+                                         and tool not in LINK_TOOLS):
+            names = ", ".join([s.name for s in self.registry.specs()] + list(LINK_TOOLS))
             shown = tool if isinstance(tool, str) else type(tool).__name__
             return None, _error(request_id, drone, f"unknown tool {str(shown)[:40]!r}; "
                                 f"tools: {names}", tool)

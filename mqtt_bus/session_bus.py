@@ -9,7 +9,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from agent_contract import AgentTools
-from mqtt_bus.commands import CommandService
+from mqtt_bus.commands import CommandService, LinkControl
 from mqtt_bus.connection import BusConnection
 from mqtt_bus.payloads import encode, status_payload
 from mqtt_bus.telemetry import FleetView, TelemetryPublisher
@@ -21,12 +21,14 @@ __all__ = ["SessionBus"]
 
 class SessionBus:
     """Use `async with SessionBus(url, session, view, ...) as bus:`. Without `tools_for`
-    the session takes no commands (its services topics are not even subscribed)."""
+    the session takes no commands (its services topics are not even subscribed); `link`
+    answers the operator's `get_link`/`set_link` (an emulated swarm's link faults)."""
 
     def __init__(self, url: BrokerUrl, session: str, view: FleetView, *,
                  osd_hz: float = 2.0,
                  tools_for: Callable[[str], Awaitable[AgentTools]] | None = None,
                  refusal: Callable[[], str | None] | None = None,
+                 link: LinkControl | None = None,
                  queue_size: int = 10_000, keepalive_s: int = 10,
                  status_extra: dict[str, Any] | None = None) -> None:
         self.topics = SessionTopics(url.prefix, session)
@@ -45,7 +47,7 @@ class SessionBus:
             queue_size=queue_size, keepalive_s=keepalive_s)
         if tools_for is not None:
             self.commands = CommandService(self.topics, self.connection, drones, tools_for,
-                                           refusal=refusal)
+                                           refusal=refusal, link=link)
         self.telemetry = TelemetryPublisher(view, self.connection, self.topics, osd_hz=osd_hz)
         self._stack = contextlib.AsyncExitStack()
 

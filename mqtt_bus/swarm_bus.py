@@ -81,14 +81,14 @@ async def swarm_session_bus(url: BrokerUrl, session: str, swarm: Swarm, *,
                             queue_size: int = 10_000) -> AsyncIterator[SessionBus]:
     """The bus of an in-process swarm (`mavswarm up`), open while inside."""
     view = SwarmView(swarm)
-    link = LinkOnCommand(swarm, SwarmServices(swarm), session, view.add_event) \
-        if commands else None
+    services = SwarmServices(swarm)
+    link = LinkOnCommand(swarm, services, session, view.add_event) if commands else None
     if link is not None:
         view.primitive_of = link.primitive_of
     try:
         async with SessionBus(url, session, view, osd_hz=osd_hz,
                               tools_for=link.tools_for if link else None,
-                              queue_size=queue_size) as bus:
+                              link=services, queue_size=queue_size) as bus:
             yield bus
     finally:
         if link is not None:
@@ -98,10 +98,12 @@ async def swarm_session_bus(url: BrokerUrl, session: str, swarm: Swarm, *,
 @contextlib.asynccontextmanager
 async def gateway_session_bus(url: BrokerUrl, session: str, swarm: Swarm, gateway: Gateway,
                               *, refusal: Callable[[], str | None] | None = None,
-                              osd_hz: float = 2.0) -> AsyncIterator[SessionBus]:
+                              osd_hz: float = 2.0, services: SwarmServices | None = None
+                              ) -> AsyncIterator[SessionBus]:
     """The bus of an in-process swarm that already has its gateway (`mavswarm serve`): the
     radio messages the gateway's users send are heard, commands run on the operator's
-    budget unless `refusal()` names a reason not to."""
+    budget unless `refusal()` names a reason not to. `services` (the swarm's, default a new
+    one) answers the operator's link commands."""
     view = SwarmView(swarm, primitive_of=gateway.busy_with)
     inner = gateway.services
     gateway.services = RadioTap(inner, view.add_event)
@@ -112,7 +114,7 @@ async def gateway_session_bus(url: BrokerUrl, session: str, swarm: Swarm, gatewa
 
     try:
         async with SessionBus(url, session, view, osd_hz=osd_hz, tools_for=tools_for,
-                              refusal=refusal) as bus:
+                              refusal=refusal, link=services or SwarmServices(swarm)) as bus:
             yield bus
     finally:
         gateway.services = inner

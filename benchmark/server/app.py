@@ -17,6 +17,7 @@ from benchmark.server.compat_lists import add_compat_list_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
+from benchmark.server.link_routes import add_link_routes
 from benchmark.server.openapi_roles import add_role_docs
 from benchmark.server.session_control import add_session_control_routes
 from benchmark.server.session_loading import add_session_loading_routes
@@ -142,6 +143,7 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     _add_session_routes(app, hub, registry)
     add_check_routes(app, hub)
     add_session_control_routes(app, hub)
+    add_link_routes(app, hub)
     add_compat_routes(app, hub, registry)
     add_compat_list_routes(app, hub)
     add_compat_collision_routes(app, hub)

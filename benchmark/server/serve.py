@@ -222,7 +222,8 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
             async def on_bus(live: LiveSession) -> None:
                 bus = await buses.enter_async_context(gateway_session_bus(
                     mqtt, live.id, live.swarm, live.gateway, osd_hz=mqtt_osd_hz,
-                    refusal=functools.partial(mqtt_refusal, hub, live.id)))
+                    refusal=functools.partial(mqtt_refusal, hub, live.id),
+                    services=live.services))
                 print(f"MQTT: {mqtt.redacted()} topics {bus.topics.base}/...", file=out,
                       flush=True)
 
