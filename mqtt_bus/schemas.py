@@ -111,7 +111,9 @@ SERVICES: dict[str, Any] = {
     "properties": {
         "id": {"type": "string", "pattern": "^[\\x21-\\x7e]{1,64}$",
                "description": "echoed in the reply"},
-        "tool": {"type": "string", "description": "an agent tool that takes drone_id"},
+        "tool": {"type": "string", "description": "an agent tool that takes drone_id, or "
+                                                  "get_link / set_link (an emulated swarm's "
+                                                  "link faults)"},
         "args": {"type": "object", "description": "the tool's arguments; drone_id comes "
                                                   "from the topic"},
     },
@@ -127,6 +129,8 @@ SERVICES_REPLY: dict[str, Any] = {
         "message": {"type": "string"},
         "state": {"type": "object", "description": "the drone's state after (as every "
                                                    "surface's tool results)"},
+        "link": {"type": "object", "required": ["uplink", "downlink"],
+                 "description": "get_link / set_link: the drone's link faults in force"},
     },
 }
 

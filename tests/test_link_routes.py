@@ -14,11 +14,13 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import jsonschema
 import pytest
 
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.hub import LiveSession
 from benchmark.server.serve import live_hub, mqtt_refusal, serve_asgi
+from mqtt_bus.schemas import SCHEMAS
 from mqtt_bus.swarm_bus import gateway_session_bus
 from mqtt_bus.url import parse_broker_url
 from tests.bench_fixtures import small_session, write_json
@@ -172,6 +174,8 @@ async def test_operators_change_links_over_rest_and_mqtt_and_an_outage_silences_
         assert probe["link"]["uplink"]["loss"] == 0.0
         assert not [g for g in op.got if g.payload.get("id") == "a1"]
         assert not agent.of("services_reply")
+        for reply in op.of("services_reply"):
+            jsonschema.validate(reply.payload, SCHEMAS["services_reply"])
 
         # the whole set replaced over REST
         whole = await client.put(f"{base}/link-faults", headers=ADMIN,
