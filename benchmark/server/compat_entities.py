@@ -10,6 +10,8 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
+from benchmark.server.compat_statistics import check_context
+from benchmark.server.compat_tracking import tracking_fields
 from benchmark.server.hub import LiveSession, Role
 from mavlink_gateway import DroneState
 
@@ -20,15 +22,19 @@ _FLIGHT = {"on_ground": "idle"}
 
 def entity_records(live: LiveSession, kind: str) -> dict[str, Mapping[str, Any]]:
     """The session file's records of `kind` ("drones", "targets" or "obstacles") by id; a
-    moving target's `position` is where it is now."""
+    moving target's `position` is where it is now, with its `tracking_status` and
+    `last_tracked_at` in the current task's window (compat_tracking)."""
     records = {record["id"]: record for record in live.session.data.get(kind, [])
                if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
     moving = live.swarm.fleet.targets if kind == "targets" else None
     if moving is not None:
-        for ident, (x, y, z) in moving.current().items():
-            if ident in records:
+        current = moving.current()
+        ctx = check_context(live) if current else None
+        for ident, (x, y, z) in current.items():
+            if ident in records and ctx is not None:
                 records[ident] = {**records[ident], "position": {
-                    "x": round(x, 2), "y": round(y, 2), "z": round(z, 2)}}
+                    "x": round(x, 2), "y": round(y, 2), "z": round(z, 2)},
+                    **tracking_fields(ctx, ident)}
     return records
 
 

@@ -2,8 +2,9 @@
 
 `GET /sessions/current/data` and `GET /sessions/{id}/data` (operators and admins, as the
 reference's SYSTEM role) give the flat session export: metadata, `statistics`, the drones with
-their live state, the targets, obstacles and environment records, the tasks (check trees for
-admins only) and `history.target_reaches` / `history.area_coverage`.
+their live state, the targets (moving ones where they are, with their tracking status),
+obstacles and environment records, the tasks (check trees for admins only) and
+`history.target_reaches` / `history.moving_target_tracking` / `history.area_coverage`.
 `GET /sessions/current/task-progress` answers every role: operators and admins get the measured
 progress; an agent gets the same keys with what the hidden checks decide left null.
 `GET /sessions/{id}/task-progress` is for operators and admins."""
@@ -15,13 +16,15 @@ from fastapi import Depends, FastAPI, Query
 
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat import resolve_session
-from benchmark.server.compat_entities import compat_drone, compat_session_fields
+from benchmark.server.compat_entities import compat_drone, compat_session_fields, entity_records
 from benchmark.server.compat_statistics import (
     agent_progress,
+    check_context,
     reach_history,
     statistics_block,
     task_progress_block,
 )
+from benchmark.server.compat_tracking import moving_target_tracking
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 
 __all__ = ["add_compat_session_data_routes", "compat_task", "session_data"]
@@ -65,11 +68,12 @@ def session_data(hub: Hub, live: LiveSession, role: Role) -> dict[str, Any]:
     return {"id": live.id, "name": live.session.name, **fields,
             "statistics": statistics_block(live),
             "drones": [compat_drone(live, s) for s in live.gateway.list_drones()],
-            "targets": [dict(t) for t in data.get("targets", [])],
+            "targets": [dict(t) for t in entity_records(live, "targets").values()],
             "obstacles": [dict(o) for o in data.get("obstacles", [])],
             "environment": data.get("environment"),
             "tasks": [compat_task(live, k, role) for k in range(len(live.session.tasks))],
-            "history": reach_history(live)}
+            "history": {**reach_history(live),
+                        "moving_target_tracking": moving_target_tracking(check_context(live))}}
 
 
 def add_compat_session_data_routes(app: FastAPI, hub: Hub) -> None:

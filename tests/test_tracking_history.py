@@ -1,0 +1,115 @@
+"""MultiUAV-Plat's tracking history of moving targets over the compatibility routes: a scripted
+client that knows only the reference's routes follows a moving target of the reference's
+tracking example by what its drone senses; the target's record then says `tracked`, the
+session data holds its tracking periods (the same as moving_target_tracked measures), and once
+the drone leaves the target turns `stale`, out of the agent's sight."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from benchmark.server.compat_tracking import RECENT_PERIODS
+from tests.compat_fixtures import KEYS, PlatClient, plat_server
+
+pytestmark = pytest.mark.mavsdk
+
+EXAMPLE = Path(__file__).parent / "reference" / "Example_Session_Target_Tracking.json"
+DRONE, OTHER, TARGET = "f2a74de4", "128b2f33", "ca02135e"  # Drone 1, Drone 2, Moving Target 1
+ALTITUDE_M = 20.0
+FOLLOW_S = 30.0
+PERIOD_FIELDS = {"start_at", "end_at", "last_update_at", "event_count"}
+
+
+def _record(records: list[dict[str, Any]], ident: str) -> dict[str, Any] | None:
+    return next((r for r in records if r["id"] == ident), None)
+
+
+async def _follow(agent: PlatClient, seconds: float) -> None:
+    """Fly to where the drone senses the target, hover, again, for `seconds` of session time."""
+    start = (await agent.get("/sessions/current/task-progress"))["details"]["sim_time_s"]
+    elapsed = 0.0
+    while elapsed < seconds:
+        seen = await agent.get(f"/drones/{DRONE}/nearby/targets")
+        here = _record(seen, TARGET)
+        assert here is not None, [r["name"] for r in seen]
+        moved = await agent.command(DRONE, "move_to", x=here["position"]["x"],
+                                    y=here["position"]["y"], z=ALTITUDE_M)
+        assert moved["status"] == "success", moved
+        assert (await agent.command(DRONE, "hover", duration=2.0))["status"] == "success"
+        details = (await agent.get("/sessions/current/task-progress"))["details"]
+        elapsed = details["sim_time_s"] - start
+
+
+async def test_a_followed_moving_target_gets_the_reference_tracking_history(
+        tmp_path: Path) -> None:
+    async with plat_server(tmp_path, json.loads(EXAMPLE.read_text())) as served:
+        agent = PlatClient(served.client)  # no key: the agent, as `serve --open`
+        operator = PlatClient(served.client, KEYS["operator"])
+        before = _record(await operator.get("/targets"), TARGET)
+        assert before is not None
+        assert (before["tracking_status"], before["last_tracked_at"]) == ("never_tracked", None)
+        data = await operator.get("/sessions/current/data")
+        assert data["history"]["moving_target_tracking"] == {}
+        assert all("tracking_status" not in t for t in data["targets"] if t["type"] != "moving")
+        assert all(t["tracking_status"] == "never_tracked" for t in data["targets"]
+                   if t["type"] == "moving")
+
+        assert (await agent.command(DRONE, "take_off", altitude=ALTITUDE_M))["status"] == \
+            "success"
+        x, y = before["position"]["x"], before["position"]["y"]
+        assert (await agent.command(DRONE, "move_to", x=x, y=y, z=ALTITUDE_M))["status"] == \
+            "success"
+        await _follow(agent, FOLLOW_S)
+
+        # the agent's drone perceives it: its record says tracked, just now
+        seen = _record(await agent.get(f"/drones/{DRONE}/nearby/targets"), TARGET)
+        assert seen is not None and seen["tracking_status"] == "tracked"
+        data = await operator.get("/sessions/current/data")
+        now_s = data["statistics"]["session_time"]
+        assert seen["last_tracked_at"] == pytest.approx(now_s, abs=0.5)
+        history = data["history"]["moving_target_tracking"]
+        assert set(history) == {TARGET}  # no other moving target came near a drone
+        entry = history[TARGET]
+        assert entry["tracking_status"] == "tracked"
+        assert (entry["tracked_by"], entry["last_tracked_by"]) == ([DRONE], DRONE)
+        assert entry["total_track_events"] >= 1
+        assert 1 <= len(entry["recent_periods"]) <= RECENT_PERIODS
+        for period in entry["recent_periods"]:
+            assert set(period) == PERIOD_FIELDS | {"last_tracked_by", "tracked_by"}
+            assert period["tracked_by"] == [DRONE]
+            assert period["start_at"] <= period["last_update_at"] < period["end_at"]
+        last = entry["recent_periods"][-1]
+        assert entry["active_period_start"] == last["start_at"]
+        assert last["end_at"] == pytest.approx(entry["last_tracked_at"] + 10.0, abs=1e-3)
+        longest = max(p["end_at"] - p["start_at"] for p in entry["recent_periods"])
+        assert longest >= FOLLOW_S
+        mine = entry["by_drone"][DRONE]
+        assert set(mine) == {"first_tracked_at", "last_tracked_at", "total_track_events",
+                             "recent_periods"}
+        assert mine["total_track_events"] == entry["total_track_events"]
+        assert [set(p) for p in mine["recent_periods"]] == [PERIOD_FIELDS] * len(
+            mine["recent_periods"])
+        assert entry["first_tracked_at"] == mine["first_tracked_at"] <= now_s - FOLLOW_S
+        # the hidden check measures the same periods on the ground truth
+        admin = PlatClient(served.client, KEYS["admin"])
+        check = await admin.get("/check/moving_target_tracked", target_id=TARGET,
+                                drone_id=DRONE, min_duration=FOLLOW_S)
+        assert check["result"] is True
+        assert check["value"] == pytest.approx(longest, abs=1e-2)
+
+        # the drone flies away and waits: stale, and out of the agent's sight
+        assert (await agent.command(DRONE, "move_to", x=60, y=60, z=ALTITUDE_M))["status"] \
+            == "success"
+        assert (await agent.command(DRONE, "hover", duration=12.0))["status"] == "success"
+        stale = _record(await operator.get("/targets"), TARGET)
+        assert stale is not None and stale["tracking_status"] == "stale"
+        assert stale["last_tracked_at"] >= entry["last_tracked_at"]
+        assert _record(await agent.get("/targets"), TARGET) is None
+        entry = (await operator.get("/sessions/current/data"))["history"][
+            "moving_target_tracking"][TARGET]
+        assert entry["tracking_status"] == "stale" and entry["active_period_start"] is None
+        assert OTHER not in entry["by_drone"]
