@@ -4,8 +4,10 @@
 Pages (one HTML page; the script picks the view from the path): `/` (home), `/live/{id}`,
 `/runs`, `/runs/{run}`, `/inspect/{session}/{task}?trial=K[&run=R][&agent=A]`, `/compare`,
 `/replay` (a truth file), `/editor`. Data under `/api/...`; live frames over the WebSocket
-`/api/live/{id}/ws?key=KEY`. Every API route needs an operator or admin key (`X-API-Key`
-header or `key` query parameter) unless the console was opened for local files only.
+`/api/live/{id}/ws?key=KEY`; a live swarm's link faults at `/api/live/{id}/link-faults` and
+`/api/live/{id}/vehicles/{drone}/link` (benchmark.server.link_routes). Every API route needs
+an operator or admin key (`X-API-Key` header or `key` query parameter) unless the console was
+opened for local files only.
 """
 
 
@@ -20,6 +22,7 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request, WebSocket
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from starlette.websockets import WebSocketDisconnect
 
+from benchmark.server.link_routes import LinkTarget, add_link_api
 from console.auth import ConsoleAuth
 from console.editor import (
     EditorError,
@@ -166,6 +169,15 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
             raise HTTPException(404, f"unknown drone {drone[:40]!r}")
         result = await live.commander.run(drone, body["tool"], body.get("args") or {})
         return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
+
+    def link_target(live_id: str, role: str) -> LinkTarget:
+        live = live_or_404(live_id)
+        if live.links is None:
+            raise HTTPException(409, f"live swarm {live_id!r} runs elsewhere: its links are "
+                                     "not changed from here")
+        return live.links(role)
+
+    add_link_api(app, "/api/live/{session_id}", staff, link_target, "links")
 
     def run_or_404(run_id: str):
         if run_id not in state.index.runs:

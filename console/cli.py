@@ -19,6 +19,7 @@ from typing import Any
 from benchmark import cli as bench_cli
 from benchmark.replay_data import session_world
 from benchmark.server import Hub
+from benchmark.server.link_routes import LinkTarget, session_link_target
 from benchmark.server.serve import ApiKey, serve_asgi
 from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
@@ -103,8 +104,9 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
         return Gateway(fleet.drones, SwarmServices(swarm))
 
     commander = None if swarm.ports.per_vehicle else Commander("swarm", open_gateway)
+    link_target = LinkTarget(SwarmServices(swarm))
     live = LiveSwarm("swarm", scenario.name, scenario_to_dict(scenario), swarm,
-                     commander=commander)
+                     commander=commander, links=lambda _role: link_target)
     state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz)
     app = create_console_app(state)
 
@@ -179,10 +181,13 @@ def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str
                 tools = hub.sessions[sid].tools
                 return tools.activity() if hasattr(tools, "activity") else {}
 
+            def links(role: str, sid: str = sid) -> LinkTarget:
+                return session_link_target(hub.sessions[sid], admin=role == "admin")
+
             state.lives[sid] = LiveSwarm(sid, session.session.name,
                                          session_world(session.session.data), session.swarm,
                                          activities=[activity], commander=commanders[sid],
-                                         task_text=session.task.text)
+                                         task_text=session.task.text, links=links)
 
     sync()
     state.refresh = sync

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from benchmark.server.link_routes import LinkTarget
 from console.commands import Commander
 from emulator.live_state import live_state
 from emulator.swarm import Swarm
@@ -44,6 +45,8 @@ class LiveSwarm:
     commander: Commander | None = None
     task_text: str = ""
     frames: Callable[[], dict[str, Any] | None] | None = None
+    links: Callable[[str], LinkTarget] | None = None
+    """The swarm's link faults as a caller of that role may use them (None: not here)."""
 
     def state(self) -> dict[str, Any]:
         """The frame: the fleet's live state and each drone's activity."""

@@ -20,10 +20,12 @@ import pytest
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.hub import LiveSession
 from benchmark.server.serve import live_hub, mqtt_refusal, serve_asgi
+from console.cli import console_for_hub, swarm_console
 from mqtt_bus.schemas import SCHEMAS
 from mqtt_bus.swarm_bus import gateway_session_bus
 from mqtt_bus.url import parse_broker_url
 from tests.bench_fixtures import small_session, write_json
+from tests.conftest import SwarmFactory
 from tests.mosquitto_broker import Broker
 from tests.mqtt_helpers import broker, listener, request
 
@@ -38,14 +40,17 @@ CLEAN = {"loss": 0.0, "latency_ms": 0.0, "jitter_ms": 0.0, "duplicate": 0.0, "re
 @contextlib.asynccontextmanager
 async def _serving(tmp_path: Path, data: dict[str, Any], b: Broker
                    ) -> AsyncIterator[tuple[httpx.AsyncClient, LiveSession]]:
-    """`mavswarm serve --mqtt` of one session, as serve_rest assembles it, on a free port."""
+    """`mavswarm serve --mqtt` of one session with its console, as serve_rest assembles it,
+    on a free port."""
     path = write_json(tmp_path / f"{data['id']}.json", data)
     url = parse_broker_url(b.url())
     async with live_hub([path]) as hub:
         (live,) = hub.sessions.values()
         _keys(hub, live.id)
         ready: asyncio.Future[str] = asyncio.get_running_loop().create_future()
-        server = asyncio.create_task(serve_asgi(create_app(hub), host="127.0.0.1", port=0,
+        app = create_app(hub)
+        console_for_hub(app, hub, [])
+        server = asyncio.create_task(serve_asgi(app, host="127.0.0.1", port=0,
                                                 on_ready=ready.set_result))
         try:
             async with gateway_session_bus(
@@ -201,7 +206,43 @@ async def test_links_stay_put_while_a_task_runs_and_hidden_faults_stay_hidden(
             assert hidden.status_code == 403 and "hidden part" in hidden.json()["detail"]
             assert (await client.get(base + route, headers=AGENT)).status_code == 403
             assert (await client.get(base + route, headers=ADMIN)).status_code == 200
+        # the console under serve: the same rules
+        console = f"/console/api/live/{live.id}"
+        assert (await client.get(f"{console}/link-faults", headers=AGENT)).status_code == 403
+        hidden = await client.get(f"{console}/link-faults", headers=OPERATOR)
+        assert hidden.status_code == 403 and "hidden part" in hidden.json()["detail"]
+        refused = await client.put(f"{console}/vehicles/{drone}/link", headers=ADMIN,
+                                   json={"loss": 0.5})
+        assert refused.status_code == 409 and "benchmark task t01" in refused.json()["detail"]
         over_mqtt = await request(op, "mavswarm/tasked", drone, "set_link", loss=0.5)
         assert over_mqtt["status"] == "rejected"
         assert "benchmark task t01" in over_mqtt["message"]
         assert live.swarm.faults.gate.faults.clean
+
+
+async def test_the_console_of_mavswarm_up_changes_links(swarm_factory: SwarmFactory) -> None:
+    swarm = await swarm_factory(2)
+    ready: asyncio.Future[tuple[str, str]] = asyncio.get_running_loop().create_future()
+    async with swarm_console(swarm, port=0, key="console-key",
+                             on_ready=lambda url, key: ready.set_result((url, key))):
+        url, key = await asyncio.wait_for(ready, 30.0)
+        async with httpx.AsyncClient(base_url=f"{url}/api/live/swarm", timeout=30.0,
+                                     headers={"X-API-Key": key}) as client:
+            wrong = await client.put("/vehicles/d1/link", json={"loss": 1.0},
+                                     headers={"X-API-Key": "nope"})
+            assert wrong.status_code == 401
+            bad = await client.put("/vehicles/d1/link", json={"downlink": {"loss": -1}})
+            assert bad.status_code == 422 and "link.vehicles.d1.downlink.loss" in \
+                bad.json()["detail"]
+            assert swarm.faults.gate.faults.clean
+            cut = await client.put("/vehicles/d1/link", json={"downlink": {"loss": 1.0}})
+            assert cut.status_code == 200, cut.text
+            assert cut.json()["downlink"]["loss"] == 1.0 and cut.json()["uplink"] == CLEAN
+            stats = swarm.faults.gate.stats
+
+            async def dropping() -> bool:
+                return stats.dropped > 0
+
+            await _until(dropping, "d1's telemetry frames dropped")  # sent at wall rates
+            whole = (await client.get("/link-faults")).json()["link_faults"]
+            assert set(whole["vehicles"]) == {"d1"} and whole["downlink"] == CLEAN

@@ -20,7 +20,8 @@ it. A task whose hidden part schedules faults (benchmark.task_faults) keeps them
 operators too: only an admin reads the link while it runs.
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Request
@@ -28,9 +29,21 @@ from fastapi import Depends, FastAPI, HTTPException, Request
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from emulator.link_faults import LinkFaultError
+from emulator.services import SwarmServices
 from llm_tools.input_limits import parse_json, preview
 
-__all__ = ["add_link_routes", "hidden_faults", "link_refusal"]
+__all__ = ["LinkTarget", "add_link_api", "add_link_routes", "hidden_faults", "link_refusal",
+           "session_link_target"]
+
+
+@dataclass(frozen=True)
+class LinkTarget:
+    """The swarm a link request acts on: its services, why a change is refused now (None:
+    it is not), and why this caller may not read the links now (None: it may)."""
+
+    services: SwarmServices
+    refusal: str | None = None
+    unreadable: str | None = None
 
 
 def link_refusal(live: LiveSession) -> str | None:
@@ -50,16 +63,13 @@ def hidden_faults(live: LiveSession) -> bool:
     return isinstance(raw, Mapping) and raw.get("faults") is not None
 
 
-def _readable(live: LiveSession, caller: Caller) -> None:
-    if caller.role is not Role.ADMIN and hidden_faults(live):
-        raise HTTPException(403, f"task {live.task.id} of session {live.id} schedules faults "
-                            "in its hidden part; only an admin reads the links while it runs")
-
-
-def _changeable(live: LiveSession) -> None:
-    refusal = link_refusal(live)
-    if refusal is not None:
-        raise HTTPException(409, refusal)
+def session_link_target(live: LiveSession, admin: bool) -> LinkTarget:
+    """A live session's links as a staff caller (`admin` or not) may use them now."""
+    unreadable = None
+    if not admin and hidden_faults(live):
+        unreadable = (f"task {live.task.id} of session {live.id} schedules faults in its "
+                      "hidden part; only an admin reads the links while it runs")
+    return LinkTarget(live.services, link_refusal(live), unreadable)
 
 
 async def _body(request: Request) -> Any:
@@ -69,69 +79,90 @@ async def _body(request: Request) -> Any:
     return parse_json(raw, "the body")
 
 
-def _drone(live: LiveSession, drone_id: str) -> str:
-    if drone_id not in live.services.drone_ids:
-        raise HTTPException(404, f"unknown drone {preview(drone_id)} in session {live.id!r}; "
-                            f"drones: {', '.join(live.services.drone_ids)}")
+def _drone(services: SwarmServices, drone_id: str) -> str:
+    if drone_id not in services.drone_ids:
+        raise HTTPException(404, f"unknown drone {preview(drone_id)}; drones: "
+                            f"{', '.join(services.drone_ids)}")
     return drone_id
 
 
-def add_link_routes(app: FastAPI, hub: Hub) -> None:
-    staff = require(hub, Role.OPERATOR, Role.ADMIN)
-    Staff = Annotated[Caller, Depends(staff)]
+def add_link_api(app: FastAPI, base: str, auth: Callable[..., Any],
+                 target: Callable[[str, Any], LinkTarget], tag: str) -> None:
+    """The four link routes under `base` (a path with a `{session_id}` parameter); `auth` is
+    the dependency that admits staff, `target(session_id, who)` the swarm they act on."""
+    Who = Annotated[Any, Depends(auth)]
 
-    @app.get("/sessions/{session_id}/link-faults", tags=["links"],
+    def readable(session_id: str, who: Any) -> LinkTarget:
+        found = target(session_id, who)
+        if found.unreadable is not None:
+            raise HTTPException(403, found.unreadable)
+        return found
+
+    def changeable(session_id: str, who: Any) -> LinkTarget:
+        found = target(session_id, who)
+        if found.refusal is not None:
+            raise HTTPException(409, found.refusal)
+        return found
+
+    def answer(session_id: str, services: SwarmServices, **fields: Any) -> dict[str, Any]:
+        return {"session": session_id, "time_s": round(services.clock_s(), 3), **fields}
+
+    @app.get(f"{base}/link-faults", tags=[tag],
              summary="The link faults in force (operator, admin)")
-    def get_links(session_id: str, caller: Staff) -> dict[str, Any]:
-        live = live_session(hub, caller, session_id)
-        _readable(live, caller)
-        return {"session": live.id, "time_s": round(live.services.clock_s(), 3),
-                "link_faults": live.services.operator_link_faults()}
+    def get_links(session_id: str, who: Who) -> dict[str, Any]:
+        services = readable(session_id, who).services
+        return answer(session_id, services, link_faults=services.operator_link_faults())
 
-    @app.put("/sessions/{session_id}/link-faults", tags=["links"],
+    @app.put(f"{base}/link-faults", tags=[tag],
              summary="Replace the link faults from now on (operator, admin)",
              description="The body is a session file's `link_faults` object: `seed`, profile "
                          "fields for both directions (`loss`, `latency_ms`, `jitter_ms`, "
                          "`duplicate`, `reorder`, `outages`), `uplink`/`downlink` objects, "
                          "`vehicles` (drone id -> the same). 422 names a bad field; 409 while "
                          "a benchmark task runs.")
-    async def put_links(session_id: str, request: Request, caller: Staff) -> dict[str, Any]:
-        live = live_session(hub, caller, session_id)
-        _changeable(live)
+    async def put_links(session_id: str, request: Request, who: Who) -> dict[str, Any]:
+        services = changeable(session_id, who).services
         body = await _body(request)
         try:
-            settings = live.services.operator_set_link_faults(body)
+            settings = services.operator_set_link_faults(body)
         except LinkFaultError as error:
             raise HTTPException(422, str(error)) from None
-        return {"session": live.id, "time_s": round(live.services.clock_s(), 3),
-                "link_faults": settings}
+        return answer(session_id, services, link_faults=settings)
 
-    @app.get("/sessions/{session_id}/vehicles/{drone_id}/link", tags=["links"],
+    @app.get(f"{base}/vehicles/{{drone_id}}/link", tags=[tag],
              summary="One vehicle's link in force (operator, admin)")
-    def get_vehicle_link(session_id: str, drone_id: str, caller: Staff) -> dict[str, Any]:
-        live = live_session(hub, caller, session_id)
-        drone = _drone(live, drone_id)
-        _readable(live, caller)
-        return {"session": live.id, "drone": drone,
-                "time_s": round(live.services.clock_s(), 3),
-                **live.services.operator_vehicle_link(drone)}
+    def get_vehicle_link(session_id: str, drone_id: str, who: Who) -> dict[str, Any]:
+        services = target(session_id, who).services
+        drone = _drone(services, drone_id)
+        services = readable(session_id, who).services
+        return answer(session_id, services, drone=drone,
+                      **services.operator_vehicle_link(drone))
 
-    @app.put("/sessions/{session_id}/vehicles/{drone_id}/link", tags=["links"],
+    @app.put(f"{base}/vehicles/{{drone_id}}/link", tags=[tag],
              summary="Set one vehicle's own link settings from now on (operator, admin)",
              description="The body: profile fields for both directions (`loss`, "
                          "`latency_ms`, `jitter_ms`, `duplicate`, `reorder`, `outages` as "
                          "[start_s, end_s) simulated seconds), `uplink`/`downlink` objects "
                          "for one; fields not given take the swarm-wide settings. 422 names "
                          "a bad field; 409 while a benchmark task runs.")
-    async def put_vehicle_link(session_id: str, drone_id: str, request: Request,
-                               caller: Staff) -> dict[str, Any]:
-        live = live_session(hub, caller, session_id)
-        drone = _drone(live, drone_id)
-        _changeable(live)
+    async def put_vehicle_link(session_id: str, drone_id: str, request: Request, who: Who
+                               ) -> dict[str, Any]:
+        drone = _drone(target(session_id, who).services, drone_id)
+        services = changeable(session_id, who).services
         body = await _body(request)
         try:
-            link = live.services.operator_set_vehicle_link(drone, body)
+            link = services.operator_set_vehicle_link(drone, body)
         except LinkFaultError as error:
             raise HTTPException(422, str(error)) from None
-        return {"session": live.id, "drone": drone,
-                "time_s": round(live.services.clock_s(), 3), **link}
+        return answer(session_id, services, drone=drone, **link)
+
+
+def add_link_routes(app: FastAPI, hub: Hub) -> None:
+    """The link routes of `mavswarm serve` under /sessions/{session_id}."""
+
+    def target(session_id: str, caller: Caller) -> LinkTarget:
+        return session_link_target(live_session(hub, caller, session_id),
+                                   admin=caller.role is Role.ADMIN)
+
+    add_link_api(app, "/sessions/{session_id}", require(hub, Role.OPERATOR, Role.ADMIN),
+                 target, "links")
