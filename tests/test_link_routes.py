@@ -22,7 +22,7 @@ from benchmark.server.hub import LiveSession
 from benchmark.server.serve import live_hub, mqtt_refusal, serve_asgi
 from console.cli import console_for_hub, swarm_console
 from mqtt_bus.schemas import SCHEMAS
-from mqtt_bus.swarm_bus import gateway_session_bus
+from mqtt_bus.swarm_bus import gateway_session_bus, swarm_session_bus
 from mqtt_bus.url import parse_broker_url
 from tests.bench_fixtures import small_session, write_json
 from tests.conftest import SwarmFactory
@@ -55,9 +55,10 @@ async def _serving(tmp_path: Path, data: dict[str, Any], b: Broker
         try:
             async with gateway_session_bus(
                     url, live.id, live.swarm, live.gateway, services=live.services,
-                    refusal=functools.partial(mqtt_refusal, hub, live.id)), \
+                    refusal=functools.partial(mqtt_refusal, hub, live.id)) as bus, \
                     httpx.AsyncClient(base_url=await asyncio.wait_for(ready, 30.0),
                                       timeout=30.0) as client:
+                assert await bus.connection.wait_connected(30.0)  # subscribed to services
                 yield client, live
         finally:
             server.cancel()
@@ -246,3 +247,23 @@ async def test_the_console_of_mavswarm_up_changes_links(swarm_factory: SwarmFact
             await _until(dropping, "d1's telemetry frames dropped")  # sent at wall rates
             whole = (await client.get("/link-faults")).json()["link_faults"]
             assert set(whole["vehicles"]) == {"d1"} and whole["downlink"] == CLEAN
+
+
+async def test_mavswarm_up_over_mqtt_sets_a_drones_link(broker: Broker,
+                                                        swarm_factory: SwarmFactory) -> None:
+    swarm = await swarm_factory(2)
+    async with swarm_session_bus(parse_broker_url(broker.url()), "up", swarm) as bus, \
+            listener(broker, "operator", "mavswarm/up/+/services_reply") as op:
+        assert await bus.connection.wait_connected(30.0)  # subscribed to services
+        bad = await request(op, "mavswarm/up", "d2", "set_link", uplink={"reorder": 2})
+        assert bad["status"] == "error" and "uplink.reorder must be" in bad["message"]
+        bad = await request(op, "mavswarm/up", "d2", "get_link", loss=0.5)
+        assert bad["status"] == "error" and "get_link takes no args" in bad["message"]
+        assert swarm.faults.gate.faults.clean
+        done = await request(op, "mavswarm/up", "d2", "set_link", loss=0.3,
+                             uplink={"duplicate": 0.1})
+        assert done["status"] == "ok", done
+        assert done["link"]["uplink"] == {**CLEAN, "loss": 0.3, "duplicate": 0.1}
+        assert done["link"]["downlink"] == {**CLEAN, "loss": 0.3}
+        assert swarm.faults.gate.profile(1, 0).loss == 0.3
+        assert swarm.faults.gate.profile(0, 0).clean

@@ -12,10 +12,9 @@ from typing import Any
 
 import pytest
 
-from benchmark.server.compat_tracking import RECENT_PERIODS
+from benchmark.server.compat_tracking import PERIODS_KEPT, RECENT_PERIODS, tracking_entry
+from benchmark.validators.reach import Visit
 from tests.compat_fixtures import KEYS, PlatClient, plat_server
-
-pytestmark = pytest.mark.mavsdk
 
 EXAMPLE = Path(__file__).parent / "reference" / "Example_Session_Target_Tracking.json"
 DRONE, OTHER, TARGET = "f2a74de4", "128b2f33", "ca02135e"  # Drone 1, Drone 2, Moving Target 1
@@ -44,6 +43,7 @@ async def _follow(agent: PlatClient, seconds: float) -> None:
         elapsed = details["sim_time_s"] - start
 
 
+@pytest.mark.mavsdk
 async def test_a_followed_moving_target_gets_the_reference_tracking_history(
         tmp_path: Path) -> None:
     async with plat_server(tmp_path, json.loads(EXAMPLE.read_text())) as served:
@@ -113,3 +113,31 @@ async def test_a_followed_moving_target_gets_the_reference_tracking_history(
             "moving_target_tracking"][TARGET]
         assert entry["tracking_status"] == "stale" and entry["active_period_start"] is None
         assert OTHER not in entry["by_drone"]
+
+
+def test_track_events_merge_into_the_reference_periods() -> None:
+    events = [(Visit(0.0, 5.0), "d1"), (Visit(3.0, 8.0), "d2"), (Visit(30.0, 31.0), "d1")]
+    entry = tracking_entry(events, now_s=40.0)
+    assert entry["recent_periods"] == [
+        {"start_at": 0.0, "end_at": 18.0, "last_update_at": 8.0, "event_count": 2,
+         "last_tracked_by": "d2", "tracked_by": ["d1", "d2"]},
+        {"start_at": 30.0, "end_at": 41.0, "last_update_at": 31.0, "event_count": 1,
+         "last_tracked_by": "d1", "tracked_by": ["d1"]}]
+    assert (entry["tracking_status"], entry["active_period_start"]) == ("tracked", 30.0)
+    assert (entry["first_tracked_at"], entry["last_tracked_at"], entry["last_tracked_by"]) == \
+        (0.0, 31.0, "d1")
+    assert (entry["tracked_by"], entry["total_track_events"]) == (["d1", "d2"], 3)
+    assert entry["by_drone"]["d2"] == {
+        "first_tracked_at": 3.0, "last_tracked_at": 8.0, "total_track_events": 1,
+        "recent_periods": [{"start_at": 3.0, "end_at": 18.0, "last_update_at": 8.0,
+                            "event_count": 1}]}
+    assert [p["start_at"] for p in entry["by_drone"]["d1"]["recent_periods"]] == [0.0, 30.0]
+    late = tracking_entry(events, now_s=41.5)
+    assert (late["tracking_status"], late["active_period_start"]) == ("stale", None)
+    # many separate periods: the reference keeps 10 and serialises the last 5
+    many = events + [(Visit(100.0 + 20 * k, 101.0 + 20 * k), "d1") for k in range(12)]
+    entry = tracking_entry(many, now_s=400.0)
+    assert PERIODS_KEPT == 10 and entry["total_track_events"] == 15
+    assert [p["start_at"] for p in entry["recent_periods"]] == \
+        [100.0 + 20 * k for k in range(7, 12)]
+    assert entry["tracking_status"] == "stale"

@@ -26,7 +26,7 @@ from benchmark.validators.geometry import Footprint
 from benchmark.validators.reach import Visit, flight_path, footprint, target_rows, visits
 
 __all__ = ["PERIODS_KEPT", "RECENT_PERIODS", "moving_target_tracking", "perceived_visits",
-           "tracking_fields"]
+           "tracking_entry", "tracking_fields"]
 
 PERIODS_KEPT = 10
 """Tracking periods the reference retains per target and per drone."""
@@ -111,10 +111,12 @@ def tracking_fields(ctx: CheckContext, target_id: str) -> dict[str, Any]:
             "last_tracked_at": None if last is None else round(last, 3)}
 
 
-def _entry(ctx: CheckContext, events: list[tuple[Visit, str]]) -> dict[str, Any]:
+def tracking_entry(events: Sequence[tuple[Visit, str]], now_s: float) -> dict[str, Any]:
+    """One target's serialised tracking entry from its track events (a stretch of flight in
+    reach and sight, and the drone), at simulated time now_s; `events` is not empty."""
     periods = _periods(events)
     last_visit, last_by = max(events, key=lambda e: (e[0].end_s, e[0].start_s))
-    status = _status(last_visit.end_s, ctx.t1_s)
+    status = _status(last_visit.end_s, now_s)
     by_drone: dict[str, dict[str, Any]] = {}
     for drone in dict.fromkeys(d for _, d in sorted(events, key=lambda e: e[0].start_s)):
         mine = [(v, d) for v, d in events if d == drone]
@@ -142,5 +144,5 @@ def moving_target_tracking(ctx: CheckContext) -> dict[str, dict[str, Any]]:
             continue
         events = _events(ctx, target.id)
         if events:
-            out[target.id] = _entry(ctx, events)
+            out[target.id] = tracking_entry(events, ctx.t1_s)
     return out
