@@ -207,6 +207,12 @@ async def test_links_stay_put_while_a_task_runs_and_hidden_faults_stay_hidden(
             assert hidden.status_code == 403 and "hidden part" in hidden.json()["detail"]
             assert (await client.get(base + route, headers=AGENT)).status_code == 403
             assert (await client.get(base + route, headers=ADMIN)).status_code == 200
+        # the API description: the link routes for staff only
+        described = {role: (await client.get("/openapi.json", headers=key)).json()["paths"]
+                     for role, key in (("agent", AGENT), ("operator", OPERATOR))}
+        assert not [p for p in described["agent"] if "link" in p]
+        assert {"/sessions/{session_id}/link-faults",
+                "/sessions/{session_id}/vehicles/{drone_id}/link"} <= set(described["operator"])
         # the console under serve: the same rules
         console = f"/console/api/live/{live.id}"
         assert (await client.get(f"{console}/link-faults", headers=AGENT)).status_code == 403
