@@ -7,7 +7,7 @@ perceives is ever looked up."""
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 from benchmark.server.compat_statistics import check_context
@@ -20,15 +20,18 @@ __all__ = ["compat_drone", "compat_nearby", "compat_session_fields", "entity_rec
 _FLIGHT = {"on_ground": "idle"}
 
 
-def entity_records(live: LiveSession, kind: str) -> dict[str, Mapping[str, Any]]:
+def entity_records(live: LiveSession, kind: str, only: Collection[str] | None = None
+                   ) -> dict[str, Mapping[str, Any]]:
     """The session file's records of `kind` ("drones", "targets" or "obstacles") by id; a
     moving target's `position` is where it is now, with its `tracking_status` and
-    `last_tracked_at` in the current task's window (compat_tracking)."""
+    `last_tracked_at` in the current task's window (compat_tracking). `only`: the ids whose
+    records are wanted (the others may come without their live fields)."""
     records = {record["id"]: record for record in live.session.data.get(kind, [])
                if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
     moving = live.swarm.fleet.targets if kind == "targets" else None
     if moving is not None:
-        current = moving.current()
+        current = {ident: at for ident, at in moving.current().items()
+                   if only is None or ident in only}
         ctx = check_context(live) if current else None
         for ident, (x, y, z) in current.items():
             if ident in records and ctx is not None:
@@ -74,7 +77,7 @@ def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, 
               if e.get("id") in states]
     out: dict[str, Any] = {"drones": drones}
     for kind in ("targets", "obstacles"):
-        records = entity_records(live, kind)
+        records = entity_records(live, kind, {e["id"] for e in perceived.get(kind, [])})
         out[kind] = [dict(records.get(e["id"], e)) for e in perceived.get(kind, [])]
     return out
 

@@ -24,11 +24,11 @@ def visible_records(live: LiveSession, caller: Caller, kind: str) -> list[dict[s
     """The session file's records of `kind` ("targets" or "obstacles") the caller may see, in
     file order: all of them for operators and admins, what its drones perceive for an
     agent."""
-    records = entity_records(live, kind)
     if caller.role is Role.AGENT:
         seen = perceived_ids(live, kind)
+        records = entity_records(live, kind, seen)
         return [dict(r) for ident, r in records.items() if ident in seen]
-    return [dict(r) for r in records.values()]
+    return [dict(r) for r in entity_records(live, kind).values()]
 
 
 def _of_type(live: LiveSession, caller: Caller, kind: str, entity_type: str

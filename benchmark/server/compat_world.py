@@ -37,7 +37,7 @@ def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dic
     if caller.role is Role.AGENT and entity_id not in perceived_ids(live, kind):
         raise HTTPException(404, f"no {kind[:-1]} {preview(entity_id)} within your drones' "
                             "perception")
-    record = entity_records(live, kind).get(entity_id)
+    record = entity_records(live, kind, (entity_id,)).get(entity_id)
     if record is None:
         raise HTTPException(404, f"unknown {kind[:-1]} {preview(entity_id)}")
     return dict(record)
