@@ -195,6 +195,7 @@ async def test_links_stay_put_while_a_task_runs_and_hidden_faults_stay_hidden(
         tmp_path: Path, broker: Broker) -> None:
     data = {**small_session(["takeoff_hold"]), "id": "tasked"}
     data["tasks"][0]["faults"] = {"link": {"loss": 0.2}}
+    data["link_faults"] = {"seed": 9, "downlink": {"latency_ms": 5}}
     async with _serving(tmp_path, data, broker) as (client, live), \
             listener(broker, "operator", "mavswarm/tasked/+/services_reply") as op:
         drone = live.services.drone_ids[0]
@@ -206,7 +207,9 @@ async def test_links_stay_put_while_a_task_runs_and_hidden_faults_stay_hidden(
             hidden = await client.get(base + route, headers=OPERATOR)
             assert hidden.status_code == 403 and "hidden part" in hidden.json()["detail"]
             assert (await client.get(base + route, headers=AGENT)).status_code == 403
-            assert (await client.get(base + route, headers=ADMIN)).status_code == 200
+            shown = await client.get(base + route, headers=ADMIN)
+            assert shown.status_code == 200  # the session file's link faults, served
+            assert shown.json().get("link_faults", shown.json())["downlink"]["latency_ms"] == 5
         # the API description: the link routes for staff only
         described = {role: (await client.get("/openapi.json", headers=key)).json()["paths"]
                      for role, key in (("agent", AGENT), ("operator", OPERATOR))}
@@ -224,7 +227,9 @@ async def test_links_stay_put_while_a_task_runs_and_hidden_faults_stay_hidden(
         over_mqtt = await request(op, "mavswarm/tasked", drone, "set_link", loss=0.5)
         assert over_mqtt["status"] == "rejected"
         assert "benchmark task t01" in over_mqtt["message"]
-        assert live.swarm.faults.gate.faults.clean
+        assert live.swarm.faults.gate.faults.to_json() == {
+            "seed": 9, "uplink": CLEAN, "downlink": {**CLEAN, "latency_ms": 5.0},
+            "vehicles": {}}
 
 
 async def test_the_console_of_mavswarm_up_changes_links(swarm_factory: SwarmFactory) -> None:

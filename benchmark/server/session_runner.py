@@ -10,7 +10,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
+from benchmark.episode import session_link_faults, swarm_gateway
 from benchmark.importer import import_session
 from benchmark.server.hub import LiveSession
 from benchmark.session_file import Session, TaskSpec, session_from_dict
@@ -67,7 +67,8 @@ class SessionRunner:
         self._stacks: dict[str, contextlib.AsyncExitStack] = {}
 
     async def start(self, session: Session) -> LiveSession:
-        """Start `session` at its first task. Nothing is left running when it fails: a
+        """Start `session` at its first task, with the session file's link faults. Nothing is
+        left running when it fails: a
         session whose first task is unusable raises ValueError before its swarm starts, and a
         swarm that cannot start (parameters out of range, no port) is closed again."""
         if session.id in self._stacks:
@@ -76,7 +77,8 @@ class SessionRunner:
         stack = contextlib.AsyncExitStack()
         try:
             swarm, services, gateway = await stack.enter_async_context(
-                swarm_gateway(session, self.physics_hz))
+                swarm_gateway(session, self.physics_hz,
+                              link_faults=session_link_faults(session)))
         except BaseException:
             await stack.aclose()
             raise
