@@ -119,6 +119,21 @@ async def test_a_request_that_cannot_be_parsed_reaches_no_tool() -> None:
     assert reached == []
 
 
+async def test_link_commands_where_the_links_are_real_are_refused() -> None:
+    async def tools_for(drone: str) -> AgentTools:
+        raise AssertionError("link commands reach no agent tool")
+
+    conn = BusConnection(parse_broker_url("mqtt://127.0.0.1:1"), client_id="t",
+                         status_topic="s", online_payload=b"1", offline_payload=b"0")
+    bridged = CommandService(SessionTopics("mavswarm", "fleet"), conn, ["d1"], tools_for)
+    for tool in ("get_link", "set_link"):
+        reply = await bridged.run("d1", json.dumps({"id": "x", "tool": tool}).encode())
+        assert reply["status"] == "rejected" and "real radio links" in reply["message"]
+        jsonschema.validate(reply, SCHEMAS["services_reply"])
+    unknown = await bridged.run("d1", b'{"id": "x", "tool": "set_links"}')
+    assert unknown["status"] == "error" and "get_link, set_link" in unknown["message"]
+
+
 async def test_publishing_never_waits_while_no_broker_answers() -> None:
     port = unused_tcp_port()  # nobody listens here
     conn = BusConnection(parse_broker_url(f"mqtt://127.0.0.1:{port}"), client_id="t",
