@@ -158,9 +158,9 @@ def _private_members() -> set[str]:
                 for inner in ast.walk(node):
                     if isinstance(inner, ast.FunctionDef):
                         names.add(inner.name)
-                    elif isinstance(inner, ast.Attribute) and isinstance(inner.value, ast.Name):
-                        if inner.value.id == "self":
-                            names.add(inner.attr)
+                    elif (isinstance(inner, ast.Attribute) and isinstance(inner.value, ast.Name)
+                          and inner.value.id == "self"):
+                        names.add(inner.attr)
     return {n for n in names if n.startswith("_") and not n.startswith("__")}
 
 
