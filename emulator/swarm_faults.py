@@ -61,7 +61,7 @@ class SwarmFaults:
             if record:
                 up, down = self.gate.profile(k, UPLINK), self.gate.profile(k, 1 - UPLINK)
                 ap.event("link_faults", seed=faults.seed, uplink=up.to_json(),
-                          downlink=down.to_json())
+                         downlink=down.to_json())
             for name, direction in DIRECTIONS.items():
                 for start, end in self.gate.profile(k, direction).outages:
                     if end <= now + _EPS:
