@@ -94,6 +94,20 @@ def test_an_obstacle_on_the_way_home_ends_the_sequence_in_hold() -> None:
         "obstacle_stop"]
 
 
+def test_failures_land_or_fall_through_their_phases() -> None:
+    fleet, ap = _fleet()
+    _airborne_at(fleet, ap, (30.0, 0.0, 20.0))
+    ap.failures.fail("gps", "test")  # no position: PX4 lands where it is
+    assert ap.mode is FlightMode.LAND
+    assert _phases_until(fleet, ap, lambda: not ap.in_air) == [
+        Phase.DESCENDING, Phase.LANDING, Phase.IDLE]
+    fleet, ap = _fleet()
+    _airborne_at(fleet, ap, (30.0, 0.0, 20.0))
+    ap.failures.fail("motor", "test")  # comes down at once, faster than a landing
+    assert ap.phase is Phase.FALLING and ap.landed_state is LandedState.LANDING
+    assert _phases_until(fleet, ap, lambda: not ap.in_air) == [Phase.FALLING, Phase.IDLE]
+
+
 def test_arming_without_take_off_sets_the_preflight_timer() -> None:
     fleet, ap = _fleet()
     ap.arm()
