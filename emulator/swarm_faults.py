@@ -60,8 +60,8 @@ class SwarmFaults:
             k = ap.k
             if record:
                 up, down = self.gate.profile(k, UPLINK), self.gate.profile(k, 1 - UPLINK)
-                ap._event("link_faults", seed=faults.seed, uplink=up.to_json(),
-                          downlink=down.to_json())
+                ap.event("link_faults", seed=faults.seed, uplink=up.to_json(),
+                         downlink=down.to_json())
             for name, direction in DIRECTIONS.items():
                 for start, end in self.gate.profile(k, direction).outages:
                     if end <= now + _EPS:
@@ -92,14 +92,14 @@ class SwarmFaults:
     def _outage_start(self, ap: Autopilot, direction: str, start_s: float, end_s: float
                       ) -> Callable[[], None]:
         def fire() -> None:
-            ap._event("link_outage", direction=direction, until_s=end_s)
+            ap.event("link_outage", direction=direction, until_s=end_s)
             if direction == "uplink":
                 self._schedule_link_check(ap)
         return fire
 
     def _outage_end(self, ap: Autopilot, direction: str) -> Callable[[], None]:
         def fire() -> None:
-            ap._event("link_restored", direction=direction)
+            ap.event("link_restored", direction=direction)
             if not self.gate.link_down(ap.k, self._fleet.now_s):
                 ap.failures.data_link_regained()
         return fire

@@ -1,18 +1,20 @@
-"""Mission execution for one autopilot: item by item, with progress and pauses."""
+"""Mission execution for one autopilot: item by item, with progress and pauses.
+
+A positional item is a goal of one of the mission phases (emulator.flight.vehicle_state.Phase);
+its arrival comes back through `on_arrived`, a hold or loiter time through `on_timer`.
+"""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
 
 from emulator.flight import dynamics as dy
 from emulator.flight.mission import Cmd, MissionItem
 from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import CommandRefused, Severity
-
-if TYPE_CHECKING:
-    from emulator.flight.autopilot import Autopilot
+from emulator.flight.vehicle_control import VehicleControl
+from emulator.flight.vehicle_state import Phase, TimerAction
 
 __all__ = ["MissionRunner", "MissionState"]
 
@@ -30,14 +32,13 @@ class MissionState:
 class MissionRunner:
     """The stored mission of one vehicle and where it stands in it."""
 
-    def __init__(self, autopilot: Autopilot) -> None:
+    def __init__(self, autopilot: VehicleControl) -> None:
         self.ap = autopilot
         self.items: tuple[MissionItem, ...] = ()
         self.current = 0
         self.state = MissionState.NO_MISSION
         self.active = False
         self._awaiting_yaw = False
-        self._wait_action: Callable[[], None] | None = None
 
     @property
     def total(self) -> int:
@@ -75,7 +76,7 @@ class MissionRunner:
             raise CommandRefused(f"Mission refused: no item {first}")
         if first is not None:
             self.current = first
-        self.ap._set_mode(FlightMode.MISSION)
+        self.ap.switch_mode(FlightMode.MISSION)
         if self.ap.armed:
             self.start_or_resume()
 
@@ -87,19 +88,19 @@ class MissionRunner:
             self.current = 0
         self.active = True
         self.state = MissionState.ACTIVE
-        ap._event("mission_start", item=self.current, total=self.total)
+        ap.event("mission_start", item=self.current, total=self.total)
         if ap.in_air:
             self._execute(self.current)
             return
         item = self.items[self.current]
         x, y, _ = ap.position_m
         if item.command == Cmd.NAV_TAKEOFF:
-            _, _, z = item.local_target_m(ap.fleet.world.origin, ap.home_m, ap.position_m)
-            seq = self.current
-            ap.begin_climb((x, y, z), lambda: self._reached_then_next(seq))
+            _, _, z = self._target(item)
+            ap.state.item_seq = self.current
+            ap.begin_climb((x, y, z), Phase.MISSION_TAKEOFF)
         else:
-            alt = ap.home_m[2] + ap.params["MIS_TAKEOFF_ALT"]
-            ap.begin_climb((x, y, alt), lambda: self._execute(self.current))
+            alt = ap.state.home_m[2] + ap.params["MIS_TAKEOFF_ALT"]
+            ap.begin_climb((x, y, alt), Phase.MISSION_CLIMB)
         ap.listener.on_mission_current()
 
     def pause(self) -> None:
@@ -110,17 +111,49 @@ class MissionRunner:
             self._cancel_wait()
             self.ap.listener.on_mission_current()
 
-    def _wait(self, delay_s: float, then: Callable[[], None]) -> None:
-        """Run `then` after delay_s of simulated time (a hold, loiter or delay item)."""
-        self._wait_action = then
-        self.ap._set_timer(delay_s, then, busy=True)
+    def _wait(self, delay_s: float, then: TimerAction, seq: int) -> None:
+        """`then` for item `seq` after delay_s of simulated time (a hold, loiter or delay)."""
+        self.ap.set_timer(delay_s, then, busy=True, seq=seq)
 
     def _cancel_wait(self) -> None:
         """A paused mission's pending hold must not fire into a later flight or mission."""
-        action, self._wait_action = self._wait_action, None
-        if action is not None and self.ap._timer_action is action:
-            self.ap._cancel_timer()
-            self.ap._refresh_busy()
+        if self.ap.state.timer in (TimerAction.MISSION_NEXT, TimerAction.MISSION_REACHED_NEXT):
+            self.ap.cancel_timer()
+            self.ap.refresh_busy()
+
+    def on_timer(self, action: TimerAction, seq: int) -> None:
+        """The wait of item `seq` ended."""
+        if action is TimerAction.MISSION_NEXT:
+            self._execute(seq + 1)
+        elif action is TimerAction.MISSION_REACHED_NEXT:
+            self._reached_then_next(seq)
+
+    def on_arrived(self, phase: Phase, seq: int, wait_s: float) -> None:
+        """The goal of item `seq` (of mission phase `phase`) is reached."""
+        if phase is Phase.MISSION_CLIMB:
+            self._execute(self.current)
+        elif phase is Phase.MISSION_TAKEOFF:
+            self._reached_then_next(seq)
+        elif phase is Phase.MISSION_WAYPOINT:
+            if not self.active:
+                return
+            self._reached(seq)
+            if wait_s > 0:
+                self._wait(wait_s, TimerAction.MISSION_NEXT, seq)
+            else:
+                self._execute(seq + 1)
+        elif phase is Phase.MISSION_LOITER:
+            if self.active:
+                self._wait(wait_s, TimerAction.MISSION_REACHED_NEXT, seq)
+        elif phase is Phase.MISSION_LOITER_UNLIMITED:
+            self._reached(seq)
+
+    def _fly_to_item(self, target_m: tuple[float, float, float], phase: Phase, seq: int,
+                     wait_s: float = 0.0, *, tracking: int = dy.TRACK_SETTLE,
+                     yaw_deg: float = math.nan) -> None:
+        """Fly to item `seq` as `phase`; `wait_s` is the hold or loiter time there."""
+        self.ap.state.item_seq, self.ap.state.item_wait_s = seq, wait_s
+        self.ap.fly_to(target_m, phase=phase, tracking=tracking, yaw_deg=yaw_deg)
 
     # ---------------------------------------------------------------- progress
     def _execute(self, seq: int) -> None:
@@ -136,7 +169,7 @@ class MissionRunner:
         handler(self, item)
 
     def _reached(self, seq: int) -> None:
-        self.ap._event("mission_item_reached", item=seq)
+        self.ap.event("mission_item_reached", item=seq)
         self.ap.listener.on_mission_item_reached(seq)
 
     def _reached_then_next(self, seq: int) -> None:
@@ -149,8 +182,8 @@ class MissionRunner:
         self.active = False
         self.state = MissionState.COMPLETE
         self.current = max(0, self.total - 1)
-        self.ap._event("mission_complete")
-        self.ap._say(Severity.INFO, "Mission finished")
+        self.ap.event("mission_complete")
+        self.ap.say(Severity.INFO, "Mission finished")
         self.ap.listener.on_mission_current()
 
     def _is_last_nav(self, seq: int) -> bool:
@@ -158,7 +191,7 @@ class MissionRunner:
 
     def _target(self, item: MissionItem) -> tuple[float, float, float]:
         ap = self.ap
-        return item.local_target_m(ap.fleet.world.origin, ap.home_m, ap.position_m)
+        return item.local_target_m(ap.fleet.world.origin, ap.state.home_m, ap.position_m)
 
     # ------------------------------------------------------------ per command
     def _waypoint(self, item: MissionItem) -> None:
@@ -166,37 +199,21 @@ class MissionRunner:
         last = self._is_last_nav(seq)
         tracking = dy.TRACK_SETTLE if last or hold_s > 0 else dy.TRACK_PASS
         yaw = item.param4 if math.isfinite(item.param4) else math.nan
-
-        def arrived() -> None:
-            if not self.active:
-                return
-            self._reached(seq)
-            if hold_s > 0:
-                self._wait(hold_s, lambda: self._execute(seq + 1))
-            else:
-                self._execute(seq + 1)
-
-        self.ap.fly_to(self._target(item), then=arrived, tracking=tracking, yaw_deg=yaw)
+        self._fly_to_item(self._target(item), Phase.MISSION_WAYPOINT, seq, hold_s,
+                          tracking=tracking, yaw_deg=yaw)
 
     def _takeoff(self, item: MissionItem) -> None:
         x, y, _ = self.ap.position_m
         _, _, z = self._target(item)
-        seq = item.seq
-        self.ap.fly_to((x, y, max(z, self.ap.position_m[2])),
-                       then=lambda: self._reached_then_next(seq))
+        self._fly_to_item((x, y, max(z, self.ap.position_m[2])), Phase.MISSION_TAKEOFF,
+                          item.seq)
 
     def _loiter_time(self, item: MissionItem) -> None:
-        seq, wait_s = item.seq, max(0.0, item.param1)
-
-        def arrived() -> None:
-            if self.active:
-                self._wait(wait_s, lambda: self._reached_then_next(seq))
-
-        self.ap.fly_to(self._target(item), then=arrived)
+        self._fly_to_item(self._target(item), Phase.MISSION_LOITER, item.seq,
+                          max(0.0, item.param1))
 
     def _loiter_unlimited(self, item: MissionItem) -> None:
-        seq = item.seq
-        self.ap.fly_to(self._target(item), then=lambda: self._reached(seq))
+        self._fly_to_item(self._target(item), Phase.MISSION_LOITER_UNLIMITED, item.seq)
 
     def _land(self, item: MissionItem) -> None:
         x, y, _ = self._target(item)
@@ -210,11 +227,10 @@ class MissionRunner:
     def _rtl(self, item: MissionItem) -> None:
         self._reached(item.seq)
         self._complete()
-        self.ap._start_rtl()
+        self.ap.start_rtl()
 
     def _delay(self, item: MissionItem) -> None:
-        seq = item.seq
-        self._wait(max(0.0, item.param1), lambda: self._execute(seq + 1))
+        self._wait(max(0.0, item.param1), TimerAction.MISSION_NEXT, item.seq)
 
     def _yaw(self, item: MissionItem) -> None:
         self._awaiting_yaw = True
@@ -224,7 +240,7 @@ class MissionRunner:
                             direction=-1 if item.param3 < 0 else 1)
         except CommandRefused as refusal:
             self._awaiting_yaw = False
-            self.ap._say(Severity.WARNING, str(refusal))
+            self.ap.say(Severity.WARNING, str(refusal))
             self._execute(item.seq + 1)
 
     def on_yaw_reached(self) -> None:
@@ -237,7 +253,7 @@ class MissionRunner:
             self.ap.change_speed(item.param1 if math.isfinite(item.param1) else 1.0,
                                  item.param2)
         except CommandRefused as refusal:
-            self.ap._say(Severity.WARNING, str(refusal))
+            self.ap.say(Severity.WARNING, str(refusal))
         self._execute(item.seq + 1)
 
     def _photo(self, item: MissionItem) -> None:

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from emulator.flight.battery import PHOTO_COST_PCT
+from emulator.flight.fleet_view import FleetView
+from emulator.flight.params import ParamStore
 
-if TYPE_CHECKING:
-    from emulator.flight.autopilot import Autopilot
-
-__all__ = ["ImageCapture", "capture_image"]
+__all__ = ["CameraCarrier", "ImageCapture", "capture_image"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -24,18 +23,40 @@ class ImageCapture:
     targets: tuple[str, ...]
 
 
-def capture_image(ap: Autopilot) -> ImageCapture:
-    """Take a photo: the footprint is the vehicle's sensor disc (SIM_SENS_RAD)."""
+class CameraCarrier(Protocol):
+    """The vehicle a camera is on (the autopilot)."""
+
+    @property
+    def k(self) -> int: ...
+    @property
+    def vehicle_id(self) -> str: ...
+    @property
+    def fleet(self) -> FleetView: ...
+    @property
+    def params(self) -> ParamStore: ...
+    @property
+    def position_m(self) -> tuple[float, float, float]: ...
+    @property
+    def now_s(self) -> float: ...
+    def event(self, kind: str, **data: object) -> None: ...
+
+
+def _position(fleet: FleetView, k: int) -> tuple[float, float, float]:
+    p = fleet.dyn.position_m[k]
+    return float(p[0]), float(p[1]), float(p[2])
+
+
+def capture_image(ap: CameraCarrier, index: int) -> ImageCapture:
+    """Take photo number `index`: the footprint is the vehicle's sensor disc (SIM_SENS_RAD)."""
     fleet, k = ap.fleet, ap.k
     position = ap.position_m
-    others = {other.vehicle_id: other.position_m for other in fleet.autopilots if other.k != k}
+    others = {vid: _position(fleet, j) for vid, j in fleet.index_by_id.items() if j != k}
     seen = fleet.sensor.sense(position, ap.params["SIM_SENS_RAD"], vehicles=others,
                               exclude_vehicle=ap.vehicle_id)
-    ap.photo_count += 1
     fleet.bat.spend(k, PHOTO_COST_PCT)
-    capture = ImageCapture(ap.photo_count, ap.now_s, position, float(fleet.dyn.yaw_deg[k]),
+    capture = ImageCapture(index, ap.now_s, position, float(fleet.dyn.yaw_deg[k]),
                            tuple(t.id for t in seen.targets))
-    ap._event(
+    ap.event(
         "photo", index=capture.index, position_m=list(position), targets=list(capture.targets),
         obstacles=[o.id for o in seen.obstacles], vehicles=[v.id for v in seen.vehicles],
     )

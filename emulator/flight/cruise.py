@@ -11,7 +11,6 @@ applies those steps in one go, still recording every step of the trajectory.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,9 +23,7 @@ from emulator.flight.dynamics import (
     TRACK_NONE,
     along_line_limit,
 )
-
-if TYPE_CHECKING:
-    from emulator.flight.fleet import Fleet
+from emulator.flight.fleet_view import FleetView
 
 __all__ = ["steady_steps"]
 
@@ -35,7 +32,7 @@ AT_GOAL_M = 1e-6
 ALIGNED_COS_TOL = 1e-9  # 1 - cos of the largest angle between velocity and goal direction
 
 
-def steady_steps(fleet: Fleet, limit: int) -> int:
+def steady_steps(fleet: FleetView, limit: int) -> int:
     """Steps (>= 2) the fleet can fast-forward through, or 0 if it must step normally."""
     if limit < 2:
         return 0
@@ -86,7 +83,7 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
     return int(horizon) if horizon >= 2.0 else 0
 
 
-def _battery_horizon_steps(fleet: Fleet, moving: np.ndarray) -> float:
+def _battery_horizon_steps(fleet: FleetView, moving: np.ndarray) -> float:
     """Steps before any battery could cross a level (low, critical, emergency, empty, full)."""
     bat, dyn, dt = fleet.bat, fleet.dyn, fleet.dt_s
     rate = bat.drain_pct_s(fleet.airborne, fleet.armed, dyn.airspeed_m_s(),

@@ -17,14 +17,11 @@ vehicle down between tasks (emulator.flight.operator).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.refusal import CommandRefused, Severity
-
-if TYPE_CHECKING:
-    from emulator.flight.autopilot import Autopilot
+from emulator.flight.vehicle_control import VehicleControl
+from emulator.flight.vehicle_state import Phase
 
 __all__ = ["DLL_ACTIONS", "FAILURE_KINDS", "VehicleFailures"]
 
@@ -38,7 +35,7 @@ GROUND_GOAL_Z_M = -1.0  # a descent aims below the ground until touchdown
 class VehicleFailures:
     """The failures in force on one vehicle."""
 
-    def __init__(self, ap: Autopilot) -> None:
+    def __init__(self, ap: VehicleControl) -> None:
         self._ap = ap
         self.gps_off = False
         self.motor_off = False
@@ -74,27 +71,27 @@ class VehicleFailures:
         ap = self._ap
         if kind not in FAILURE_KINDS:
             raise ValueError(f"unknown failure {kind!r} (known: {', '.join(FAILURE_KINDS)})")
-        ap._event("failure", unit=kind, source=source, position_m=list(ap.position_m))
+        ap.event("failure", unit=kind, source=source, position_m=list(ap.position_m))
         if kind == "gps":
             self.gps_off = True
             if ap.in_air:
-                ap._event("failsafe", reason="gps_lost")
-                ap._say(Severity.CRITICAL, "GPS lost: no position estimate, landing")
-                ap._start_land(None)
+                ap.event("failsafe", reason="gps_lost")
+                ap.say(Severity.CRITICAL, "GPS lost: no position estimate, landing")
+                ap.start_land(None)
         elif kind == "motor":
             self.motor_off = True
             if ap.in_air:
-                ap._event("failsafe", reason="motor_failure")
-                ap._say(Severity.EMERGENCY, "Motor failure: vehicle going down")
-                ap.mission.pause()
-                ap._set_mode(FlightMode.LAND)
+                ap.event("failsafe", reason="motor_failure")
+                ap.say(Severity.EMERGENCY, "Motor failure: vehicle going down")
+                ap.pause_mission()
+                ap.switch_mode(FlightMode.LAND)
                 x, y, _ = ap.position_m
-                ap.fly_to((x, y, GROUND_GOAL_Z_M), tracking=dy.TRACK_NONE,
+                ap.fly_to((x, y, GROUND_GOAL_Z_M), phase=Phase.FALLING, tracking=dy.TRACK_NONE,
                           descent_m_s=MOTOR_DESCENT_M_S)
-                ap.landed_state = LandedState.LANDING
+                ap.state.landed_state = LandedState.LANDING
             elif ap.armed:
                 ap.disarm()
-            ap._say(Severity.EMERGENCY, "Motor failure: vehicle out of service")
+            ap.say(Severity.EMERGENCY, "Motor failure: vehicle out of service")
         elif kind == "battery":
             bat, k = ap.fleet.bat, ap.k
             bat.pct[k] = max(0.0, min(float(bat.pct[k]),
@@ -102,7 +99,7 @@ class VehicleFailures:
             before = int(bat.level[k])
             bat.step(0.0, ap.fleet.airborne, ap.fleet.armed, ap.fleet.dyn.airspeed_m_s(),
                      ap.fleet.dyn.velocity_m_s[:, 2])
-            ap._say(Severity.CRITICAL, f"Battery failure: {ap.battery_pct:.0f}% remaining")
+            ap.say(Severity.CRITICAL, f"Battery failure: {ap.battery_pct:.0f}% remaining")
             if int(bat.level[k]) != before:
                 ap.on_battery_level(int(bat.level[k]))
         else:
@@ -113,10 +110,10 @@ class VehicleFailures:
         """A failure cleared by injection of 'ok' (GPS and MAVLink signal only)."""
         if kind == "gps" and self.gps_off:
             self.gps_off = False
-            self._ap._event("failure_cleared", unit=kind, source=source)
+            self._ap.event("failure_cleared", unit=kind, source=source)
         elif kind == "mavlink" and self.mavlink_off:
             self._set_mavlink(False)
-            self._ap._event("failure_cleared", unit=kind, source=source)
+            self._ap.event("failure_cleared", unit=kind, source=source)
 
     # --------------------------------------------------------- link failsafe
     def data_link_lost(self, timeout_s: float) -> None:
@@ -126,21 +123,19 @@ class VehicleFailures:
             return
         self.link_lost = True
         action = DLL_ACTIONS.get(int(ap.params["NAV_DLL_ACT"]))
-        ap._event("link_lost", timeout_s=timeout_s, action=action or "none")
+        ap.event("link_lost", timeout_s=timeout_s, action=action or "none")
         if action is None or not ap.in_air or self.motor_off:
             return
-        ap._event("failsafe", reason="data_link_lost", action=action)
-        ap._say(Severity.CRITICAL, f"Data link lost: failsafe {action}")
+        ap.event("failsafe", reason="data_link_lost", action=action)
+        ap.say(Severity.CRITICAL, f"Data link lost: failsafe {action}")
         if action == "hold":
-            ap.mission.pause()
-            ap._set_mode(FlightMode.HOLD)
-            ap.brake_and_hold()
-        elif action == "return" and ap.mode is not FlightMode.RTL:
-            ap._start_rtl()
-        elif action == "land" and ap.mode is not FlightMode.LAND:
-            ap._start_land(None)
+            ap.hold()
+        elif action == "return" and ap.state.mode is not FlightMode.RTL:
+            ap.start_rtl()
+        elif action == "land" and ap.state.mode is not FlightMode.LAND:
+            ap.start_land(None)
 
     def data_link_regained(self) -> None:
         if self.link_lost:
             self.link_lost = False
-            self._ap._event("link_regained")
+            self._ap.event("link_regained")

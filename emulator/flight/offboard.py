@@ -10,15 +10,12 @@ set-points holds at the fence.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from emulator.flight import dynamics as dy
 from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.refusal import CommandRefused, Severity
-
-if TYPE_CHECKING:
-    from emulator.flight.autopilot import Autopilot
+from emulator.flight.vehicle_control import VehicleControl
 
 __all__ = ["OffboardControl"]
 
@@ -28,7 +25,7 @@ Vec3 = tuple[float, float, float]
 class OffboardControl:
     """The latest set-point of one vehicle and whether it is being flown."""
 
-    def __init__(self, autopilot: Autopilot) -> None:
+    def __init__(self, autopilot: VehicleControl) -> None:
         self.ap = autopilot
         self._setpoint: tuple[str, Vec3, float] | None = None
         self._received_wall_s = -math.inf
@@ -39,18 +36,18 @@ class OffboardControl:
         ENU m/s) set-point. Raises CommandRefused for a position outside the geofence."""
         if kind == "position":
             vector = (vector[0], vector[1], max(vector[2], 0.0))
-            check_target(self.ap.params, self.ap.home_m, vector, "Offboard set-point")
+            check_target(self.ap.params, self.ap.state.home_m, vector, "Offboard set-point")
         self._setpoint = (kind, vector, yaw_deg)
         self._received_wall_s = wall_now_s
-        if self.ap.mode is FlightMode.OFFBOARD and self._setpoint != self._applied:
+        if self.ap.state.mode is FlightMode.OFFBOARD and self._setpoint != self._applied:
             self.apply()
 
     def enter(self, wall_now_s: float) -> None:
         ap = self.ap
         if wall_now_s - self._received_wall_s > ap.params["COM_OF_LOSS_T"]:
             raise CommandRefused("Offboard refused: no recent setpoint")
-        ap.mission.pause()
-        ap._set_mode(FlightMode.OFFBOARD)
+        ap.pause_mission()
+        ap.switch_mode(FlightMode.OFFBOARD)
         self.apply()
 
     def apply(self) -> None:
@@ -66,21 +63,19 @@ class OffboardControl:
             if not rising:
                 return
             ap.fleet.airborne[k] = True
-            ap.landed_state = LandedState.IN_AIR
-            ap._cancel_timer()
-            ap._update_charging()
-            ap._event("takeoff", altitude_m=vec[2] if kind == "position" else None)
+            ap.state.landed_state = LandedState.IN_AIR
+            ap.cancel_timer()
+            ap.update_charging()
+            ap.event("takeoff", altitude_m=vec[2] if kind == "position" else None)
         if kind == "position":
             ap.fly_to(vec, tracking=dy.TRACK_SETTLE, yaw_deg=yaw)
         else:
-            ap._on_arrive = None
-            ap._blockage = None
+            ap.drop_goal()
             dyn.control[k] = dy.CONTROL_VELOCITY
             dyn.velocity_sp_m_s[k] = vec
             dyn.tracking[k] = dy.TRACK_NONE
             dyn.goal_yaw_deg[k] = yaw
-            ap._goal_pending = False
-            ap._refresh_busy()
+            ap.refresh_busy()
 
     def check_fence(self) -> None:
         """Geofence for velocity set-points: hold once beyond the ceiling or the fence radius
@@ -88,25 +83,25 @@ class OffboardControl:
         ap = self.ap
         p, k = ap.params, ap.k
         x, y, z = ap.position_m
-        hx, hy, hz = ap.home_m
+        hx, hy, hz = ap.state.home_m
         vx, vy, vz = (float(v) for v in ap.fleet.dyn.velocity_sp_m_s[k])
         above = z - hz > p["GF_MAX_VER_DIST"] and vz > 0.0
         outside = math.hypot(x - hx, y - hy) > p["GF_MAX_HOR_DIST"] and (
             (x - hx) * vx + (y - hy) * vy > 0.0
         )
         if above or outside:
-            ap._event("failsafe", reason="geofence")
-            ap._say(Severity.WARNING, "Geofence reached: holding")
+            ap.event("failsafe", reason="geofence")
+            ap.say(Severity.WARNING, "Geofence reached: holding")
             self._applied = None
             ap.hold()
 
     def check_link(self, wall_now_s: float) -> None:
         """Offboard failsafe: hold when set-points stop arriving (wall-clock timeout)."""
         ap = self.ap
-        if ap.mode is FlightMode.OFFBOARD and (
+        if ap.state.mode is FlightMode.OFFBOARD and (
             wall_now_s - self._received_wall_s > ap.params["COM_OF_LOSS_T"]
         ):
-            ap._event("failsafe", reason="offboard_lost")
-            ap._say(Severity.WARNING, "Offboard setpoints lost: holding")
+            ap.event("failsafe", reason="offboard_lost")
+            ap.say(Severity.WARNING, "Offboard setpoints lost: holding")
             self._applied = None
             ap.hold()

@@ -22,10 +22,8 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
     """Put the vehicle disarmed on the ground at (x, y), at rest, in HOLD."""
     fleet, k, dyn = ap.fleet, ap.k, ap.fleet.dyn
     ap.mission.pause()
-    ap._cancel_timer()
-    ap._on_arrive = None
-    ap._blockage = None
-    ap._goal_pending = False
+    ap.cancel_timer()
+    ap.drop_goal()
     dyn.position_m[k] = (x_m, y_m, 0.0)
     dyn.goal_m[k] = (x_m, y_m, 0.0)
     dyn.velocity_m_s[k] = 0.0
@@ -42,13 +40,13 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
     ap.mode = FlightMode.HOLD
     repaired = ap.failures.any
     if repaired:
-        ap._event("operator_repair", failures=[name for name in ("gps", "motor", "mavlink")
+        ap.event("operator_repair", failures=[name for name in ("gps", "motor", "mavlink")
                                                if getattr(ap.failures, f"{name}_off")])
     ap.failures.clear()
     if repaired:
         ap.listener.on_statustext(6, "Failures cleared by the operator")
-    ap._event("operator_place", position_m=[x_m, y_m, 0.0])
-    ap._update_charging()
+    ap.event("operator_place", position_m=[x_m, y_m, 0.0])
+    ap.update_charging()
     ap.listener.on_operator_reset()
 
 
@@ -61,6 +59,6 @@ def set_battery(ap: Autopilot, pct: float) -> None:
     bat.level[ap.k] = 0
     bat.step(0.0, ap.fleet.airborne, ap.fleet.armed,
              ap.fleet.dyn.airspeed_m_s(), ap.fleet.dyn.velocity_m_s[:, 2])
-    ap._event("operator_battery", battery_pct=pct)
-    ap._update_charging()
+    ap.event("operator_battery", battery_pct=pct)
+    ap.update_charging()
     ap.listener.on_operator_reset()
