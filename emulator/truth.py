@@ -411,24 +411,36 @@ class TruthRecorder(TruthHistory):
                 f"record_step expects shapes {self._shapes} for position_m, yaw_deg, "
                 f"battery_pct, moving; got {shapes}"
             )
-        if t >= self._next_keyframe_t_s:
-            self._schedule_next_keyframe(t)
+        self.record_fleet_step(t, position_m, yaw_deg, battery_pct, moving)
+
+    def record_fleet_step(self, t_s: float, position_m: np.ndarray, yaw_deg: np.ndarray,
+                          battery_pct: np.ndarray, moving: np.ndarray) -> None:
+        """`record_step` without its checks, for the fleet's physics step: float t_s not
+        before the last step, float arrays of the recorder's shapes and a bool mask."""
+        if t_s >= self._next_keyframe_t_s:
+            self._schedule_next_keyframe(t_s)
             index = self._all_index
         else:
             index = (moving | self._was_moving).nonzero()[0]
         np.copyto(self._was_moving, moving)
-        self._end_t_s = t
-        if not index.size:
+        self._end_t_s = t_s
+        size = index.size
+        if not size:
             return
-        if self._stage_len + index.size > self._stage.shape[0]:
+        if self._stage_len + size > self._stage.shape[0]:
             self._flush()
         start = self._stage_len
-        self._stage_len = end = start + index.size
+        self._stage_len = end = start + size
         rows = self._stage[start:end]
-        rows[:, 0] = t
-        rows[:, 1:4] = position_m.take(index, 0)
-        rows[:, 4] = yaw_deg.take(index)
-        rows[:, 5] = battery_pct.take(index)
+        rows[:, 0] = t_s
+        if size == self._n:
+            rows[:, 1:4] = position_m
+            rows[:, 4] = yaw_deg
+            rows[:, 5] = battery_pct
+        else:
+            rows[:, 1:4] = position_m.take(index, 0)
+            rows[:, 4] = yaw_deg.take(index)
+            rows[:, 5] = battery_pct.take(index)
         rows[:, 6] = index
 
     def record_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,

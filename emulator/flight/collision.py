@@ -20,7 +20,6 @@ from emulator.world import World
 __all__ = ["ClearanceGuard"]
 
 
-
 class ClearanceGuard:
     """Per-vehicle clearance bookkeeping for one world."""
 
@@ -45,6 +44,14 @@ class ClearanceGuard:
     def forget(self, k: int) -> None:
         """Force a fresh check of vehicle k (its motion limits changed)."""
         self.check_at_s[k] = 0.0
+
+    def due(self, now_s: float, active: np.ndarray) -> np.ndarray | None:
+        """Mask of the `active` vehicles whose clearance deadline has passed at now_s (None
+        when there is none: no vehicle needs a look)."""
+        if not self.enabled:
+            return None
+        due = active & (self.check_at_s <= now_s)
+        return due if np.count_nonzero(due) else None
 
     def check(self, now_s: float, candidates: np.ndarray, new_pos: np.ndarray,
               max_speed_m_s: Callable[[int], float], dt_s: float) -> np.ndarray:

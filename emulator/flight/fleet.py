@@ -12,7 +12,12 @@ from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
 from emulator.flight.cruise import steady_steps
-from emulator.flight.dynamics import CONTROL_NONE, CONTROL_VELOCITY, FleetDynamics
+from emulator.flight.dynamics import (
+    CONTROL_NONE,
+    CONTROL_VELOCITY,
+    FleetDynamics,
+    StepGuard,
+)
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
 from emulator.target_motion import moving_targets_of
@@ -63,6 +68,7 @@ class Fleet:
         if self.targets is not None:
             self.recorder.attach_targets(self.targets)
         self.guard = ClearanceGuard(self.world, n)
+        self._step_guard: StepGuard | None = self if self.guard.enabled else None
         self.autopilots = [Autopilot(k, spec, self) for k, spec in enumerate(specs)]
         self.index_by_id = {s.id: k for k, s in enumerate(specs)}
         self._record()
@@ -82,7 +88,7 @@ class Fleet:
     def step(self) -> None:
         """Advance simulated time by one physics step."""
         dyn = self.dyn
-        events = dyn.step(self.dt_s, self._guard if self.guard.enabled else None)
+        events = dyn.step(self.dt_s, self._step_guard)
         if self.targets is not None:
             self.targets.advance(self.now_s, self.dt_s)
         self.step_count += 1
@@ -116,7 +122,12 @@ class Fleet:
             self.timer_s[k] = math.inf
             aps[k].on_timer()
 
-    def _guard(self, candidates: np.ndarray, new_pos: np.ndarray) -> np.ndarray:
+    def due(self, active: np.ndarray) -> np.ndarray | None:
+        """StepGuard: the active vehicles whose clearance the guard measures this step."""
+        return self.guard.due(self.now_s + self.dt_s, active)
+
+    def __call__(self, candidates: np.ndarray, new_pos: np.ndarray) -> np.ndarray:
+        """StepGuard: the candidates whose new position lies inside an obstacle."""
         return self.guard.check(self.now_s + self.dt_s, candidates, new_pos, self.max_speed_m_s,
                                 self.dt_s)
 
@@ -184,5 +195,5 @@ class Fleet:
 
     def _record(self) -> None:
         dyn = self.dyn
-        self.recorder.record_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
-                                  self._moving_mask())
+        self.recorder.record_fleet_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
+                                        self._moving_mask())
