@@ -467,19 +467,17 @@ class TruthRecorder(TruthHistory):
                 k += 1
             else:
                 k = int(np.searchsorted(t_s, self._next_keyframe_t_s, side="left"))
-        first = (moving | self._was_moving).nonzero()[0]
-        rest = moving.nonzero()[0]
-        blocks = []
-        for step in range(count):
-            index = self._all_index if keyframe[step] else (first if step == 0 else rest)
-            if index.size:
-                blocks.append((step, index))
+        # Which vehicles each step stores: all on a keyframe, else the moving ones (and on
+        # the first step those that stopped moving with the step before).
+        stored = np.empty((count, self._n), dtype=bool)
+        stored[:] = moving
+        stored[0] |= self._was_moving
+        stored[keyframe] = True
         np.copyto(self._was_moving, moving)
         self._end_t_s = float(t_s[-1])
-        if not blocks:
+        steps, index = stored.nonzero()
+        if not index.size:
             return
-        steps = np.concatenate([np.full(ix.size, st) for st, ix in blocks])
-        index = np.concatenate([ix for _, ix in blocks])
         rows = np.empty((index.size, _N_COLS + 1))
         rows[:, 0] = t_s[steps]
         rows[:, 1:4] = position_m[steps, index]

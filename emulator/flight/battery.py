@@ -70,6 +70,26 @@ class FleetBattery:
         self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
 
+    def steps(self, count: int, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
+              airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
+        """`count` calls of `step` with the same inputs (steady flight), at once; returns the
+        charge before and after each, (count + 1, n). Level changes are not reported (the
+        levels are brought up to date)."""
+        rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
+        delta = (self.charge_rate_pct_s - rate) * dt_s
+        charge = np.empty((count + 1, self.pct.size))
+        charge[0] = self.pct
+        charge[1:] = delta
+        np.cumsum(charge, axis=0, out=charge)  # the same sums, one after the other
+        after = charge[1:]
+        if not (np.all(after > 0.0) and np.all(after <= 100.0)):  # clipped: one by one
+            for i in range(1, count + 1):
+                charge[i] = np.minimum(np.maximum(charge[i - 1] + delta, 0.0), 100.0)
+        if count:
+            self.pct = charge[-1].copy()
+            self._update_levels()
+        return charge
+
     def spend(self, k: int, pct: float) -> None:
         self.pct[k] = max(0.0, self.pct[k] - pct)
 

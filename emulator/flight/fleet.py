@@ -174,14 +174,11 @@ class Fleet:
         steps = np.arange(first, first + count)
         offsets = (steps - self.step_count)[:, None, None] * dt
         positions = dyn.position_m + dyn.velocity_m_s * offsets
-        battery = np.empty((count, self.n))
-        start = 0
-        for i in _indices(steps % BATTERY_EVERY_STEPS == 0):
-            battery[start:i] = self.bat.pct
-            self.bat.step(dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
-                          dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
-            start = i
-        battery[start:] = self.bat.pct
+        due = _indices(steps % BATTERY_EVERY_STEPS == 0)
+        charge = self.bat.steps(due.size, dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
+                                dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
+        # Step i records the charge after every battery step at or before it.
+        battery = np.repeat(charge, np.diff(due, prepend=0, append=count), axis=0)
         if self.targets is not None:
             self.targets.advance(self.now_s, count * dt)
         self.step_count += count
