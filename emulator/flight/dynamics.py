@@ -15,6 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
+from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 
 __all__ = [
@@ -47,7 +48,6 @@ SETTLED_GOAL_M = 0.1
 BRAKING_SHARE = 0.8
 YAW_REACHED_DEG = 1.0
 _EMPTY = np.empty(0, dtype=np.intp)
-_count = np.count_nonzero
 
 
 class StepGuard(Protocol):
