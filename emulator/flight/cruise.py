@@ -40,9 +40,9 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
     if limit < 2:
         return 0
     dyn, dt = fleet.dyn, fleet.dt_s
-    if np.abs(dyn.accel_m_s2).max() > ACCEL_STEADY_M_S2 or _any(dyn.yaw_tracking):
+    if _any(np.abs(dyn.accel_m_s2) > ACCEL_STEADY_M_S2) or _any(dyn.yaw_tracking):
         return 0
-    if dyn.last_yaw_step_deg > 1e-9:
+    if dyn.yaw_stepped_over(1e-9):
         return 0
     active = dyn.control != CONTROL_NONE
     if _any(active & (dyn.control != CONTROL_POSITION)):

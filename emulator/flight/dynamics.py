@@ -231,13 +231,18 @@ class FleetDynamics:
         dv[:, 2] = np.minimum(np.maximum(dv[:, 2], -lim_z), lim_z)
         v_new = vel + dv
         # The airframe cannot exceed its airspeed limit: in strong wind it drifts.
-        if self._windy or _count(dv_xy > 0):
+        if self._windy:
             air = v_new[:, :2] - self.wind_m_s
             air_speed = np.hypot(air[:, 0], air[:, 1])
-            over = air_speed > self.airspeed_max_m_s
-            if _count(over):
-                air[over] *= (self.airspeed_max_m_s[over] / air_speed[over])[:, None]
-                v_new[:, :2] = air + self.wind_m_s
+        elif _count(dv_xy > 0):  # calm: the airspeed is the ground speed (v - 0 is v)
+            air_speed = np.hypot(v_new[:, 0], v_new[:, 1])
+        else:
+            return v_new
+        over = air_speed > self.airspeed_max_m_s
+        if _count(over):
+            air = v_new[:, :2] - self.wind_m_s
+            air[over] *= (self.airspeed_max_m_s[over] / air_speed[over])[:, None]
+            v_new[:, :2] = air + self.wind_m_s
         return v_new
 
     @property
@@ -254,6 +259,11 @@ class FleetDynamics:
         """The largest yaw change of the last step."""
         step = self._yaw_step
         return 0.0 if step is None else float(np.abs(step).max())
+
+    def yaw_stepped_over(self, deg: float) -> bool:
+        """Whether some vehicle's yaw changed by more than deg in the last step."""
+        step = self._yaw_step
+        return step is not None and bool(_count(np.abs(step) > deg))
 
     def _step_yaw(self, dt_s: float, active: np.ndarray, every: bool, err: np.ndarray,
                   d_xy: np.ndarray) -> np.ndarray:
