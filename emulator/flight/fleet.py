@@ -107,16 +107,18 @@ class Fleet:
                 aps[k].on_arrived()
             for k in events.yaw_reached:
                 aps[k].on_yaw_reached()
-        for k in levels:
-            aps[k].on_battery_level(int(self.bat.level[k]))
+        if levels.size:
+            for k in levels:
+                aps[k].on_battery_level(int(self.bat.level[k]))
         by_velocity = dyn.control == CONTROL_VELOCITY
         if _any(by_velocity):
             for k in _indices(by_velocity):
                 aps[k].offboard.check_fence()
-        charging = self.bat.charge_rate_pct_s > 0.0
-        if levels is not _NO_LEVELS and _any(charging):
-            for k in _indices(charging & (self.bat.pct >= 100.0)):
-                aps[k].on_charged()
+        if levels is not _NO_LEVELS:
+            charging = self.bat.charge_rate_pct_s > 0.0
+            if _any(charging):
+                for k in _indices(charging & (self.bat.pct >= 100.0)):
+                    aps[k].on_charged()
         due = _indices(self.timer_s <= self.now_s + 1e-9)
         for k in due:
             self.timer_s[k] = math.inf
