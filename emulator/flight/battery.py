@@ -43,9 +43,12 @@ class FleetBattery:
     def __init__(self, n: int) -> None:
         self.pct = np.full(n, 100.0)
         self.hover_endurance_s = np.full(n, 1200.0)
-        self.low_pct = np.full(n, 15.0)
-        self.critical_pct = np.full(n, 7.0)
-        self.emergency_pct = np.full(n, 5.0)
+        # The rows low, critical, emergency and empty (0 %) of one array: `levels_pct`.
+        self.levels_pct = np.zeros((4, n))
+        self.low_pct, self.critical_pct, self.emergency_pct = self.levels_pct[:3]
+        self.low_pct[:] = 15.0
+        self.critical_pct[:] = 7.0
+        self.emergency_pct[:] = 5.0
         self.charge_rate_pct_s = np.zeros(n)  # > 0 while resting on a charging station
         self.level = np.zeros(n, dtype=np.int8)
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from emulator.flight.arrays import any_true as _any
+from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 from emulator.flight.dynamics import (
     BRAKING_SHARE,
@@ -56,12 +57,15 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
         return 0  # about to start moving
     if _any(active & ~moving & (dyn.tracking != TRACK_NONE)):
         return 0  # at rest on a goal whose arrival the next step reports
-    if _any(moving):
-        idx = _indices(moving)
+    n_moving = _count(moving)
+    if n_moving:
+        # Every vehicle moving (the common case): whole arrays, not copies of their rows.
+        idx: slice | np.ndarray = slice(None) if n_moving == moving.size else _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
+        vel = dyn.velocity_m_s[idx]
         # Steady flight heads straight for the goal. A velocity that does not (a wind the
         # airframe cannot fly against bends or reverses it) is no cruise: step normally.
-        along = np.einsum("ij,ij->i", dyn.velocity_m_s[idx], e)
+        along = np.einsum("ij,ij->i", vel, e)
         if _any(along < s * d * (1.0 - ALIGNED_COS_TOL)):
             return 0
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
@@ -72,7 +76,7 @@ def steady_steps(fleet: Fleet, limit: int) -> int:
         free_m = d - braking_m
         tracked = dyn.tracking[idx] != TRACK_NONE
         free_m = np.where(tracked, np.minimum(free_m, d - dyn.acceptance_m[idx]), free_m)
-        vz = dyn.velocity_m_s[idx, 2]
+        vz = vel[:, 2]
         ground_m = np.where(vz < 0.0, dyn.position_m[idx, 2] / np.maximum(-vz, 1e-9) * s, np.inf)
         free_m = np.minimum(free_m, ground_m)
         horizon = min(horizon, float((free_m / step_m).min()) - 2.0)
@@ -95,7 +99,7 @@ def _battery_horizon_steps(fleet: Fleet, moving: np.ndarray) -> float:
     horizon = math.inf
     draining = rate > 0.0
     if _any(draining):
-        levels = np.stack([bat.low_pct, bat.critical_pct, bat.emergency_pct, np.zeros_like(pct)])
+        levels = bat.levels_pct
         gaps = np.where(levels < pct, pct - levels, np.inf).min(axis=0)
         horizon = float((gaps[draining] / rate[draining]).min()) / dt
     charging = rate < 0.0
