@@ -274,7 +274,7 @@ def main() -> None:
                        + "\n" + summary)
     print("\n".join(out))
     print(f"\nRTF: simulated/wall s; slip: simulated s/s the pacer gave up; tele %: messages "
-          f"sent per vehicle as % of the default streams' nominal {NOMINAL:g}/s; host busy %: "
+          f"sent per vehicle as % of the streams' nominal {NOMINAL:g}/s; host busy %: "
           f"the whole machine's busy CPU (every process, other users included) in % of one "
           f"core, of {100 * (os.cpu_count() or 1)}. MAVSDK warn: WARN/ERROR log lines of the "
           f"client during the window" + "".join(f"\n  MAVSDK said: {w}" for w in WARN_LAST))
