@@ -456,7 +456,14 @@ class TruthRecorder(TruthHistory):
             return
         if not (self._end_t_s <= t_s[0] and np.all(np.diff(t_s) >= 0) and np.isfinite(t_s[-1])):
             raise ValueError("t_s must be finite and non-decreasing")
-        moving = np.asarray(moving, dtype=bool)
+        self.record_fleet_steps(t_s, np.asarray(position_m), np.asarray(yaw_deg),
+                                np.asarray(battery_pct), np.asarray(moving, dtype=bool))
+
+    def record_fleet_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,
+                           battery_pct: np.ndarray, moving: np.ndarray) -> None:
+        """`record_steps` without its checks, for the fleet's fast-forward: float times not
+        before the last step and increasing, arrays of the documented shapes."""
+        count = t_s.shape[0]
         # Steps that carry a keyframe (every vehicle) instead of only the moving ones.
         keyframe = np.zeros(count, dtype=bool)
         k = 0

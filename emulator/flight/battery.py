@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 
 __all__ = [
@@ -83,9 +84,10 @@ class FleetBattery:
         charge = np.empty((count + 1, self.pct.size))
         charge[0] = self.pct
         charge[1:] = delta
-        np.cumsum(charge, axis=0, out=charge)  # the same sums, one after the other
+        np.add.accumulate(charge, axis=0, out=charge)  # the same sums, one after the other
         after = charge[1:]
-        if not (np.all(after > 0.0) and np.all(after <= 100.0)):  # clipped: one by one
+        size = after.size
+        if _count(after > 0.0) != size or _count(after <= 100.0) != size:  # clipped: one by one
             for i in range(1, count + 1):
                 charge[i] = np.minimum(np.maximum(charge[i - 1] + delta, 0.0), 100.0)
         if count:

@@ -180,13 +180,13 @@ class Fleet:
         charge = self.bat.steps(due.size, dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
                                 dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
         # Step i records the charge after every battery step at or before it.
-        battery = np.repeat(charge, np.diff(due, prepend=0, append=count), axis=0)
+        battery = charge[np.searchsorted(due, np.arange(count), side="right")]
         if self.targets is not None:
             self.targets.advance(self.now_s, count * dt)
         self.step_count += count
         dyn.position_m = positions[-1].copy()
-        self.recorder.record_steps(steps * dt, positions, dyn.yaw_deg, battery,
-                                   self._moving_mask())
+        self.recorder.record_fleet_steps(steps * dt, positions, dyn.yaw_deg, battery,
+                                         self._moving_mask())
 
     def _moving_mask(self) -> np.ndarray:
         dyn = self.dyn
