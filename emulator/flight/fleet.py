@@ -53,6 +53,7 @@ class Fleet:
         self.step_count = 0
         self.battery_every_steps = BATTERY_EVERY_STEPS
         self._leap_retry_step = 0
+        self._acted = False
         self.dyn = FleetDynamics(n)
         self.dyn.wind_m_s = np.asarray(self.world.wind.velocity_enu_m_s(), dtype=float)
         self.bat = FleetBattery(n)
@@ -98,7 +99,9 @@ class Fleet:
                                    dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
         self._record()
         aps = self.autopilots
+        acted = False  # whether an autopilot was called (only they change `busy`/`ended`)
         if not events.empty:
+            acted = True
             for k in events.obstacle_stop:
                 aps[k].on_obstacle_stop()
             for k in events.touched_down:
@@ -108,21 +111,27 @@ class Fleet:
             for k in events.yaw_reached:
                 aps[k].on_yaw_reached()
         if levels.size:
+            acted = True
             for k in levels:
                 aps[k].on_battery_level(int(self.bat.level[k]))
         by_velocity = dyn.control == CONTROL_VELOCITY
         if _any(by_velocity):
+            acted = True
             for k in _indices(by_velocity):
                 aps[k].offboard.check_fence()
         if levels is not _NO_LEVELS:
             charging = self.bat.charge_rate_pct_s > 0.0
             if _any(charging):
                 for k in _indices(charging & (self.bat.pct >= 100.0)):
+                    acted = True
                     aps[k].on_charged()
         due = _indices(self.timer_s <= self.now_s + 1e-9)
-        for k in due:
-            self.timer_s[k] = math.inf
-            aps[k].on_timer()
+        if due.size:
+            acted = True
+            for k in due:
+                self.timer_s[k] = math.inf
+                aps[k].on_timer()
+        self._acted = acted
 
     def due(self, active: np.ndarray) -> np.ndarray | None:
         """StepGuard: the active vehicles whose clearance the guard measures this step."""
@@ -151,6 +160,7 @@ class Fleet:
         moment the swarm comes to rest or a watched vehicle needs its client's attention.
         """
         done = 0
+        look = True  # the first step, and any in which an autopilot acted, can end the run
         while done < max_steps:
             was_busy = self.busy.copy()
             leap = 0
@@ -159,14 +169,17 @@ class Fleet:
                 if not leap:  # not steady: do not ask again for a few steps
                     self._leap_retry_step = self.step_count + LEAP_RETRY_STEPS
             if leap:
-                self._leap(leap)
+                self._leap(leap)  # no autopilot acts in steady flight
                 done += leap
             else:
                 self.step()
                 done += 1
-            self.ended |= was_busy & ~self.busy
-            if not _any(self.busy) or _any(self.ended & self.stop_on):
-                break
+                look = look or self._acted
+            if look:
+                self.ended |= was_busy & ~self.busy
+                if not _any(self.busy) or _any(self.ended & self.stop_on):
+                    break
+                look = False
         return done
 
     def _leap(self, count: int) -> None:
