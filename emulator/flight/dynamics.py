@@ -247,6 +247,8 @@ class FleetDynamics:
 
     @property
     def wind_m_s(self) -> np.ndarray:
+        """The wind (east, north) in m/s; assign a new array to change it (the step keeps
+        whether there is any)."""
         return self._wind_m_s
 
     @wind_m_s.setter
