@@ -2,7 +2,11 @@
 
     ./dev bench scale [--sizes 10,50,100,250] [--window 15] [--alone-window 10]
                       [--networks 4] [--clients 4,1] [--api asyncio|callback]
-                      [--skip alone,client,multi] [--profile FILE]
+                      [--streams default|issue] [--largest-step 500] [--largest-max 4000]
+                      [--skip alone,largest,client,multi] [--profile FILE] [--quick]
+
+    --quick   = --sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2
+                (about a minute: the targets' figures and the largest N, alone)
 
 Each emulator is `Swarm(default_scenario(N))` in its own process at speed 1 (real-time
 pacing, 50 Hz physics; above 250 vehicles, swarms of 250 side by side in that one process,
@@ -14,8 +18,15 @@ ground (telemetry cost does not depend on flying).
 
   alone   the emulator sends into a bound socket that a thread of this process drains
   client  one MAVSDK process (udpin) discovers all N and subscribes to position on each
+  largest the emulator alone at N = max(sizes) + step, + 2 steps, ... (--largest-step, up to
+          --largest-max) until one misses RTF >= 0.995 or 99 % of its telemetry: the
+          largest N one process holds (measured, not extrapolated)
   multi   `--networks` emulator processes of 250 (separate ports), alone, then with K
           clients for each K in --clients (client j on network j)
+
+--streams issue keeps only issue 16's "full telemetry" (HEARTBEAT, SYS_STATUS,
+EXTENDED_SYS_STATE 1 Hz; GLOBAL_POSITION_INT, ATTITUDE, LOCAL_POSITION_NED 10 Hz: 33 messages/s
+per vehicle); the default streams are a superset of it (39/s).
 
 CPU % is the process's CPU time (all threads) / wall over the window, in % of one core.
 RTF = simulated seconds / wall seconds over the window (swarm.stats()); "slip" is the
@@ -39,7 +50,12 @@ from _mavsdk import Client
 from emulator.mavlink.streams import DEFAULT_STREAMS
 
 RTF_OK = 0.995  # the window edges are quantised to one 20 ms physics step
-NOMINAL = sum(s.default_hz for s in DEFAULT_STREAMS)  # messages/s per vehicle, 39
+TELE_OK = 99.0  # % of the nominal telemetry sent
+ISSUE_STREAMS = ("HEARTBEAT", "SYS_STATUS", "EXTENDED_SYS_STATE", "GLOBAL_POSITION_INT",
+                 "ATTITUDE", "LOCAL_POSITION_NED")
+TARGETS = {250: 15.0, 1000: 50.0}  # issue 16: emulator alone, % of one core
+STREAM_HZ: dict[str, float] = {}  # --streams issue: the streams switched off
+NOMINAL = sum(s.default_hz for s in DEFAULT_STREAMS)  # messages/s per vehicle (39; issue: 33)
 
 
 def _emu_cols(r: dict, n: int) -> list[str]:
@@ -79,27 +95,53 @@ def measure(emus: list[Emulator], clients: list[Client], warmup_s: float, window
     return rs[: len(emus)], rs[len(emus):]
 
 
-def run_alone(sizes: list[int], args) -> list[list[str]]:
+def alone_row(n: int, args) -> list:
+    sink = UdpSink()
+    try:
+        with Emulator(n, sink.port, telemetry_hz=STREAM_HZ,
+                      timeout_s=60.0 + n / 20.0) as emu:
+            (r,), _ = measure([emu], [], args.warmup, args.alone_window, (sink,))
+            drained = sink.mark / r["wall"]
+    finally:
+        sink.close()
+    return [n, *_emu_cols(r, n), f"{drained:.0f}", f"{measure.own:.1f}", f"{measure.host:.0f}",
+            f"{os.getloadavg()[0]:.1f}"]
+
+
+def holds(row: list) -> bool:
+    """RTF >= 0.995 and >= 99 % of the telemetry (an alone row)."""
+    return float(row[2]) >= RTF_OK and float(row[5]) >= TELE_OK
+
+
+def run_alone(sizes: list[int], args) -> list[list]:
     rows = []
     for n in sizes:
-        sink = UdpSink()
-        try:
-            with Emulator(n, sink.port) as emu:
-                (r,), _ = measure([emu], [], args.warmup, args.alone_window, (sink,))
-                drained = sink.mark / r["wall"]
-        finally:
-            sink.close()
-        rows.append([n, *_emu_cols(r, n), f"{drained:.0f}", f"{measure.own:.1f}",
-                     f"{measure.host:.0f}"])
+        rows.append(alone_row(n, args))
         print("  alone", rows[-1], flush=True)
     return rows
+
+
+def run_largest(start: int, args) -> tuple[list[list], int | None]:
+    """Alone at start + step, + 2 steps, ... until a size misses; the last size that held."""
+    rows: list[list] = []
+    held = None
+    n = start + args.largest_step
+    while n <= args.largest_max:
+        rows.append(alone_row(n, args))
+        print("  largest", rows[-1], flush=True)
+        if not holds(rows[-1]):
+            break
+        held = n
+        n += args.largest_step
+    return rows, held
 
 
 def run_with_client(sizes: list[int], args) -> list[list[str]]:
     rows = []
     for n in sizes:
         port = free_udp_port()
-        with Client(port, n, api=args.api) as client, Emulator(n, port) as emu:
+        with Client(port, n, api=args.api) as client, \
+                Emulator(n, port, telemetry_hz=STREAM_HZ) as emu:
             info = client.ready(60)
             (r,), (c,) = measure([emu], [client], args.warmup, args.window)
         rows.append([n, info["found"], f"{info['discovery_s']:.2f}", *_emu_cols(r, n),
@@ -119,7 +161,8 @@ def run_multi(networks: int, k_clients: int, args) -> tuple[list[list[str]], str
         sinks = [UdpSink() for _ in range(networks - k_clients)]
         stack.callback(lambda: [s.close() for s in sinks])
         dests = ports[:k_clients] + [s.port for s in sinks]
-        emus = [stack.enter_context(Emulator(n, dests[j])) for j in range(networks)]
+        emus = [stack.enter_context(Emulator(n, dests[j], telemetry_hz=STREAM_HZ))
+                for j in range(networks)]
         infos = [c.ready(90) for c in clients]
         rs, cs = measure(emus, clients, args.warmup, args.window, tuple(sinks))
     rows = []
@@ -166,21 +209,49 @@ def main() -> None:
     p.add_argument("--api", choices=("asyncio", "callback"), default="asyncio")
     p.add_argument("--skip", default="", help="comma list of: alone, client, multi")
     p.add_argument("--profile", metavar="FILE", help="then cProfile N=max(sizes) with client")
+    p.add_argument("--streams", choices=("default", "issue"), default="default",
+                   help="'issue': only issue 16's six streams (see above)")
+    p.add_argument("--largest-step", type=int, default=500)
+    p.add_argument("--largest-max", type=int, default=4000)
+    p.add_argument("--quick", action="store_true",
+                   help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2")
     args = p.parse_args()
+    if args.quick:
+        args.sizes, args.skip = "250,1000", ",".join({"client", "multi", *args.skip.split(",")})
+        args.alone_window, args.warmup = 5.0, 2.0
+    global NOMINAL
+    if args.streams == "issue":
+        STREAM_HZ.update({s.name: 0.0 for s in DEFAULT_STREAMS if s.name not in ISSUE_STREAMS})
+        NOMINAL = sum(s.default_hz for s in DEFAULT_STREAMS if s.name in ISSUE_STREAMS)
     sizes = [int(s) for s in args.sizes.split(",")]
     skip = set(filter(None, args.skip.split(",")))
     print(f"scale: sizes {sizes}, window {args.window:g} s with client / "
           f"{args.alone_window:g} s alone after {args.warmup:g} s warm-up, speed 1 real time, "
-          f"physics 50 Hz, default streams, client api {args.api}, 127.0.0.1")
+          f"physics 50 Hz, {args.streams} streams ({NOMINAL:g} messages/s per vehicle), "
+          f"client api {args.api}, 127.0.0.1")
     print(machine_line(), flush=True)
     out = []
     if "alone" not in skip:
         rows = run_alone(sizes, args)
-        ok = [int(r[0]) for r in rows if float(r[2]) >= RTF_OK and float(r[5]) >= 99]
-        out.append("\nEmulator alone (sending into a drained sink):\n" + table(
-            ["N", *EMU_HEAD, "sink recv/s", "sink CPU %", "host busy %"], rows)
-            + f"\nlargest N with RTF >= {RTF_OK} and tele >= 99%: "
-            f"{max(ok) if ok else 'none'}")
+        ok = [int(r[0]) for r in rows if holds(r)]
+        largest = max(ok) if ok else None
+        note = ""
+        if "largest" not in skip and largest == max(sizes):
+            more, held = run_largest(largest, args)
+            rows += more
+            if held is not None:
+                largest = held
+            elif not more:
+                note = f" (--largest-max {args.largest_max} reached)"
+        out.append("\nEmulator alone, one process (sending into a drained sink):\n" + table(
+            ["N", *EMU_HEAD, "sink recv/s", "sink CPU %", "host busy %", "load avg"], rows)
+            + f"\nlargest N per process with RTF >= {RTF_OK} and tele >= {TELE_OK:g}%: "
+            f"{largest if largest is not None else 'none'}{note}")
+        for n, target in TARGETS.items():
+            row = next((r for r in rows if int(r[0]) == n), None)
+            if row is not None:
+                out[-1] += (f"\nN={n}: emulator alone {row[1]}% of one core (target < "
+                            f"{target:g}%), RTF {row[2]}, tele {row[5]}%, load avg {row[-1]}")
     if "client" not in skip:
         rows = run_with_client(sizes, args)
         ok = [int(r[0]) for r in rows
@@ -203,7 +274,7 @@ def main() -> None:
                        + "\n" + summary)
     print("\n".join(out))
     print(f"\nRTF: simulated/wall s; slip: simulated s/s the pacer gave up; tele %: messages "
-          f"sent per vehicle as % of the default streams' nominal {NOMINAL:g}/s; host busy %: "
+          f"sent per vehicle as % of the streams' nominal {NOMINAL:g}/s; host busy %: "
           f"the whole machine's busy CPU (every process, other users included) in % of one "
           f"core, of {100 * (os.cpu_count() or 1)}. MAVSDK warn: WARN/ERROR log lines of the "
           f"client during the window" + "".join(f"\n  MAVSDK said: {w}" for w in WARN_LAST))

@@ -248,7 +248,7 @@ class MovingTargets:
         self._leg_p0, self._leg_v = np.zeros((m, 3)), np.zeros((m, 3))
         self._fresh_from, self._fresh_until = math.inf, -math.inf
         self.now_s = 0.0
-        self.position_m = self.positions_at(0.0)
+        self._position_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -278,12 +278,19 @@ class MovingTargets:
                 self._refresh(t, stale)
         return self._leg_p0 + self._leg_v * np.maximum(t - self._leg_t0, 0.0)[:, None]
 
-    def advance(self, now_s: float, dt_s: float) -> np.ndarray:
+    def advance(self, now_s: float, dt_s: float) -> None:
         """One physics step (or dt_s of them) from now_s: the positions at now_s + dt_s
-        become the current ones (returned)."""
+        become the current ones (worked out when first read: the motion is a function of
+        time alone)."""
         self.now_s = now_s + dt_s
-        self.position_m = self.positions_at(self.now_s)
-        return self.position_m
+        self._position_m = None
+
+    @property
+    def position_m(self) -> np.ndarray:
+        """Every target's position (M, 3) at `now_s`."""
+        if self._position_m is None:
+            self._position_m = self.positions_at(self.now_s)
+        return self._position_m
 
     def current(self) -> dict[str, Point3]:
         """The current position of each target, by id."""

@@ -18,9 +18,10 @@ twice.
 from __future__ import annotations
 
 import asyncio
+import bisect
 import logging
 import socket
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 from emulator.link_faults import DOWNLINK, UPLINK, LinkGate
@@ -181,6 +182,27 @@ class UdpEndpoint:
                         self._send_now(data)
                 return
         self._send_now(data)
+
+    def emit_frames(self, data: bytes, ends: Sequence[int]) -> bool:
+        """Frames data[ends[i-1]:ends[i]] (data[:ends[0]] first) in a batch, packed into
+        datagrams as `emit` would pack them one by one; False, sending nothing, while the
+        link gate decides frame by frame (the caller then emits each)."""
+        gate = self.gate
+        if (gate is not None and gate.active) or not self.batching:
+            return False
+        self.stats.frames_out += len(ends)
+        batch, start, i, count = self._batch, 0, 0, len(ends)
+        while i < count:
+            # The frames from i on that still fit into the datagram being packed.
+            j = bisect.bisect_right(ends, start + MAX_BATCH_BYTES - len(batch), i)
+            if j == i:
+                self.flush()
+                j = max(bisect.bisect_right(ends, start + MAX_BATCH_BYTES, i), i + 1)
+            batch += data[start:ends[j - 1]]
+            start, i = ends[j - 1], j
+            if i < count:
+                self.flush()
+        return True
 
     def _send_now(self, data: bytes) -> None:
         if self.batching:

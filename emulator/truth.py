@@ -411,24 +411,36 @@ class TruthRecorder(TruthHistory):
                 f"record_step expects shapes {self._shapes} for position_m, yaw_deg, "
                 f"battery_pct, moving; got {shapes}"
             )
-        if t >= self._next_keyframe_t_s:
-            self._schedule_next_keyframe(t)
+        self.record_fleet_step(t, position_m, yaw_deg, battery_pct, moving)
+
+    def record_fleet_step(self, t_s: float, position_m: np.ndarray, yaw_deg: np.ndarray,
+                          battery_pct: np.ndarray, moving: np.ndarray) -> None:
+        """`record_step` without its checks, for the fleet's physics step: float t_s not
+        before the last step, float arrays of the recorder's shapes and a bool mask."""
+        if t_s >= self._next_keyframe_t_s:
+            self._schedule_next_keyframe(t_s)
             index = self._all_index
         else:
             index = (moving | self._was_moving).nonzero()[0]
         np.copyto(self._was_moving, moving)
-        self._end_t_s = t
-        if not index.size:
+        self._end_t_s = t_s
+        size = index.size
+        if not size:
             return
-        if self._stage_len + index.size > self._stage.shape[0]:
+        if self._stage_len + size > self._stage.shape[0]:
             self._flush()
         start = self._stage_len
-        self._stage_len = end = start + index.size
+        self._stage_len = end = start + size
         rows = self._stage[start:end]
-        rows[:, 0] = t
-        rows[:, 1:4] = position_m.take(index, 0)
-        rows[:, 4] = yaw_deg.take(index)
-        rows[:, 5] = battery_pct.take(index)
+        rows[:, 0] = t_s
+        if size == self._n:
+            rows[:, 1:4] = position_m
+            rows[:, 4] = yaw_deg
+            rows[:, 5] = battery_pct
+        else:
+            rows[:, 1:4] = position_m.take(index, 0)
+            rows[:, 4] = yaw_deg.take(index)
+            rows[:, 5] = battery_pct.take(index)
         rows[:, 6] = index
 
     def record_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,
@@ -444,7 +456,14 @@ class TruthRecorder(TruthHistory):
             return
         if not (self._end_t_s <= t_s[0] and np.all(np.diff(t_s) >= 0) and np.isfinite(t_s[-1])):
             raise ValueError("t_s must be finite and non-decreasing")
-        moving = np.asarray(moving, dtype=bool)
+        self.record_fleet_steps(t_s, np.asarray(position_m), np.asarray(yaw_deg),
+                                np.asarray(battery_pct), np.asarray(moving, dtype=bool))
+
+    def record_fleet_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,
+                           battery_pct: np.ndarray, moving: np.ndarray) -> None:
+        """`record_steps` without its checks, for the fleet's fast-forward: float times not
+        before the last step and increasing, arrays of the documented shapes."""
+        count = t_s.shape[0]
         # Steps that carry a keyframe (every vehicle) instead of only the moving ones.
         keyframe = np.zeros(count, dtype=bool)
         k = 0
@@ -455,19 +474,17 @@ class TruthRecorder(TruthHistory):
                 k += 1
             else:
                 k = int(np.searchsorted(t_s, self._next_keyframe_t_s, side="left"))
-        first = (moving | self._was_moving).nonzero()[0]
-        rest = moving.nonzero()[0]
-        blocks = []
-        for step in range(count):
-            index = self._all_index if keyframe[step] else (first if step == 0 else rest)
-            if index.size:
-                blocks.append((step, index))
+        # Which vehicles each step stores: all on a keyframe, else the moving ones (and on
+        # the first step those that stopped moving with the step before).
+        stored = np.empty((count, self._n), dtype=bool)
+        stored[:] = moving
+        stored[0] |= self._was_moving
+        stored[keyframe] = True
         np.copyto(self._was_moving, moving)
         self._end_t_s = float(t_s[-1])
-        if not blocks:
+        steps, index = stored.nonzero()
+        if not index.size:
             return
-        steps = np.concatenate([np.full(ix.size, st) for st, ix in blocks])
-        index = np.concatenate([ix for _, ix in blocks])
         rows = np.empty((index.size, _N_COLS + 1))
         rows[:, 0] = t_s[steps]
         rows[:, 1:4] = position_m[steps, index]

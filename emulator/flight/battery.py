@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 
 __all__ = [
@@ -43,9 +44,12 @@ class FleetBattery:
     def __init__(self, n: int) -> None:
         self.pct = np.full(n, 100.0)
         self.hover_endurance_s = np.full(n, 1200.0)
-        self.low_pct = np.full(n, 15.0)
-        self.critical_pct = np.full(n, 7.0)
-        self.emergency_pct = np.full(n, 5.0)
+        # The rows low, critical, emergency and empty (0 %) of one array: `levels_pct`.
+        self.levels_pct = np.zeros((4, n))
+        self.low_pct, self.critical_pct, self.emergency_pct = self.levels_pct[:3]
+        self.low_pct[:] = 15.0
+        self.critical_pct[:] = 7.0
+        self.emergency_pct[:] = 5.0
         self.charge_rate_pct_s = np.zeros(n)  # > 0 while resting on a charging station
         self.level = np.zeros(n, dtype=np.int8)
 
@@ -69,6 +73,27 @@ class FleetBattery:
         delta = (self.charge_rate_pct_s - rate) * dt_s
         self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
+
+    def steps(self, count: int, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
+              airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
+        """`count` calls of `step` with the same inputs (steady flight), at once; returns the
+        charge before and after each, (count + 1, n). Level changes are not reported (the
+        levels are brought up to date)."""
+        rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
+        delta = (self.charge_rate_pct_s - rate) * dt_s
+        charge = np.empty((count + 1, self.pct.size))
+        charge[0] = self.pct
+        charge[1:] = delta
+        np.add.accumulate(charge, axis=0, out=charge)  # the same sums, one after the other
+        after = charge[1:]
+        size = after.size
+        if _count(after > 0.0) != size or _count(after <= 100.0) != size:  # clipped: one by one
+            for i in range(1, count + 1):
+                charge[i] = np.minimum(np.maximum(charge[i - 1] + delta, 0.0), 100.0)
+        if count:
+            self.pct = charge[-1].copy()
+            self._update_levels()
+        return charge
 
     def spend(self, k: int, pct: float) -> None:
         self.pct[k] = max(0.0, self.pct[k] - pct)

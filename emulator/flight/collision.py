@@ -20,7 +20,6 @@ from emulator.world import World
 __all__ = ["ClearanceGuard"]
 
 
-
 class ClearanceGuard:
     """Per-vehicle clearance bookkeeping for one world."""
 
@@ -33,6 +32,7 @@ class ClearanceGuard:
         if self.enabled:
             shapely.prepare(self._footprints)
         self.check_at_s = np.zeros(n)
+        self._first_check_s = 0.0  # the earliest of check_at_s (kept by the methods below)
 
     def clearance_m(self, x_m: float, y_m: float, z_m: float) -> float:
         """Distance from a point to the nearest obstacle volume (0 when inside one)."""
@@ -45,6 +45,15 @@ class ClearanceGuard:
     def forget(self, k: int) -> None:
         """Force a fresh check of vehicle k (its motion limits changed)."""
         self.check_at_s[k] = 0.0
+        self._first_check_s = 0.0
+
+    def due(self, now_s: float, active: np.ndarray) -> np.ndarray | None:
+        """Mask of the `active` vehicles whose clearance deadline has passed at now_s (None
+        when there is none: no vehicle needs a look)."""
+        if not self.enabled or now_s < self._first_check_s:
+            return None
+        due = active & (self.check_at_s <= now_s)
+        return due if np.count_nonzero(due) else None
 
     def check(self, now_s: float, candidates: np.ndarray, new_pos: np.ndarray,
               max_speed_m_s: Callable[[int], float], dt_s: float) -> np.ndarray:
@@ -70,4 +79,5 @@ class ClearanceGuard:
                 self.check_at_s[k] = now_s + max(
                     0.0, clearance / max(max_speed_m_s(int(k)), 0.1) - dt_s
                 )
+        self._first_check_s = float(self.check_at_s.min())
         return np.asarray(hits, dtype=np.intp)

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from emulator.flight.arrays import any_true as _any
+from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 from emulator.flight.dynamics import (
     BRAKING_SHARE,
@@ -37,9 +38,9 @@ def steady_steps(fleet: FleetView, limit: int) -> int:
     if limit < 2:
         return 0
     dyn, dt = fleet.dyn, fleet.dt_s
-    if np.abs(dyn.accel_m_s2).max() > ACCEL_STEADY_M_S2 or _any(dyn.yaw_tracking):
+    if _any(np.abs(dyn.accel_m_s2) > ACCEL_STEADY_M_S2) or _any(dyn.yaw_tracking):
         return 0
-    if dyn.last_yaw_step_deg > 1e-9:
+    if dyn.yaw_stepped_over(1e-9):
         return 0
     active = dyn.control != CONTROL_NONE
     if _any(active & (dyn.control != CONTROL_POSITION)):
@@ -53,12 +54,15 @@ def steady_steps(fleet: FleetView, limit: int) -> int:
         return 0  # about to start moving
     if _any(active & ~moving & (dyn.tracking != TRACK_NONE)):
         return 0  # at rest on a goal whose arrival the next step reports
-    if _any(moving):
-        idx = _indices(moving)
+    n_moving = _count(moving)
+    if n_moving:
+        # Every vehicle moving (the common case): whole arrays, not copies of their rows.
+        idx: slice | np.ndarray = slice(None) if n_moving == moving.size else _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
+        vel = dyn.velocity_m_s[idx]
         # Steady flight heads straight for the goal. A velocity that does not (a wind the
         # airframe cannot fly against bends or reverses it) is no cruise: step normally.
-        along = np.einsum("ij,ij->i", dyn.velocity_m_s[idx], e)
+        along = np.einsum("ij,ij->i", vel, e)
         if _any(along < s * d * (1.0 - ALIGNED_COS_TOL)):
             return 0
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
@@ -69,7 +73,7 @@ def steady_steps(fleet: FleetView, limit: int) -> int:
         free_m = d - braking_m
         tracked = dyn.tracking[idx] != TRACK_NONE
         free_m = np.where(tracked, np.minimum(free_m, d - dyn.acceptance_m[idx]), free_m)
-        vz = dyn.velocity_m_s[idx, 2]
+        vz = vel[:, 2]
         ground_m = np.where(vz < 0.0, dyn.position_m[idx, 2] / np.maximum(-vz, 1e-9) * s, np.inf)
         free_m = np.minimum(free_m, ground_m)
         horizon = min(horizon, float((free_m / step_m).min()) - 2.0)
@@ -92,7 +96,7 @@ def _battery_horizon_steps(fleet: FleetView, moving: np.ndarray) -> float:
     horizon = math.inf
     draining = rate > 0.0
     if _any(draining):
-        levels = np.stack([bat.low_pct, bat.critical_pct, bat.emergency_pct, np.zeros_like(pct)])
+        levels = bat.levels_pct
         gaps = np.where(levels < pct, pct - levels, np.inf).min(axis=0)
         horizon = float((gaps[draining] / rate[draining]).min()) / dt
     charging = rate < 0.0

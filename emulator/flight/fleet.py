@@ -12,7 +12,12 @@ from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
 from emulator.flight.cruise import steady_steps
-from emulator.flight.dynamics import CONTROL_NONE, CONTROL_VELOCITY, FleetDynamics
+from emulator.flight.dynamics import (
+    CONTROL_NONE,
+    CONTROL_VELOCITY,
+    FleetDynamics,
+    StepGuard,
+)
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
 from emulator.target_motion import moving_targets_of
@@ -48,6 +53,7 @@ class Fleet:
         self.step_count = 0
         self.battery_every_steps = BATTERY_EVERY_STEPS
         self._leap_retry_step = 0
+        self._acted = False
         self.dyn = FleetDynamics(n)
         self.dyn.wind_m_s = np.asarray(self.world.wind.velocity_enu_m_s(), dtype=float)
         self.bat = FleetBattery(n)
@@ -63,6 +69,7 @@ class Fleet:
         if self.targets is not None:
             self.recorder.attach_targets(self.targets)
         self.guard = ClearanceGuard(self.world, n)
+        self._step_guard: StepGuard | None = self if self.guard.enabled else None
         self.autopilots = [Autopilot(k, spec, self) for k, spec in enumerate(specs)]
         self.index_by_id = {s.id: k for k, s in enumerate(specs)}
         self._record()
@@ -82,7 +89,7 @@ class Fleet:
     def step(self) -> None:
         """Advance simulated time by one physics step."""
         dyn = self.dyn
-        events = dyn.step(self.dt_s, self._guard if self.guard.enabled else None)
+        events = dyn.step(self.dt_s, self._step_guard)
         if self.targets is not None:
             self.targets.advance(self.now_s, self.dt_s)
         self.step_count += 1
@@ -92,7 +99,9 @@ class Fleet:
                                    dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
         self._record()
         aps = self.autopilots
+        acted = False  # whether an autopilot was called (only they change `busy`/`ended`)
         if not events.empty:
+            acted = True
             for k in events.obstacle_stop:
                 aps[k].on_obstacle_stop()
             for k in events.touched_down:
@@ -101,22 +110,35 @@ class Fleet:
                 aps[k].on_arrived()
             for k in events.yaw_reached:
                 aps[k].on_yaw_reached()
-        for k in levels:
-            aps[k].on_battery_level(int(self.bat.level[k]))
+        if levels.size:
+            acted = True
+            for k in levels:
+                aps[k].on_battery_level(int(self.bat.level[k]))
         by_velocity = dyn.control == CONTROL_VELOCITY
         if _any(by_velocity):
+            acted = True
             for k in _indices(by_velocity):
                 aps[k].offboard.check_fence()
-        charging = self.bat.charge_rate_pct_s > 0.0
-        if levels is not _NO_LEVELS and _any(charging):
-            for k in _indices(charging & (self.bat.pct >= 100.0)):
-                aps[k].on_charged()
+        if levels is not _NO_LEVELS:
+            charging = self.bat.charge_rate_pct_s > 0.0
+            if _any(charging):
+                for k in _indices(charging & (self.bat.pct >= 100.0)):
+                    acted = True
+                    aps[k].on_charged()
         due = _indices(self.timer_s <= self.now_s + 1e-9)
-        for k in due:
-            self.timer_s[k] = math.inf
-            aps[k].on_timer()
+        if due.size:
+            acted = True
+            for k in due:
+                self.timer_s[k] = math.inf
+                aps[k].on_timer()
+        self._acted = acted
 
-    def _guard(self, candidates: np.ndarray, new_pos: np.ndarray) -> np.ndarray:
+    def due(self, active: np.ndarray) -> np.ndarray | None:
+        """StepGuard: the active vehicles whose clearance the guard measures this step."""
+        return self.guard.due(self.now_s + self.dt_s, active)
+
+    def __call__(self, candidates: np.ndarray, new_pos: np.ndarray) -> np.ndarray:
+        """StepGuard: the candidates whose new position lies inside an obstacle."""
         return self.guard.check(self.now_s + self.dt_s, candidates, new_pos, self.max_speed_m_s,
                                 self.dt_s)
 
@@ -138,6 +160,7 @@ class Fleet:
         moment the swarm comes to rest or a watched vehicle needs its client's attention.
         """
         done = 0
+        look = True  # the first step, and any in which an autopilot acted, can end the run
         while done < max_steps:
             was_busy = self.busy.copy()
             leap = 0
@@ -146,14 +169,17 @@ class Fleet:
                 if not leap:  # not steady: do not ask again for a few steps
                     self._leap_retry_step = self.step_count + LEAP_RETRY_STEPS
             if leap:
-                self._leap(leap)
+                self._leap(leap)  # no autopilot acts in steady flight
                 done += leap
             else:
                 self.step()
                 done += 1
-            self.ended |= was_busy & ~self.busy
-            if not _any(self.busy) or _any(self.ended & self.stop_on):
-                break
+                look = look or self._acted
+            if look:
+                self.ended |= was_busy & ~self.busy
+                if not _any(self.busy) or _any(self.ended & self.stop_on):
+                    break
+                look = False
         return done
 
     def _leap(self, count: int) -> None:
@@ -163,20 +189,17 @@ class Fleet:
         steps = np.arange(first, first + count)
         offsets = (steps - self.step_count)[:, None, None] * dt
         positions = dyn.position_m + dyn.velocity_m_s * offsets
-        battery = np.empty((count, self.n))
-        start = 0
-        for i in _indices(steps % BATTERY_EVERY_STEPS == 0):
-            battery[start:i] = self.bat.pct
-            self.bat.step(dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
-                          dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
-            start = i
-        battery[start:] = self.bat.pct
+        due = _indices(steps % BATTERY_EVERY_STEPS == 0)
+        charge = self.bat.steps(due.size, dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
+                                dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
+        # Step i records the charge after every battery step at or before it.
+        battery = charge[np.searchsorted(due, np.arange(count), side="right")]
         if self.targets is not None:
             self.targets.advance(self.now_s, count * dt)
         self.step_count += count
         dyn.position_m = positions[-1].copy()
-        self.recorder.record_steps(steps * dt, positions, dyn.yaw_deg, battery,
-                                   self._moving_mask())
+        self.recorder.record_fleet_steps(steps * dt, positions, dyn.yaw_deg, battery,
+                                         self._moving_mask())
 
     def _moving_mask(self) -> np.ndarray:
         dyn = self.dyn
@@ -184,5 +207,5 @@ class Fleet:
 
     def _record(self) -> None:
         dyn = self.dyn
-        self.recorder.record_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
-                                  self._moving_mask())
+        self.recorder.record_fleet_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
+                                        self._moving_mask())
