@@ -462,46 +462,70 @@ class TruthRecorder(TruthHistory):
     def record_fleet_steps(self, t_s: np.ndarray, position_m: np.ndarray, yaw_deg: np.ndarray,
                            battery_pct: np.ndarray, moving: np.ndarray) -> None:
         """`record_steps` without its checks, for the fleet's fast-forward: float times not
-        before the last step and increasing, arrays of the documented shapes."""
+        before the last step and increasing, arrays of the documented shapes; yaw_deg and
+        moving may also be given per step, (K, N)."""
         count = t_s.shape[0]
         # Steps that carry a keyframe (every vehicle) instead of only the moving ones.
-        keyframe = np.zeros(count, dtype=bool)
-        k = 0
-        while k < count:
-            if t_s[k] >= self._next_keyframe_t_s:
-                keyframe[k] = True
-                self._schedule_next_keyframe(float(t_s[k]))
-                k += 1
-            else:
-                k = int(np.searchsorted(t_s, self._next_keyframe_t_s, side="left"))
+        keyframe = None
+        if t_s[-1] >= self._next_keyframe_t_s:
+            keyframe = np.zeros(count, dtype=bool)
+            k = 0
+            while k < count:
+                if t_s[k] >= self._next_keyframe_t_s:
+                    keyframe[k] = True
+                    self._schedule_next_keyframe(float(t_s[k]))
+                    k += 1
+                else:
+                    k = int(np.searchsorted(t_s, self._next_keyframe_t_s, side="left"))
+        self._end_t_s = float(t_s[-1])
+        last = moving[-1] if moving.ndim == 2 else moving
+        if np.count_nonzero(moving) == moving.size:  # every vehicle moves: every row stored
+            np.copyto(self._was_moving, last)
+            rows = self._new_rows(count * self._n)
+            grid = rows.reshape(count, self._n, _N_COLS + 1)
+            grid[:, :, 0] = t_s[:, None]
+            grid[:, :, 1:4] = position_m
+            grid[:, :, 4] = yaw_deg
+            grid[:, :, 5] = battery_pct
+            grid[:, :, 6] = self._all_index
+            self._staged(rows)
+            return
         # Which vehicles each step stores: all on a keyframe, else the moving ones (and on
         # the first step those that stopped moving with the step before).
         stored = np.empty((count, self._n), dtype=bool)
         stored[:] = moving
+        if moving.ndim == 2:  # per step: also the step after a vehicle stopped moving
+            stored[1:] |= moving[:-1]
         stored[0] |= self._was_moving
-        stored[keyframe] = True
-        np.copyto(self._was_moving, moving)
-        self._end_t_s = float(t_s[-1])
+        if keyframe is not None:
+            stored[keyframe] = True
+        np.copyto(self._was_moving, last)
         steps, index = stored.nonzero()
         if not index.size:
             return
-        rows = np.empty((index.size, _N_COLS + 1))
+        rows = self._new_rows(index.size)
         rows[:, 0] = t_s[steps]
         rows[:, 1:4] = position_m[steps, index]
-        rows[:, 4] = np.asarray(yaw_deg)[index]
+        rows[:, 4] = yaw_deg[steps, index] if yaw_deg.ndim == 2 else yaw_deg[index]
         rows[:, 5] = battery_pct[steps, index]
         rows[:, 6] = index
-        self._stage_rows(rows)
+        self._staged(rows)
 
-    def _stage_rows(self, rows: np.ndarray) -> None:
-        if self._stage_len + rows.shape[0] > self._stage.shape[0]:
+    def _new_rows(self, size: int) -> np.ndarray:
+        """`size` rows to fill and hand to `_staged`: the next rows of the stage, or an array
+        of their own when the stage cannot hold them."""
+        if self._stage_len + size > self._stage.shape[0]:
             self._flush()
-        if rows.shape[0] > self._stage.shape[0]:
-            self._group_into_chunks(rows)
-            return
+        if size > self._stage.shape[0]:
+            return np.empty((size, _N_COLS + 1))
         start = self._stage_len
-        self._stage_len = start + rows.shape[0]
-        self._stage[start : self._stage_len] = rows
+        self._stage_len = start + size
+        return self._stage[start : self._stage_len]
+
+    def _staged(self, rows: np.ndarray) -> None:
+        """The rows of `_new_rows` are filled in."""
+        if rows.base is not self._stage:
+            self._group_into_chunks(rows)
 
     def record_event(self, t_s: float, vehicle_id: str, kind: str, **data: Any) -> TruthEvent:
         """Record an event for a known vehicle; ``data`` must be JSON-serialisable."""

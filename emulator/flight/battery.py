@@ -69,8 +69,28 @@ class FleetBattery:
         climb_m_s: np.ndarray,
     ) -> np.ndarray:
         """Drain (or charge) for dt_s; returns indices whose level changed."""
+        return self.apply(self.deltas(dt_s, airborne, armed, airspeed_m_s, climb_m_s))
+
+    def deltas(self, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
+               airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
+        """The change of charge of every vehicle over a `step` of dt_s (before clipping)."""
         rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
-        delta = (self.charge_rate_pct_s - rate) * dt_s
+        return (self.charge_rate_pct_s - rate) * dt_s
+
+    def delta(self, k: int, dt_s: float, airborne: bool, armed: bool, airspeed_m_s: float,
+              climb_m_s: float) -> float:
+        """`deltas` of vehicle k alone, in Python floats (the same operations)."""
+        if airborne:
+            power = (1.0 + SPEED_POWER_PER_M2_S2 * (airspeed_m_s * airspeed_m_s)
+                     + CLIMB_POWER_PER_M_S * max(climb_m_s, 0.0))
+        else:
+            power = GROUND_IDLE_POWER if armed else 0.0
+        rate = 100.0 / float(self.hover_endurance_s[k]) * power
+        return (float(self.charge_rate_pct_s[k]) - rate) * dt_s
+
+    def apply(self, delta: np.ndarray) -> np.ndarray:
+        """Add delta to every charge (clipped to 0-100 %); returns indices whose level
+        changed."""
         self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
 

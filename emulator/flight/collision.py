@@ -70,14 +70,28 @@ class ClearanceGuard:
         hits = []
         for k in due:
             x, y, z = new_pos[k]
-            clearance = self.clearance_m(float(x), float(y), float(z))
-            if clearance <= 0.0:
+            if self._measure(int(k), now_s, float(x), float(y), float(z), max_speed_m_s(int(k)),
+                             dt_s):
                 hits.append(k)
-                self.check_at_s[k] = 0.0
-            else:
-                # Travel time to the nearest volume, less one step of slack.
-                self.check_at_s[k] = now_s + max(
-                    0.0, clearance / max(max_speed_m_s(int(k)), 0.1) - dt_s
-                )
         self._first_check_s = float(self.check_at_s.min())
         return np.asarray(hits, dtype=np.intp)
+
+    def check_one(self, k: int, now_s: float, x_m: float, y_m: float, z_m: float,
+                  max_speed_m_s: float, dt_s: float) -> bool:
+        """`check` for vehicle k alone, moving to (x_m, y_m, z_m): whether that lies inside
+        an obstacle (False while its clearance deadline lies ahead)."""
+        if not self.enabled or self.check_at_s[k] > now_s:
+            return False
+        hit = self._measure(k, now_s, x_m, y_m, z_m, max_speed_m_s, dt_s)
+        self._first_check_s = float(self.check_at_s.min())
+        return hit
+
+    def _measure(self, k: int, now_s: float, x_m: float, y_m: float, z_m: float,
+                 max_speed_m_s: float, dt_s: float) -> bool:
+        clearance = self.clearance_m(x_m, y_m, z_m)
+        if clearance <= 0.0:
+            self.check_at_s[k] = 0.0
+            return True
+        # Travel time to the nearest volume, less one step of slack.
+        self.check_at_s[k] = now_s + max(0.0, clearance / max(max_speed_m_s, 0.1) - dt_s)
+        return False

@@ -1,70 +1,120 @@
 """Fast-forward through steady flight: how many physics steps provably change nothing but
-positions along straight lines at constant velocity.
+positions along straight lines at constant velocity, vehicle by vehicle.
 
-When every vehicle is either resting at its goal or cruising at its speed limit towards it,
-the next steps are pure constant-velocity motion until something can happen: braking
-begins, an acceptance radius or the ground is reached, a timer fires, a battery level or a
-collision-prevention check falls due. `steady_steps` computes that horizon; the fleet then
-applies those steps in one go, still recording every step of the trajectory.
+A vehicle resting at its goal, or cruising at its speed limit towards it, moves at constant
+velocity until something can happen to it: braking begins, an acceptance radius or the ground
+is reached, a battery level or a collision-prevention check falls due. `cruise_plan` works out
+that horizon for every vehicle. When every vehicle is steady the fleet applies the steps in one
+go (a leap); when only a few are not, those few are stepped one by one while the steady ones
+still move in one go (emulator.flight.solo). Either way every step of the trajectory is
+recorded, and no step runs past a timer.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from emulator.flight.arrays import any_true as _any
 from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
+from emulator.flight.battery import (
+    CLIMB_POWER_PER_M_S,
+    GROUND_IDLE_POWER,
+    SPEED_POWER_PER_M2_S2,
+)
 from emulator.flight.dynamics import (
     BRAKING_SHARE,
     CONTROL_NONE,
-    CONTROL_POSITION,
+    CONTROL_VELOCITY,
     TRACK_NONE,
     along_line_limit,
 )
 from emulator.flight.fleet_view import FleetView
 
-__all__ = ["steady_steps"]
+__all__ = ["CruisePlan", "cruise_plan", "steady_steps"]
 
 ACCEL_STEADY_M_S2 = 1e-6
+YAW_STEADY_DEG = 1e-9
 AT_GOAL_M = 1e-6
 ALIGNED_COS_TOL = 1e-9  # 1 - cos of the largest angle between velocity and goal direction
+MIN_CRUISE_STEPS = 2.0  # a vehicle steady for fewer steps than this is stepped one by one
+# Up to this many vehicles the plan is worked out in Python floats, vehicle by vehicle; for
+# more, with whole arrays (the same decisions, up to the last bit of a few roundings).
+FLOAT_PLAN_MAX_VEHICLES = 32
+
+
+@dataclass(frozen=True, slots=True)
+class CruisePlan:
+    """`steps` steps in which every vehicle outside `solo` flies at constant velocity;
+    `solo` (ascending indices) are stepped one by one (none: a leap of the whole fleet)."""
+
+    steps: int
+    solo: np.ndarray
 
 
 def steady_steps(fleet: FleetView, limit: int) -> int:
-    """Steps (>= 2) the fleet can fast-forward through, or 0 if it must step normally."""
-    if limit < 2:
-        return 0
+    """Steps (>= 2) the whole fleet can fast-forward through, or 0 if it must step normally."""
+    plan = cruise_plan(fleet, limit, max_solo=0)
+    return 0 if plan is None else plan.steps
+
+
+def cruise_plan(fleet: FleetView, limit: int, *, max_solo: int) -> CruisePlan | None:
+    """The next stretch of steady flight, with at most max_solo vehicles stepped one by one;
+    None when the fleet must take a plain step (a stretch of a leap is at least 2 steps)."""
+    if limit < 1:
+        return None
     dyn, dt = fleet.dyn, fleet.dt_s
-    if _any(np.abs(dyn.accel_m_s2) > ACCEL_STEADY_M_S2) or _any(dyn.yaw_tracking):
-        return 0
-    if dyn.yaw_stepped_over(1e-9):
-        return 0
-    active = dyn.control != CONTROL_NONE
-    if _any(active & (dyn.control != CONTROL_POSITION)):
-        return 0
+    if _any(dyn.control == CONTROL_VELOCITY):
+        return None  # offboard set-points are checked against the fence every step
     horizon = float(limit)
+    timer = fleet.timer_s.min()
+    if math.isfinite(timer):
+        horizon = min(horizon, (timer - fleet.now_s) / dt - 1.0)
+    if horizon < 1.0 or (max_solo == 0 and horizon < MIN_CRUISE_STEPS):
+        return None
+    steps = (_cruise_steps_floats(fleet) if dyn.n <= FLOAT_PLAN_MAX_VEHICLES
+             else _cruise_steps_arrays(fleet).tolist())
+    solo = [k for k, s in enumerate(steps) if not s >= MIN_CRUISE_STEPS]
+    if not solo:
+        horizon = min(horizon, min(steps))
+        return CruisePlan(int(horizon), _NO_SOLO) if horizon >= MIN_CRUISE_STEPS else None
+    if len(solo) > max_solo:
+        return None
+    if len(solo) < len(steps):
+        horizon = min(horizon, min(s for s in steps if s >= MIN_CRUISE_STEPS))
+    return CruisePlan(int(horizon), np.array(solo, dtype=np.intp)) if horizon >= 1.0 else None
+
+
+def _cruise_steps_arrays(fleet: FleetView) -> np.ndarray:
+    """Per vehicle, the steps it can cruise (-inf: not steady), with whole arrays."""
+    dyn, dt, now = fleet.dyn, fleet.dt_s, fleet.now_s
+    n = dyn.n
+    active = dyn.control != CONTROL_NONE
+    # Vehicles that are not in steady flight at all: speeding up, braking or turning.
+    unsteady = dyn.yaw_tracking | (np.abs(dyn.accel_m_s2) > ACCEL_STEADY_M_S2).any(axis=1)
+    yaw_step = dyn.yaw_step_deg
+    if yaw_step is not None:
+        unsteady |= np.abs(yaw_step) > YAW_STEADY_DEG
     speed = np.sqrt(np.einsum("ij,ij->i", dyn.velocity_m_s, dyn.velocity_m_s))
     moving = active & (speed > 1e-9)
     err = dyn.goal_m - dyn.position_m
     dist = np.sqrt(np.einsum("ij,ij->i", err, err))
-    if _any(active & ~moving & (dist > AT_GOAL_M)):
-        return 0  # about to start moving
-    if _any(active & ~moving & (dyn.tracking != TRACK_NONE)):
-        return 0  # at rest on a goal whose arrival the next step reports
+    # At rest off its goal (about to start moving) or on a goal whose arrival the next step
+    # reports.
+    unsteady |= active & ~moving & ((dist > AT_GOAL_M) | (dyn.tracking != TRACK_NONE))
+    steps = np.full(n, math.inf)
     n_moving = _count(moving)
     if n_moving:
-        # Every vehicle moving (the common case): whole arrays, not copies of their rows.
-        idx: slice | np.ndarray = slice(None) if n_moving == moving.size else _indices(moving)
+        idx = _indices(moving)
         s, d, e = speed[idx], dist[idx], err[idx]
         vel = dyn.velocity_m_s[idx]
         # Steady flight heads straight for the goal. A velocity that does not (a wind the
-        # airframe cannot fly against bends or reverses it) is no cruise: step normally.
+        # airframe cannot fly against bends or reverses it) is no cruise.
         along = np.einsum("ij,ij->i", vel, e)
-        if _any(along < s * d * (1.0 - ALIGNED_COS_TOL)):
-            return 0
+        unsteady[idx] |= along < s * d * (1.0 - ALIGNED_COS_TOL)
         h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
         w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
         a_eff = along_line_limit(dyn.accel_xy_m_s2[idx], dyn.accel_z_m_s2[idx], h, w)
@@ -76,30 +126,112 @@ def steady_steps(fleet: FleetView, limit: int) -> int:
         vz = vel[:, 2]
         ground_m = np.where(vz < 0.0, dyn.position_m[idx, 2] / np.maximum(-vz, 1e-9) * s, np.inf)
         free_m = np.minimum(free_m, ground_m)
-        horizon = min(horizon, float((free_m / step_m).min()) - 2.0)
+        cruise = free_m / step_m - 2.0
         if fleet.guard.enabled:
-            due = fleet.guard.check_at_s[idx].min()
-            horizon = min(horizon, (due - fleet.now_s) / dt - 1.0)
-    timer = fleet.timer_s.min()
-    if math.isfinite(timer):
-        horizon = min(horizon, (timer - fleet.now_s) / dt - 1.0)
-    horizon = min(horizon, _battery_horizon_steps(fleet, moving))
-    return int(horizon) if horizon >= 2.0 else 0
+            cruise = np.minimum(cruise, (fleet.guard.check_at_s[idx] - now) / dt - 1.0)
+        steps[idx] = cruise
+    steps = np.minimum(steps, _battery_horizon_steps(fleet))
+    steps[unsteady] = -math.inf
+    return steps
 
 
-def _battery_horizon_steps(fleet: FleetView, moving: np.ndarray) -> float:
-    """Steps before any battery could cross a level (low, critical, emergency, empty, full)."""
+def _cruise_steps_floats(fleet: FleetView) -> list[float]:
+    """`_cruise_steps_arrays` vehicle by vehicle in Python floats (cheaper for a few)."""
+    dyn, dt, now = fleet.dyn, fleet.dt_s, fleet.now_s
+    yaw_step = dyn.yaw_step_deg
+    yaw_steps = [0.0] * dyn.n if yaw_step is None else yaw_step.tolist()
+    check_at = fleet.guard.check_at_s.tolist() if fleet.guard.enabled else None
+    accel_xy, accel_z = dyn.accel_xy_m_s2.tolist(), dyn.accel_z_m_s2.tolist()
+    acceptance = dyn.acceptance_m.tolist()
+    battery = _BatteryFloats(fleet)
+    steps = []
+    for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), (px, py, pz),
+            (gx, gy, gz)) in enumerate(zip(
+                dyn.control.tolist(), dyn.tracking.tolist(), dyn.yaw_tracking.tolist(),
+                dyn.accel_m_s2.tolist(), dyn.velocity_m_s.tolist(), dyn.position_m.tolist(),
+                dyn.goal_m.tolist(), strict=True)):
+        if (yaw_tracking or abs(ax) > ACCEL_STEADY_M_S2 or abs(ay) > ACCEL_STEADY_M_S2
+                or abs(az) > ACCEL_STEADY_M_S2 or abs(yaw_steps[k]) > YAW_STEADY_DEG):
+            steps.append(-math.inf)
+            continue
+        s = math.sqrt(vx * vx + vy * vy + vz * vz)
+        ex, ey, ez = gx - px, gy - py, gz - pz
+        d = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if control == CONTROL_NONE or not s > 1e-9:
+            at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
+            steps.append(battery.steps(k, vx, vy, vz) if at_rest else -math.inf)
+            continue
+        if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
+            steps.append(-math.inf)
+            continue
+        d_min = max(d, 1e-9)
+        a_eff = _along_line_limit(accel_xy[k], accel_z[k], math.hypot(ex, ey) / d_min,
+                                  abs(ez) / d_min)
+        free_m = d - s * s / (2.0 * BRAKING_SHARE * a_eff)
+        if tracking != TRACK_NONE:
+            free_m = min(free_m, d - acceptance[k])
+        if vz < 0.0:
+            free_m = min(free_m, pz / max(-vz, 1e-9) * s)
+        cruise = free_m / (s * dt) - 2.0
+        if check_at is not None:
+            cruise = min(cruise, (check_at[k] - now) / dt - 1.0)
+        steps.append(min(cruise, battery.steps(k, vx, vy, vz)))
+    return steps
+
+
+class _BatteryFloats:
+    """`_battery_horizon_steps` for one vehicle at a time, in Python floats."""
+
+    def __init__(self, fleet: FleetView) -> None:
+        bat = fleet.bat
+        self._pct = bat.pct.tolist()
+        self._levels = bat.levels_pct.T.tolist()
+        self._full_pct_s = (100.0 / bat.hover_endurance_s).tolist()
+        self._charge = bat.charge_rate_pct_s.tolist()
+        self._airborne, self._armed = fleet.airborne.tolist(), fleet.armed.tolist()
+        self._wind = fleet.dyn.wind_m_s.tolist()
+        self._dt = fleet.dt_s
+        self._slack = 2.0 * fleet.battery_every_steps
+
+    def steps(self, k: int, vx: float, vy: float, vz: float) -> float:
+        if self._airborne[k]:
+            air = math.hypot(vx - self._wind[0], vy - self._wind[1])
+            power = 1.0 + SPEED_POWER_PER_M2_S2 * (air * air) + CLIMB_POWER_PER_M_S * max(vz, 0.0)
+        else:
+            power = GROUND_IDLE_POWER if self._armed[k] else 0.0
+        rate = self._full_pct_s[k] * power - self._charge[k]
+        pct = self._pct[k]
+        if rate > 0.0:
+            gap = min([pct - level for level in self._levels[k] if level < pct], default=math.inf)
+            return gap / rate / self._dt - self._slack
+        if rate < 0.0:
+            return (100.0 - pct) / -rate / self._dt - self._slack
+        return math.inf
+
+
+def _along_line_limit(limit_h: float, limit_v: float, h: float, w: float) -> float:
+    """emulator.flight.dynamics.along_line_limit for one line."""
+    along = min(limit_h / h if h > 0.0 else math.inf, limit_v / w if w > 0.0 else math.inf)
+    return along if math.isfinite(along) else min(limit_h, limit_v)
+
+
+_NO_SOLO = np.empty(0, dtype=np.intp)
+
+
+def _battery_horizon_steps(fleet: FleetView) -> np.ndarray:
+    """Per vehicle, the steps before its battery could cross a level (low, critical,
+    emergency, empty, full) at its present drain or charge rate."""
     bat, dyn, dt = fleet.bat, fleet.dyn, fleet.dt_s
     rate = bat.drain_pct_s(fleet.airborne, fleet.armed, dyn.airspeed_m_s(),
                            dyn.velocity_m_s[:, 2]) - bat.charge_rate_pct_s
     pct = bat.pct
-    horizon = math.inf
+    steps = np.full(pct.size, math.inf)
     draining = rate > 0.0
     if _any(draining):
         levels = bat.levels_pct
         gaps = np.where(levels < pct, pct - levels, np.inf).min(axis=0)
-        horizon = float((gaps[draining] / rate[draining]).min()) / dt
+        steps[draining] = gaps[draining] / rate[draining] / dt
     charging = rate < 0.0
     if _any(charging):
-        horizon = min(horizon, float(((100.0 - pct[charging]) / -rate[charging]).min()) / dt)
-    return horizon - 2.0 * fleet.battery_every_steps
+        steps[charging] = (100.0 - pct[charging]) / -rate[charging] / dt
+    return steps - 2.0 * fleet.battery_every_steps

@@ -146,7 +146,8 @@ class FleetDynamics:
         self.yaw_rate_deg_s = np.full(n, 45.0)
         self.acceptance_m = np.full(n, 2.0)
         self.wind_m_s = np.zeros(2)
-        self._yaw_step: np.ndarray | None = None  # the yaw change of the last step
+        # the yaw change of every vehicle in the last step (None: no vehicle turned)
+        self.yaw_step_deg: np.ndarray | None = None
 
     # ------------------------------------------------------------------ step
     def step(self, dt_s: float, guard: StepGuard | None = None) -> StepEvents:
@@ -257,14 +258,19 @@ class FleetDynamics:
         self._windy = bool(_count(value))
 
     @property
+    def windy(self) -> bool:
+        """Whether there is any wind."""
+        return self._windy
+
+    @property
     def last_yaw_step_deg(self) -> float:
         """The largest yaw change of the last step."""
-        step = self._yaw_step
+        step = self.yaw_step_deg
         return 0.0 if step is None else float(np.abs(step).max())
 
     def yaw_stepped_over(self, deg: float) -> bool:
         """Whether some vehicle's yaw changed by more than deg in the last step."""
-        step = self._yaw_step
+        step = self.yaw_step_deg
         return step is not None and bool(_count(np.abs(step) > deg))
 
     def _step_yaw(self, dt_s: float, active: np.ndarray, every: bool, err: np.ndarray,
@@ -279,7 +285,7 @@ class FleetDynamics:
             desired = bearing if n_far == self.n else np.where(
                 far, bearing, np.where(free, yaw, goal))
         elif _count(free) == self.n:
-            self._yaw_step = None
+            self.yaw_step_deg = None
             return _EMPTY
         else:
             desired = np.where(free, yaw, goal)
@@ -288,7 +294,7 @@ class FleetDynamics:
         step = np.minimum(np.maximum(diff, -limit), limit)
         if not every:
             step[~active] = 0.0
-        self._yaw_step = step
+        self.yaw_step_deg = step
         self.yaw_deg = (yaw + step) % 360.0
         if not _count(self.yaw_tracking):
             return _EMPTY

@@ -11,12 +11,21 @@ from emulator.flight.arrays import indices as _indices
 from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
-from emulator.flight.cruise import steady_steps
+from emulator.flight.cruise import CruisePlan, cruise_plan
 from emulator.flight.dynamics import (
     CONTROL_NONE,
     CONTROL_VELOCITY,
     FleetDynamics,
+    StepEvents,
     StepGuard,
+)
+from emulator.flight.solo import (
+    ARRIVED,
+    OBSTACLE_STOP,
+    STEADY,
+    TOUCHED_DOWN,
+    YAW_REACHED,
+    SoloVehicle,
 )
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
@@ -28,6 +37,11 @@ __all__ = ["BATTERY_EVERY_STEPS", "Fleet"]
 BATTERY_EVERY_STEPS = 5  # the battery integrates at physics_hz / 5 (10 Hz at 50 Hz physics)
 _NO_LEVELS = np.empty(0, dtype=np.intp)
 LEAP_RETRY_STEPS = 4  # after a failed fast-forward check, step normally this many times
+# At most this many vehicles are stepped one by one while the others cruise (see
+# emulator.flight.cruise); with more, a plain step of the whole fleet costs less.
+MAX_SOLO = 12
+_SOLO_EVENTS = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
+_NO_EVENTS = StepEvents(_NO_LEVELS, _NO_LEVELS, _NO_LEVELS, _NO_LEVELS)
 
 
 class Fleet:
@@ -94,12 +108,18 @@ class Fleet:
             self.targets.advance(self.now_s, self.dt_s)
         self.step_count += 1
         levels = _NO_LEVELS
-        if self.step_count % BATTERY_EVERY_STEPS == 0:
+        battery_step = self.step_count % BATTERY_EVERY_STEPS == 0
+        if battery_step:
             levels = self.bat.step(self.dt_s * BATTERY_EVERY_STEPS, self.airborne, self.armed,
                                    dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
         self._record()
+        self._acted = self._react(events, levels, battery_step)
+
+    def _react(self, events: StepEvents, levels: np.ndarray, battery_step: bool) -> bool:
+        """Hand the events of the step just taken to the autopilots; whether one was called
+        (only they change `busy` and `ended`)."""
         aps = self.autopilots
-        acted = False  # whether an autopilot was called (only they change `busy`/`ended`)
+        acted = False
         if not events.empty:
             acted = True
             for k in events.obstacle_stop:
@@ -114,12 +134,12 @@ class Fleet:
             acted = True
             for k in levels:
                 aps[k].on_battery_level(int(self.bat.level[k]))
-        by_velocity = dyn.control == CONTROL_VELOCITY
+        by_velocity = self.dyn.control == CONTROL_VELOCITY
         if _any(by_velocity):
             acted = True
             for k in _indices(by_velocity):
                 aps[k].offboard.check_fence()
-        if levels is not _NO_LEVELS:
+        if battery_step:
             charging = self.bat.charge_rate_pct_s > 0.0
             if _any(charging):
                 for k in _indices(charging & (self.bat.pct >= 100.0)):
@@ -131,7 +151,7 @@ class Fleet:
             for k in due:
                 self.timer_s[k] = math.inf
                 aps[k].on_timer()
-        self._acted = acted
+        return acted
 
     def due(self, active: np.ndarray) -> np.ndarray | None:
         """StepGuard: the active vehicles whose clearance the guard measures this step."""
@@ -163,18 +183,21 @@ class Fleet:
         look = True  # the first step, and any in which an autopilot acted, can end the run
         while done < max_steps:
             was_busy = self.busy.copy()
-            leap = 0
+            plan = None
             if fast_forward and self._leap_retry_step <= self.step_count:
-                leap = steady_steps(self, max_steps - done)
-                if not leap:  # not steady: do not ask again for a few steps
+                plan = cruise_plan(self, max_steps - done, max_solo=MAX_SOLO)
+                if plan is None:  # not steady: do not ask again for a few steps
                     self._leap_retry_step = self.step_count + LEAP_RETRY_STEPS
-            if leap:
-                self._leap(leap)  # no autopilot acts in steady flight
-                done += leap
-            else:
+            if plan is None:
                 self.step()
                 done += 1
                 look = look or self._acted
+            elif plan.solo.size:
+                done += self._cruise(plan)
+                look = look or self._acted
+            else:
+                self._leap(plan.steps)  # no autopilot acts in steady flight
+                done += plan.steps
             if look:
                 self.ended |= was_busy & ~self.busy
                 if not _any(self.busy) or _any(self.ended & self.stop_on):
@@ -201,6 +224,89 @@ class Fleet:
         self.recorder.record_fleet_steps(steps * dt, positions, dyn.yaw_deg, battery,
                                          self._moving_mask())
 
+    def _cruise(self, plan: CruisePlan) -> int:
+        """Up to `plan.steps` steps in which the vehicles of `plan.solo` are stepped one by
+        one and every other vehicle flies at constant velocity (see emulator.flight.cruise).
+        Ends after a step in which something happened to a solo vehicle (its autopilot then
+        acts, as after a plain step) or once every solo vehicle flies steadily after speeding
+        up, braking or turning; returns the steps run."""
+        dyn, dt, bat, n = self.dyn, self.dt_s, self.bat, self.n
+        guard = _SoloGuard(self) if self.guard.enabled else None
+        solos = [SoloVehicle(dyn, k, dt, guard) for k in plan.solo.tolist()]
+        moving = self._moving_mask()
+        start = self.step_count
+        charging = bat.charge_rate_pct_s > 0.0
+        any_charging = _any(charging)
+        deltas = None  # battery changes per battery step (the same for the cruising ones)
+        flags: list[tuple[bool, bool]] = []  # airborne, armed of each solo vehicle
+        bat_dt = dt * BATTERY_EVERY_STEPS
+        wind_x, wind_y = dyn.wind_m_s.tolist()
+        rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
+        charge: list[np.ndarray] = []
+        bits = [0] * len(solos)
+        settling = False  # whether some solo vehicle sped up, braked or turned in this run
+        levels = _NO_LEVELS
+        battery_step = False
+        j = 0
+        while j < plan.steps:
+            t_guard = (start + j) * dt + dt  # the plain step's now_s + dt_s
+            j += 1
+            happened, steady = 0, STEADY
+            for i, solo in enumerate(solos):
+                bits[i] = b = solo.step(t_guard)
+                happened |= b
+                steady &= b
+                rows += (solo.px, solo.py, solo.pz, solo.yaw, solo.moving)
+            battery_step = (start + j) % BATTERY_EVERY_STEPS == 0
+            if battery_step:
+                if deltas is None:
+                    deltas = bat.deltas(bat_dt, self.airborne, self.armed, dyn.airspeed_m_s(),
+                                        dyn.velocity_m_s[:, 2])
+                    flags = list(zip(self.airborne[plan.solo].tolist(),
+                                     self.armed[plan.solo].tolist(), strict=True))
+                for solo, (airborne, armed) in zip(solos, flags, strict=True):
+                    deltas[solo.k] = bat.delta(solo.k, bat_dt, airborne, armed, math.hypot(
+                        solo.vx - wind_x, solo.vy - wind_y), solo.vz)
+                levels = bat.apply(deltas)
+                if levels.size or (any_charging and _any(charging & (bat.pct >= 100.0))):
+                    happened |= ARRIVED  # not an arrival: just stop here for the autopilots
+            charge.append(bat.pct)
+            if happened & _SOLO_EVENTS:
+                break
+            if not steady:
+                settling = True
+            elif settling and j >= LEAP_RETRY_STEPS:
+                break  # every solo vehicle cruises now: the whole fleet may leap
+        steps = np.arange(start + 1, start + j + 1)
+        positions = dyn.position_m + dyn.velocity_m_s * ((steps - start)[:, None, None] * dt)
+        solo_rows = np.array(rows).reshape(j, len(solos), 5)
+        index = plan.solo
+        positions[:, index] = solo_rows[:, :, :3]
+        yaw = np.empty((j, n))
+        yaw[:] = dyn.yaw_deg
+        yaw[:, index] = solo_rows[:, :, 3]
+        moving_rows = np.empty((j, n), dtype=bool)
+        moving_rows[:] = moving
+        moving_rows[:, index] = solo_rows[:, :, 4] != 0.0
+        if self.targets is not None:
+            self.targets.advance(self.now_s, j * dt)
+        self.step_count += j
+        dyn.position_m = positions[-1].copy()
+        yaw_step = np.zeros(n)
+        for solo in solos:
+            solo.store(dyn)
+            yaw_step[solo.k] = solo.yaw_step
+        dyn.yaw_step_deg = yaw_step
+        self.recorder.record_fleet_steps(steps * dt, positions, yaw, np.array(charge),
+                                         moving_rows)
+        events = _NO_EVENTS
+        if any(b & _SOLO_EVENTS for b in bits):
+            events = StepEvents(*(np.array([s.k for s, b in zip(solos, bits, strict=True)
+                                            if b & bit], dtype=np.intp)
+                                  for bit in (ARRIVED, YAW_REACHED, TOUCHED_DOWN, OBSTACLE_STOP)))
+        self._acted = self._react(events, levels if battery_step else _NO_LEVELS, battery_step)
+        return j
+
     def _moving_mask(self) -> np.ndarray:
         dyn = self.dyn
         return (dyn.control != CONTROL_NONE) & (dyn.velocity_m_s.any(axis=1) | dyn.yaw_tracking)
@@ -209,3 +315,18 @@ class Fleet:
         dyn = self.dyn
         self.recorder.record_fleet_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
                                         self._moving_mask())
+
+
+class _SoloGuard:
+    """The fleet's clearance guard for vehicles stepped one by one (emulator.flight.solo)."""
+
+    def __init__(self, fleet: Fleet) -> None:
+        self._fleet = fleet
+        self._guard = fleet.guard
+
+    def __call__(self, k: int, t_s: float, x_m: float, y_m: float, z_m: float) -> bool:
+        fleet = self._fleet
+        return self._guard.check_one(k, t_s, x_m, y_m, z_m, fleet.max_speed_m_s(k), fleet.dt_s)
+
+    def check_at_s(self, k: int) -> float:
+        return float(self._guard.check_at_s[k])

@@ -1,0 +1,230 @@
+"""One vehicle stepped on its own, in Python floats.
+
+While most of the fleet cruises (emulator.flight.cruise), the few vehicles that speed up,
+brake or turn are stepped one by one: for a handful of vehicles, float arithmetic costs far
+less than numpy's calls on whole arrays. `SoloVehicle.step` applies to one vehicle the rules
+`FleetDynamics.step` applies to every row, in the same order and with the same operations
+(only `math.hypot` and `math.atan2` may round their last bit differently from numpy's).
+Vehicles under velocity control are never stepped here.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+from emulator.flight.dynamics import (
+    BRAKING_SHARE,
+    CONTROL_NONE,
+    CONTROL_POSITION,
+    SETTLED_GOAL_M,
+    SETTLED_SPEED_M_S,
+    TRACK_NONE,
+    TRACK_PASS,
+    TRACK_SETTLE,
+    YAW_REACHED_DEG,
+    FleetDynamics,
+)
+
+__all__ = ["ARRIVED", "OBSTACLE_STOP", "STEADY", "TOUCHED_DOWN", "YAW_REACHED", "SoloVehicle"]
+
+# What happened to a solo vehicle in its step (bits of `SoloVehicle.step`'s result).
+ARRIVED, YAW_REACHED, TOUCHED_DOWN, OBSTACLE_STOP = 1, 2, 4, 8
+STEADY = 16  # no acceleration and no yaw change: it may cruise from here
+
+ACCEL_STEADY_M_S2 = 1e-6  # emulator.flight.cruise's bounds
+YAW_STEADY_DEG = 1e-9
+_SETTLED_SPEED2 = SETTLED_SPEED_M_S**2
+_SETTLED_GOAL2 = SETTLED_GOAL_M**2
+_INF = math.inf
+_hypot, _sqrt, _atan2, _degrees = math.hypot, math.sqrt, math.atan2, math.degrees
+
+
+class Guard(Protocol):
+    """Collision prevention for one vehicle at a time (emulator.flight.collision)."""
+
+    def __call__(self, k: int, t_s: float, x_m: float, y_m: float, z_m: float) -> bool:
+        """Whether vehicle k's position at t_s lies inside an obstacle (measured only once
+        its clearance deadline has passed)."""
+
+    def check_at_s(self, k: int) -> float:
+        """When vehicle k's clearance is next measured."""
+
+
+class SoloVehicle:
+    """Row k of a FleetDynamics as floats: read by the constructor, stepped by `step`,
+    written back by `store`. The commands and limits must not change in between."""
+
+    __slots__ = (
+        "_accel_xy", "_accel_z", "_acceptance2", "_active", "_airspeed", "_check_at", "_climb",
+        "_descent", "_dt", "_dv_xy_max", "_dv_z_max", "_goal", "_goal_yaw", "_guard", "_inv_dt",
+        "_landing", "_position", "_speed_xy", "_wind", "_yaw_step_max", "ax", "ay", "az", "k",
+        "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw", "yaw_step",
+        "yaw_tracking",
+    )
+
+    def __init__(self, dyn: FleetDynamics, k: int, dt_s: float, guard: Guard | None) -> None:
+        self.k = k
+        self.px, self.py, self.pz = dyn.position_m[k].tolist()
+        self.vx, self.vy, self.vz = dyn.velocity_m_s[k].tolist()
+        self.ax, self.ay, self.az = dyn.accel_m_s2[k].tolist()
+        self.yaw = float(dyn.yaw_deg[k])
+        self.yaw_step = 0.0
+        self.tracking = int(dyn.tracking[k])
+        self.yaw_tracking = bool(dyn.yaw_tracking[k])
+        self.moving = False
+        control = int(dyn.control[k])
+        self._active = control != CONTROL_NONE
+        self._position = control == CONTROL_POSITION
+        self._goal = dyn.goal_m[k].tolist()
+        self._landing = self._active and self._goal[2] < 0.0
+        self._goal_yaw = float(dyn.goal_yaw_deg[k])
+        self._speed_xy = float(dyn.speed_xy_m_s[k])
+        self._accel_xy = float(dyn.accel_xy_m_s2[k])
+        self._accel_z = float(dyn.accel_z_m_s2[k])
+        self._airspeed = float(dyn.airspeed_max_m_s[k])
+        self._climb = float(dyn.climb_m_s[k])
+        self._descent = float(dyn.descent_m_s[k])
+        self._dv_xy_max = self._accel_xy * dt_s
+        self._dv_z_max = self._accel_z * dt_s
+        self._yaw_step_max = float(dyn.yaw_rate_deg_s[k]) * dt_s
+        acceptance = float(dyn.acceptance_m[k])
+        self._acceptance2 = acceptance * acceptance
+        self._wind = dyn.wind_m_s.tolist() if dyn.windy else None
+        self._dt = dt_s
+        self._inv_dt = 1.0 / dt_s
+        self._guard = guard
+        # when the guard next measures this vehicle's clearance (never without a guard)
+        self._check_at = _INF if guard is None else guard.check_at_s(k)
+
+    def step(self, t_s: float) -> int:
+        """Advance by one step ending at t_s; returns the bits of what happened."""
+        px, py, pz = self.px, self.py, self.pz
+        vx, vy, vz = self.vx, self.vy, self.vz
+        gx, gy, gz = self._goal
+        dt = self._dt
+        ex, ey, ez = gx - px, gy - py, gz - pz
+        d_xy = _hypot(ex, ey)
+        active = self._active
+        if active:
+            dist = _sqrt(d_xy * d_xy + ez * ez)
+            inv = 1.0 / (dist if dist > 1e-9 else 1e-9)
+            h = d_xy * inv
+            w = abs(ez) * inv
+            speed_xy, accel_xy, accel_z = self._speed_xy, self._accel_xy, self._accel_z
+            vz_lim = self._climb if ez >= 0.0 else self._descent
+            # along_line_limit for the speed and the acceleration
+            if h > 0.0:
+                speed_h, accel_h = speed_xy / h, accel_xy / h
+            else:
+                speed_h = accel_h = _INF
+            if w > 0.0:
+                speed_v, accel_v = vz_lim / w, accel_z / w
+            else:
+                speed_v = accel_v = _INF
+            s_max = speed_v if speed_v < speed_h else speed_h
+            if s_max == _INF:
+                s_max = vz_lim if vz_lim < speed_xy else speed_xy
+            a_eff = accel_v if accel_v < accel_h else accel_h
+            if a_eff == _INF:
+                a_eff = accel_z if accel_z < accel_xy else accel_xy
+            speed = _sqrt(2.0 * BRAKING_SHARE * a_eff * dist)
+            if s_max < speed:
+                speed = s_max
+            reach = dist * self._inv_dt
+            if reach < speed:
+                speed = reach
+            f = speed * inv
+            dvx, dvy, dvz = ex * f - vx, ey * f - vy, ez * f - vz
+            dv_xy = _hypot(dvx, dvy)
+            scale = self._dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
+            if scale < 1.0:
+                nvx, nvy = vx + dvx * scale, vy + dvy * scale
+            else:
+                nvx, nvy = vx + dvx, vy + dvy
+            lim_z = self._dv_z_max
+            nvz = vz + (-lim_z if dvz < -lim_z else lim_z if dvz > lim_z else dvz)
+            wind = self._wind
+            if wind is None:
+                air = _hypot(nvx, nvy)
+                if air > self._airspeed:
+                    ratio = self._airspeed / air
+                    nvx, nvy = nvx * ratio, nvy * ratio
+            else:
+                airx, airy = nvx - wind[0], nvy - wind[1]
+                air = _hypot(airx, airy)
+                if air > self._airspeed:
+                    ratio = self._airspeed / air
+                    nvx, nvy = airx * ratio + wind[0], airy * ratio + wind[1]
+        else:
+            nvx = nvy = nvz = 0.0
+        npx, npy, npz = px + nvx * dt, py + nvy * dt, pz + nvz * dt
+        events = 0
+        if npz < 0.0:
+            npz = 0.0
+            if nvz < 0.0:
+                nvz = 0.0
+            if self._landing:
+                events = TOUCHED_DOWN
+        if t_s >= self._check_at and active and abs(nvx) + abs(nvy) + abs(nvz) > 0.0:
+            guard = self._guard
+            assert guard is not None
+            if guard(self.k, t_s, npx, npy, npz):
+                npx, npy, npz = px, py, pz
+                nvx = nvy = nvz = 0.0
+                events |= OBSTACLE_STOP
+            self._check_at = guard.check_at_s(self.k)
+        inv_dt = self._inv_dt
+        self.ax = ax = (nvx - vx) * inv_dt
+        self.ay = ay = (nvy - vy) * inv_dt
+        self.az = az = (nvz - vz) * inv_dt
+        self.vx, self.vy, self.vz = nvx, nvy, nvz
+        self.px, self.py, self.pz = npx, npy, npz
+        # yaw: free (NaN goal) yaw follows the bearing to a position goal more than 2 m away
+        goal_yaw, yaw = self._goal_yaw, self.yaw
+        if goal_yaw == goal_yaw:
+            desired = goal_yaw
+        elif self._position and d_xy > 2.0:
+            desired = _degrees(_atan2(ex, ey))
+        else:
+            desired = yaw
+        if desired == yaw:
+            diff = step = 0.0
+        else:
+            diff = (desired - yaw + 540.0) % 360.0 - 180.0
+            if active:
+                limit = self._yaw_step_max
+                step = -limit if diff < -limit else limit if diff > limit else diff
+                self.yaw = (yaw + step) % 360.0
+            else:
+                step = 0.0
+        self.yaw_step = step
+        if self.yaw_tracking and abs(diff - step) < YAW_REACHED_DEG:
+            self.yaw_tracking = False
+            events |= YAW_REACHED
+        tracking = self.tracking
+        if tracking != TRACK_NONE:
+            ex, ey, ez = gx - npx, gy - npy, gz - npz
+            dist2 = ex * ex + ey * ey + ez * ez
+            if dist2 <= self._acceptance2 and (tracking == TRACK_PASS or (
+                    tracking == TRACK_SETTLE and dist2 <= _SETTLED_GOAL2
+                    and nvx * nvx + nvy * nvy + nvz * nvz <= _SETTLED_SPEED2)):
+                self.tracking = TRACK_NONE
+                events |= ARRIVED
+        self.moving = active and bool(nvx or nvy or nvz or self.yaw_tracking)
+        if (-ACCEL_STEADY_M_S2 <= ax <= ACCEL_STEADY_M_S2
+                and -ACCEL_STEADY_M_S2 <= ay <= ACCEL_STEADY_M_S2
+                and -ACCEL_STEADY_M_S2 <= az <= ACCEL_STEADY_M_S2
+                and -YAW_STEADY_DEG <= step <= YAW_STEADY_DEG and not self.yaw_tracking):
+            events |= STEADY
+        return events
+
+    def store(self, dyn: FleetDynamics) -> None:
+        """Write the vehicle's state back into its row of dyn (positions excepted: the fleet
+        writes those with every other vehicle's)."""
+        k = self.k
+        dyn.velocity_m_s[k] = (self.vx, self.vy, self.vz)
+        dyn.accel_m_s2[k] = (self.ax, self.ay, self.az)
+        dyn.yaw_deg[k] = self.yaw
+        dyn.tracking[k] = self.tracking
+        dyn.yaw_tracking[k] = self.yaw_tracking
