@@ -1,13 +1,13 @@
 """Fast-forward through steady flight: how many physics steps provably change nothing but
 positions along straight lines at constant velocity, vehicle by vehicle.
 
-A vehicle resting at its goal, or cruising at its speed limit towards it, moves at constant
-velocity until something can happen to it: braking begins, an acceptance radius or the ground
-is reached, a battery level or a collision-prevention check falls due. `cruise_plan` works out
-that horizon for every vehicle. When every vehicle is steady the fleet applies the steps in one
-go (a leap); when only a few are not, those few are stepped one by one while the steady ones
-still move in one go (emulator.flight.solo). Either way every step of the trajectory is
-recorded, and no step runs past a timer.
+A vehicle resting at its goal, or cruising towards it at the speed and heading its commands
+ask for, moves at constant velocity until something can happen to it: braking begins, an
+acceptance radius or the ground is reached, a battery level or a collision-prevention check
+falls due. `cruise_plan` works out that horizon for every vehicle. When every vehicle is steady
+the fleet applies the steps in one go (a leap); when only a few are not, those few are stepped
+one by one while the steady ones still move in one go (emulator.flight.solo). Either way every
+step of the trajectory is recorded, and no step runs past a timer.
 """
 
 from __future__ import annotations
@@ -115,8 +115,19 @@ def _cruise_steps_arrays(fleet: FleetView) -> np.ndarray:
         # airframe cannot fly against bends or reverses it) is no cruise.
         along = np.einsum("ij,ij->i", vel, e)
         unsteady[idx] |= along < s * d * (1.0 - ALIGNED_COS_TOL)
-        h = np.hypot(e[:, 0], e[:, 1]) / np.maximum(d, 1e-9)
+        d_xy = np.hypot(e[:, 0], e[:, 1])
+        h = d_xy / np.maximum(d, 1e-9)
         w = np.abs(e[:, 2]) / np.maximum(d, 1e-9)
+        # ... at the speed its commands ask for now (a command since its last step may have
+        # changed them), facing where they ask it to face
+        vz_lim = np.where(e[:, 2] >= 0.0, dyn.climb_m_s[idx], dyn.descent_m_s[idx])
+        s_max = along_line_limit(dyn.speed_xy_m_s[idx], vz_lim, h, w)
+        unsteady[idx] |= np.abs(s - s_max) > ACCEL_STEADY_M_S2 * dt
+        goal_yaw, yaw = dyn.goal_yaw_deg[idx], dyn.yaw_deg[idx]
+        free = np.isnan(goal_yaw)
+        bearing = np.degrees(np.arctan2(e[:, 0], e[:, 1]))
+        desired = np.where(free, np.where(d_xy > 2.0, bearing, yaw), goal_yaw)
+        unsteady[idx] |= np.abs((desired - yaw + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG
         a_eff = along_line_limit(dyn.accel_xy_m_s2[idx], dyn.accel_z_m_s2[idx], h, w)
         step_m = s * dt
         braking_m = s * s / (2.0 * BRAKING_SHARE * a_eff)
@@ -143,6 +154,9 @@ def _cruise_steps_floats(fleet: FleetView) -> list[float]:
     check_at = fleet.guard.check_at_s.tolist() if fleet.guard.enabled else None
     accel_xy, accel_z = dyn.accel_xy_m_s2.tolist(), dyn.accel_z_m_s2.tolist()
     acceptance = dyn.acceptance_m.tolist()
+    speed_xy, climb, descent = (dyn.speed_xy_m_s.tolist(), dyn.climb_m_s.tolist(),
+                                dyn.descent_m_s.tolist())
+    goal_yaws, yaws = dyn.goal_yaw_deg.tolist(), dyn.yaw_deg.tolist()
     battery = _BatteryFloats(fleet)
     steps = []
     for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), (px, py, pz),
@@ -165,8 +179,21 @@ def _cruise_steps_floats(fleet: FleetView) -> list[float]:
             steps.append(-math.inf)
             continue
         d_min = max(d, 1e-9)
-        a_eff = _along_line_limit(accel_xy[k], accel_z[k], math.hypot(ex, ey) / d_min,
-                                  abs(ez) / d_min)
+        d_xy = math.hypot(ex, ey)
+        h, w = d_xy / d_min, abs(ez) / d_min
+        vz_lim = climb[k] if ez >= 0.0 else descent[k]
+        if abs(s - _along_line_limit(speed_xy[k], vz_lim, h, w)) > ACCEL_STEADY_M_S2 * dt:
+            steps.append(-math.inf)  # not at the speed its commands ask for now
+            continue
+        goal_yaw = goal_yaws[k]
+        if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
+            desired = math.degrees(math.atan2(ex, ey)) if d_xy > 2.0 else yaws[k]
+        else:
+            desired = goal_yaw
+        if abs((desired - yaws[k] + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
+            steps.append(-math.inf)  # about to turn
+            continue
+        a_eff = _along_line_limit(accel_xy[k], accel_z[k], h, w)
         free_m = d - s * s / (2.0 * BRAKING_SHARE * a_eff)
         if tracking != TRACK_NONE:
             free_m = min(free_m, d - acceptance[k])
