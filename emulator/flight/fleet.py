@@ -232,7 +232,9 @@ class Fleet:
         up, braking or turning; returns the steps run."""
         dyn, dt, bat, n = self.dyn, self.dt_s, self.bat, self.n
         guard = _SoloGuard(self) if self.guard.enabled else None
-        solos = [SoloVehicle(dyn, k, dt, guard) for k in plan.solo.tolist()]
+        rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
+        solos = [SoloVehicle(dyn, k, dt, guard, rows) for k in plan.solo.tolist()]
+        stepping = [solo.step for solo in solos]
         moving = self._moving_mask()
         start = self.step_count
         charging = bat.charge_rate_pct_s > 0.0
@@ -241,24 +243,24 @@ class Fleet:
         flags: list[tuple[bool, bool]] = []  # airborne, armed of each solo vehicle
         bat_dt = dt * BATTERY_EVERY_STEPS
         wind_x, wind_y = dyn.wind_m_s.tolist()
-        rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
         charge: list[np.ndarray] = []
         bits = [0] * len(solos)
         settling = False  # whether some solo vehicle sped up, braked or turned in this run
         levels = _NO_LEVELS
         battery_step = False
+        battery_j = BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS  # the first battery step
         j = 0
         while j < plan.steps:
             t_guard = (start + j) * dt + dt  # the plain step's now_s + dt_s
             j += 1
             happened, steady = 0, STEADY
-            for i, solo in enumerate(solos):
-                bits[i] = b = solo.step(t_guard)
+            for i, step in enumerate(stepping):
+                bits[i] = b = step(t_guard)
                 happened |= b
                 steady &= b
-                rows += (solo.px, solo.py, solo.pz, solo.yaw, solo.moving)
-            battery_step = (start + j) % BATTERY_EVERY_STEPS == 0
+            battery_step = j == battery_j
             if battery_step:
+                battery_j += BATTERY_EVERY_STEPS
                 if deltas is None:
                     deltas = bat.deltas(bat_dt, self.airborne, self.armed, dyn.airspeed_m_s(),
                                         dyn.velocity_m_s[:, 2])

@@ -58,13 +58,16 @@ class SoloVehicle:
     __slots__ = (
         "_accel_xy", "_accel_z", "_acceptance2", "_active", "_airspeed", "_check_at", "_climb",
         "_descent", "_dt", "_dv_xy_max", "_dv_z_max", "_goal", "_goal_yaw", "_guard", "_inv_dt",
-        "_landing", "_position", "_speed_xy", "_wind", "_yaw_step_max", "ax", "ay", "az", "k",
-        "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw", "yaw_step",
+        "_landing", "_position", "_rows", "_speed_xy", "_wind", "_yaw_step_max", "ax", "ay",
+        "az", "k", "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw", "yaw_step",
         "yaw_tracking",
     )
 
-    def __init__(self, dyn: FleetDynamics, k: int, dt_s: float, guard: Guard | None) -> None:
+    def __init__(self, dyn: FleetDynamics, k: int, dt_s: float, guard: Guard | None,
+                 rows: list[float] | None = None) -> None:
+        """rows: where each step appends the vehicle's x, y, z, yaw and moving (1.0 or 0.0)."""
         self.k = k
+        self._rows = [] if rows is None else rows
         self.px, self.py, self.pz = dyn.position_m[k].tolist()
         self.vx, self.vy, self.vz = dyn.velocity_m_s[k].tolist()
         self.ax, self.ay, self.az = dyn.accel_m_s2[k].tolist()
@@ -211,7 +214,8 @@ class SoloVehicle:
                     and nvx * nvx + nvy * nvy + nvz * nvz <= _SETTLED_SPEED2)):
                 self.tracking = TRACK_NONE
                 events |= ARRIVED
-        self.moving = active and bool(nvx or nvy or nvz or self.yaw_tracking)
+        self.moving = moving = active and bool(nvx or nvy or nvz or self.yaw_tracking)
+        self._rows += (npx, npy, npz, self.yaw, 1.0 if moving else 0.0)
         if (-ACCEL_STEADY_M_S2 <= ax <= ACCEL_STEADY_M_S2
                 and -ACCEL_STEADY_M_S2 <= ay <= ACCEL_STEADY_M_S2
                 and -ACCEL_STEADY_M_S2 <= az <= ACCEL_STEADY_M_S2
