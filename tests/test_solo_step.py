@@ -151,6 +151,7 @@ def test_the_cruise_plan_in_floats_is_the_plan_in_arrays() -> None:
         if step % 7:
             continue
         floats = _cruise_steps_floats(fleet)
+        assert floats is not None
         arrays = _cruise_steps_arrays(fleet).tolist()
         for a, b in zip(floats, arrays, strict=True):
             assert (a == -math.inf) == (b == -math.inf)

@@ -75,8 +75,10 @@ def cruise_plan(fleet: FleetView, limit: int, *, max_solo: int) -> CruisePlan | 
         horizon = min(horizon, (timer - fleet.now_s) / dt - 1.0)
     if horizon < 1.0 or (max_solo == 0 and horizon < MIN_CRUISE_STEPS):
         return None
-    steps = (_cruise_steps_floats(fleet) if dyn.n <= FLOAT_PLAN_MAX_VEHICLES
+    steps = (_cruise_steps_floats(fleet, max_solo) if dyn.n <= FLOAT_PLAN_MAX_VEHICLES
              else _cruise_steps_arrays(fleet).tolist())
+    if steps is None:
+        return None
     solo = [k for k, s in enumerate(steps) if not s >= MIN_CRUISE_STEPS]
     if not solo:
         horizon = min(horizon, min(steps))
@@ -146,12 +148,15 @@ def _cruise_steps_arrays(fleet: FleetView) -> np.ndarray:
     return steps
 
 
-def _cruise_steps_floats(fleet: FleetView) -> list[float]:
-    """`_cruise_steps_arrays` vehicle by vehicle in Python floats (cheaper for a few)."""
+def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[float] | None:
+    """`_cruise_steps_arrays` vehicle by vehicle in Python floats (cheaper for a few); None
+    as soon as more than max_solo vehicles cannot cruise for MIN_CRUISE_STEPS."""
     dyn, dt, now = fleet.dyn, fleet.dt_s, fleet.now_s
+    short_left = dyn.n if max_solo is None else max_solo
     yaw_step = dyn.yaw_step_deg
     yaw_steps = [0.0] * dyn.n if yaw_step is None else yaw_step.tolist()
-    check_at = fleet.guard.check_at_s.tolist() if fleet.guard.enabled else None
+    check_at = (fleet.guard.check_at_s.tolist() if fleet.guard.enabled
+                else [math.inf] * dyn.n)
     accel_xy, accel_z = dyn.accel_xy_m_s2.tolist(), dyn.accel_z_m_s2.tolist()
     acceptance = dyn.acceptance_m.tolist()
     speed_xy, climb, descent = (dyn.speed_xy_m_s.tolist(), dyn.climb_m_s.tolist(),
@@ -159,51 +164,58 @@ def _cruise_steps_floats(fleet: FleetView) -> list[float]:
     goal_yaws, yaws = dyn.goal_yaw_deg.tolist(), dyn.yaw_deg.tolist()
     battery = _BatteryFloats(fleet)
     steps = []
-    for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), (px, py, pz),
-            (gx, gy, gz)) in enumerate(zip(
-                dyn.control.tolist(), dyn.tracking.tolist(), dyn.yaw_tracking.tolist(),
-                dyn.accel_m_s2.tolist(), dyn.velocity_m_s.tolist(), dyn.position_m.tolist(),
-                dyn.goal_m.tolist(), strict=True)):
+    for k, (control, tracking, yaw_tracking, (ax, ay, az), v, p, g) in enumerate(zip(
+            dyn.control.tolist(), dyn.tracking.tolist(), dyn.yaw_tracking.tolist(),
+            dyn.accel_m_s2.tolist(), dyn.velocity_m_s.tolist(), dyn.position_m.tolist(),
+            dyn.goal_m.tolist(), strict=True)):
         if (yaw_tracking or abs(ax) > ACCEL_STEADY_M_S2 or abs(ay) > ACCEL_STEADY_M_S2
                 or abs(az) > ACCEL_STEADY_M_S2 or abs(yaw_steps[k]) > YAW_STEADY_DEG):
-            steps.append(-math.inf)
-            continue
-        s = math.sqrt(vx * vx + vy * vy + vz * vz)
-        ex, ey, ez = gx - px, gy - py, gz - pz
-        d = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if control == CONTROL_NONE or not s > 1e-9:
-            at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
-            steps.append(battery.steps(k, vx, vy, vz) if at_rest else -math.inf)
-            continue
-        if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
-            steps.append(-math.inf)
-            continue
-        d_min = max(d, 1e-9)
-        d_xy = math.hypot(ex, ey)
-        h, w = d_xy / d_min, abs(ez) / d_min
-        vz_lim = climb[k] if ez >= 0.0 else descent[k]
-        if abs(s - _along_line_limit(speed_xy[k], vz_lim, h, w)) > ACCEL_STEADY_M_S2 * dt:
-            steps.append(-math.inf)  # not at the speed its commands ask for now
-            continue
-        goal_yaw = goal_yaws[k]
-        if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
-            desired = math.degrees(math.atan2(ex, ey)) if d_xy > 2.0 else yaws[k]
+            value = -math.inf  # speeding up, braking or turning
         else:
-            desired = goal_yaw
-        if abs((desired - yaws[k] + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
-            steps.append(-math.inf)  # about to turn
-            continue
-        a_eff = _along_line_limit(accel_xy[k], accel_z[k], h, w)
-        free_m = d - s * s / (2.0 * BRAKING_SHARE * a_eff)
-        if tracking != TRACK_NONE:
-            free_m = min(free_m, d - acceptance[k])
-        if vz < 0.0:
-            free_m = min(free_m, pz / max(-vz, 1e-9) * s)
-        cruise = free_m / (s * dt) - 2.0
-        if check_at is not None:
-            cruise = min(cruise, (check_at[k] - now) / dt - 1.0)
-        steps.append(min(cruise, battery.steps(k, vx, vy, vz)))
+            value = _vehicle_steps(
+                k, control, tracking, v, p, g, speed_xy[k],
+                climb[k] if g[2] - p[2] >= 0.0 else descent[k], accel_xy[k], accel_z[k],
+                acceptance[k], goal_yaws[k], yaws[k], (check_at[k] - now) / dt - 1.0, dt,
+                battery)
+        if not value >= MIN_CRUISE_STEPS:
+            short_left -= 1
+            if short_left < 0:
+                return None
+        steps.append(value)
     return steps
+
+
+def _vehicle_steps(k: int, control: int, tracking: int, v: list[float], p: list[float],
+                   g: list[float], speed_xy: float, vz_lim: float, accel_xy: float,
+                   accel_z: float, acceptance: float, goal_yaw: float, yaw: float,
+                   guard_steps: float, dt: float, battery: _BatteryFloats) -> float:
+    """The steps one vehicle with no acceleration and no yaw change can cruise (-inf: none)."""
+    vx, vy, vz = v
+    ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - p[2]
+    s = math.sqrt(vx * vx + vy * vy + vz * vz)
+    d = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if control == CONTROL_NONE or not s > 1e-9:
+        at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
+        return battery.steps(k, vx, vy, vz) if at_rest else -math.inf
+    if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
+        return -math.inf  # not heading straight for the goal
+    d_min = max(d, 1e-9)
+    d_xy = math.hypot(ex, ey)
+    h, w = d_xy / d_min, abs(ez) / d_min
+    if abs(s - _along_line_limit(speed_xy, vz_lim, h, w)) > ACCEL_STEADY_M_S2 * dt:
+        return -math.inf  # not at the speed its commands ask for now
+    if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
+        desired = math.degrees(math.atan2(ex, ey)) if d_xy > 2.0 else yaw
+    else:
+        desired = goal_yaw
+    if abs((desired - yaw + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
+        return -math.inf  # about to turn
+    free_m = d - s * s / (2.0 * BRAKING_SHARE * _along_line_limit(accel_xy, accel_z, h, w))
+    if tracking != TRACK_NONE:
+        free_m = min(free_m, d - acceptance)
+    if vz < 0.0:
+        free_m = min(free_m, p[2] / max(-vz, 1e-9) * s)
+    return min(free_m / (s * dt) - 2.0, guard_steps, battery.steps(k, vx, vy, vz))
 
 
 class _BatteryFloats:
