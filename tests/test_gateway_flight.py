@@ -400,12 +400,16 @@ async def test_five_drones_fly_concurrently_and_a_busy_drone_refuses():
         assert max(a for a, _ in spans) < min(b for _, b in spans)
         assert elapsed < 2 * (100.0 / 8.0 + 10.0)
 
-        # A second primitive for a drone that is still busy is refused; others go on.
+        # A second primitive for a drone that is still busy is refused; others go on. The
+        # clock is pinned until then: stepped, the whole move may take less wall time than
+        # one look at the busy flag.
+        pin = s.swarm.pin()
         fly = asyncio.create_task(gw.move_to("d1", 0, 0, 15))
         while not s.swarm.fleet.busy[0]:
             await asyncio.sleep(0.001)
         t1 = s.now_s
         second = await gw.hover("d1", 5)
+        s.swarm.release_clock(pin)
         assert second.status is Status.REJECTED
         assert second.message == "drone d1 is busy with move_to: wait for it to end"
         assert second.state is not None and second.state.drone == "d1"
@@ -466,12 +470,16 @@ async def test_critical_battery_failsafe_stops_a_move():
         s.services.operator_reset_batteries(7.3)
         await s.settle()
         t0 = s.now_s
+        # Stepped, the clock runs on while the outcome travels to the gateway; held 15 s on
+        # (the critical level comes about 3 s on), it cannot reach the emergency level first.
+        hold = s.swarm.hold_clock_at(t0 + 15.0)
         out = await gw.move_to("d1", 300, 0, 10)
         assert out.status is Status.BLOCKED
         assert out.message.startswith("move_to stopped: Critical battery 7%: returning home")
         failsafes = s.swarm.recorder.events("d1", t0_s=t0, kinds=["failsafe"])
         assert [e.data["reason"] for e in failsafes] == ["battery_critical"]
         assert ap.mode.name == "RTL" and ap.position_m[0] < 100.0
+        s.swarm.release_clock(hold)
 
 
 async def test_outcomes_hold_when_the_clock_outruns_telemetry():
