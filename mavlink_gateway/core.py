@@ -80,6 +80,9 @@ class GatewayCore:
         self.drones = dict(drones)
         self.services = services
         self._busy: dict[str, str] = {}
+        # Simulated time of each drone's last command: a stepped clock runs on while the
+        # answer travels back, so an outcome's budget starts there, not when the wait begins.
+        self._command_s: dict[str, float] = {}
 
     def busy_with(self, drone: str) -> str | None:
         """The primitive running for `drone` now (None: none)."""
@@ -150,6 +153,7 @@ class GatewayCore:
         all, then raises NoAnswer: the outcome cannot be known, and is never called a
         refusal."""
         tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
+        self._command_s[link.drone_id] = self.services.clock_s()
         for attempt in range(1, tries + 1):
             texts = len(link.status_texts)
             try:
@@ -199,15 +203,18 @@ class GatewayCore:
             texts = len(link.status_texts) if texts_from is None else texts_from
             return await wait_lockstep(self.services, link, budget_s, what, done, self._hold,
                                        watch_obstacles=watch_obstacles, texts=texts)
-        with self.services.clock_limit(self.services.clock_s() + budget_s):
+        now = self.services.clock_s()
+        start = min(self._command_s.pop(link.drone_id, now), now)
+        with self.services.clock_limit(start + budget_s):
             return await self._wait_for_outcome(link, budget_s, what, done,
                                                 watch_obstacles=watch_obstacles,
-                                                texts_from=texts_from)
+                                                texts_from=texts_from, start_s=start)
 
     async def _wait_for_outcome(
         self, link: DroneLink, budget_s: float, what: str,
         done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
         watch_obstacles: bool = True, texts_from: int | None = None,
+        start_s: float | None = None,
     ) -> Outcome:
         """Look at telemetry until `done` gives an outcome, an obstacle or failsafe stops the
         drone, or `budget_s` of simulated time has passed. Looks again as soon as a new
@@ -215,9 +222,10 @@ class GatewayCore:
 
         `texts_from`: the number of STATUSTEXTs before the command was sent. A goal blocked
         at once is reported within a physics step, and its STATUSTEXT may come before the
-        command's ACK, so before this wait begins."""
+        command's ACK, so before this wait begins. `start_s`: the simulated time the budget
+        started (default: now)."""
         texts = len(link.status_texts) if texts_from is None else texts_from
-        start_sim = self.services.clock_s()
+        start_sim = self.services.clock_s() if start_s is None else start_s
         wall_deadline = time.monotonic() + budget_s + WALL_MARGIN_S
         obstacle_mark: dict[str, int] | None = None  # telemetry seen when the obstacle text came
         while True:
