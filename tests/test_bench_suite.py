@@ -1,4 +1,4 @@
-"""The shipped suite: 100 sessions of 20 tasks that load cleanly, cover the check endpoints,
+"""The shipped suite: 125 sessions of 20 tasks that load cleanly, cover the check endpoints,
 and regenerate byte for byte from their seeds."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from benchmark.validators import endpoints_used, leaf_count
 
 def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     paths, limit = suite_paths("full")
-    assert limit is None and len(paths) == 100
+    assert limit is None and len(paths) == 125
     assert [p.stem for p in paths] == [session_id(*k) for k in all_session_keys()]
     endpoints: set[str] = set()
     categories: Counter[str] = Counter()
@@ -37,10 +37,10 @@ def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     assert {"moving_target_tracked", "moving_target_reached_in_zone"} <= endpoints
     assert set(categories) == {"basic_operations", "navigation", "search",
                                "multi_drone_coordination", "delivery", "communication",
-                               "battery_management", "target_tracking"}
+                               "battery_management", "target_tracking", "resilience"}
     assert families == dict.fromkeys(("area_search", "area_assignment_and_patrol",
-                                      "target_assignment", "target_tracking"), 25)
-    assert checks >= 4 * 2000
+                                      "target_assignment", "target_tracking", "resilience"), 25)
+    assert checks >= 4 * 2500
 
 
 def test_unverified_generation_reproduces_a_shipped_session() -> None:

@@ -42,8 +42,10 @@ _CATEGORY = "resilience"
 _FAMILY = ("resilience",)
 FAULT_AFTER_S = (10, 30)  # the fault strikes this many simulated seconds into the task
 HOLD_EXTRA_S = 30.0  # the failing drone's hold outlasts its fault by this much
-# The degraded link of one drone (both directions): loss, latency and its jitter.
-LOSSY_LINK = {"loss": 0.2, "latency_ms": 60.0, "jitter_ms": 20.0}
+# The degraded link of one drone: commands lost on the way up (MAVSDK sends them again), and
+# latency with jitter both ways. Replies are not lost: a lost acknowledgement makes a command's
+# fate depend on wall-clock retransmission timing, which would make a proof depend on load.
+LOSSY_LINK = {"uplink": {"loss": 0.2}, "latency_ms": 60.0, "jitter_ms": 20.0}
 SQUARE_M = 450.0  # the points of one task lie within a square of this side
 _TRIES = 60
 
