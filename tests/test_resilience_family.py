@@ -172,3 +172,40 @@ def test_the_do_nothing_agent_passes_no_resilience_task(tmp_path: Path) -> None:
     assert not any(r["passed"] for r in records)
     # a drone left on the ground meets "ends on the ground", nothing more
     assert all(r["checks_passed"] <= 1 for r in records)
+
+
+def _kept_to_the_split(task: dict[str, Any]) -> list[list[dict[str, Any]]]:
+    """The plan of an agent that keeps to the delivery task's split and never notices the
+    fault: each drone carries its own parcel."""
+    alt = next(op["z"] for phase in task["oracle"] for op in phase if op["op"] == "goto")
+    ops = []
+    for k, parcel in enumerate(task["checks"]["checks"]):
+        own = parcel["checks"][k]["checks"]  # parcel k planned for the k-th drone
+        for landing in own:
+            p = landing["parameters"]
+            ops += [{"op": "goto", "drone": p["drone_id"], "x": p["x"], "y": p["y"], "z": alt},
+                    {"op": "land", "drone": p["drone_id"]}]
+    return [ops]
+
+
+@pytest.mark.mavsdk
+def test_keeping_to_the_plan_without_noticing_the_fault_fails(tmp_path: Path) -> None:
+    """The failing drone's parcel is left undelivered when nobody takes it over: the check
+    is on what the team achieves, and the fault makes the difference."""
+    data = small_session(["delivery_despite_motor_failure"], family="resilience", seed=7)
+    (task,) = data["tasks"]
+    naive = {**task, "oracle": _kept_to_the_split(task)}
+    write_json(tmp_path / "naive.json", {**data, "tasks": [naive]})
+    clean = {**naive, "id": "t02"}
+    del clean["faults"]
+    write_json(tmp_path / "clean.json", {**data, "tasks": [clean]})
+    for name in ("naive", "clean"):
+        run_benchmark(RunPlan(sessions=(tmp_path / f"{name}.json",), agent="oracle",
+                              out_dir=tmp_path / name), progress=print)
+    (faulty,) = read_records(tmp_path / "naive" / "results.jsonl")
+    (unfaulted,) = read_records(tmp_path / "clean" / "results.jsonl")
+    assert unfaulted["passed"], unfaulted["checks"]  # the split itself works without a fault
+    assert not faulty["passed"]
+    failing = task["faults"]["failures"][0]["drone"]
+    own = [c["passed"] for c in faulty["checks"] if c["parameters"]["drone_id"] == failing]
+    assert own and not all(own)  # the failing drone's parcel was not delivered
