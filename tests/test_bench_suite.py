@@ -61,14 +61,14 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
     assert again == shipped, lines
 
 
-def test_every_tracking_session_redraws_from_its_seed() -> None:
-    """Every first draw of the 25 target_tracking sessions passed the oracle, so drawing alone
-    gives the shipped files."""
+@pytest.mark.parametrize("family", ["target_tracking", "resilience"])
+def test_every_tracking_and_resilience_session_redraws_from_its_seed(family: str) -> None:
+    """Every first draw of the 25 sessions of these families passed the oracle (faults
+    striking, for resilience), so drawing alone gives the shipped files."""
     for level in LEVELS:
         for index in SESSION_INDICES:
-            name = f"target_tracking-{level}-{index}"
-            again = dump_session(generate_session("target_tracking", level, index,
-                                                  verify=False))
+            name = f"{family}-{level}-{index}"
+            again = dump_session(generate_session(family, level, index, verify=False))
             assert again == (SESSIONS_DIR / f"{name}.json").read_text(), name
 
 

@@ -209,3 +209,21 @@ def test_keeping_to_the_plan_without_noticing_the_fault_fails(tmp_path: Path) ->
     failing = task["faults"]["failures"][0]["drone"]
     own = [c["passed"] for c in faulty["checks"] if c["parameters"]["drone_id"] == failing]
     assert own and not all(own)  # the failing drone's parcel was not delivered
+
+
+@pytest.mark.parametrize(("faults", "named"), [
+    ({"failures": [{"drone": "d9", "after_s": 5, "unit": "motor"}]}, "unknown drone 'd9'"),
+    ({"failures": [{"drone": "d1", "after_s": -1, "unit": "motor"}]}, "after_s"),
+    ({"failures": [{"drone": "d1", "after_s": 5, "unit": "rotor"}]}, "unit: expected one of"),
+    ({"link": {"loss": 2}}, "loss"),
+    ({"later": []}, "expected an object with 'failures' and/or 'link'"),
+])
+def test_a_task_with_bad_faults_is_a_task_error_naming_the_field(faults: dict[str, Any],
+                                                                  named: str) -> None:
+    data = small_session(["delivery_over_lossy_link"], family="resilience")
+    good = session_from_dict(data).tasks[0]
+    assert good.error is None and good.faults is not None and good.faults.link is not None
+    data["tasks"][0]["faults"] = faults
+    (task,) = session_from_dict(data).tasks
+    assert task.error is not None and "tasks[0] (t01).faults" in task.error, task.error
+    assert named in task.error and task.faults is None
