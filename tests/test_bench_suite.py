@@ -79,3 +79,14 @@ def test_the_oracle_proves_the_first_tracking_tasks_again() -> None:
     lines: list[str] = []
     again = generate_session("target_tracking", "easy", 2, tasks=3, progress=lines.append)
     assert again["tasks"] == shipped, lines
+
+
+@pytest.mark.mavsdk
+def test_the_oracle_proves_the_first_resilience_tasks_again() -> None:
+    """The first tasks of a resilience session, flown again by the oracle with their faults
+    striking: the same tasks, none redrawn."""
+    shipped = load_session(SESSIONS_DIR / "resilience-easy-1.json").data["tasks"][:4]
+    assert any("faults" in task for task in shipped)
+    lines: list[str] = []
+    again = generate_session("resilience", "easy", 1, tasks=4, progress=lines.append)
+    assert again["tasks"] == shipped, lines
