@@ -84,6 +84,9 @@ def main() -> None:
         families[r["family"]] += 1
         family_passed[r["family"]] += bool(r["passed"])
     print("by family:", ", ".join(f"{f} {family_passed[f]}/{n}" for f, n in families.items()))
+    finishes = Counter(str(r["finish"]) for r in records)
+    print("task ends:", ", ".join(f"{k} {v}" for k, v in finishes.most_common()),
+          f"(agent wall max {max(r['wall_time_s'] for r in records):.1f} s)")
     print(f"{args.agent} on {args.suite}: {len(records)} tasks, {passed} passed, "
           f"{len(outcome.errors)} errors, wall {wall_s:.1f} s with {args.workers} workers "
           f"({wall_s / max(len(records), 1):.2f} s per task)")

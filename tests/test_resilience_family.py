@@ -5,6 +5,7 @@ verdicts byte for byte; and nothing that does not fly passes."""
 
 from __future__ import annotations
 
+import asyncio
 import hashlib
 import json
 import random
@@ -227,3 +228,34 @@ def test_a_task_with_bad_faults_is_a_task_error_naming_the_field(faults: dict[st
     (task,) = session_from_dict(data).tasks
     assert task.error is not None and "tasks[0] (t01).faults" in task.error, task.error
     assert named in task.error and task.faults is None
+
+
+@pytest.mark.mavsdk
+async def test_a_lost_failure_report_is_told_again_at_the_halt() -> None:
+    """The STATUSTEXT of a motor failure lost on the way (a loaded machine drops datagrams
+    too): the swarm tells it again with the halt's telemetry, so the primitive under way ends
+    as failed instead of waiting on a drone that has come to rest."""
+    from mavlink_gateway import Status
+    from tests.test_gateway_faults import act, lockstep_gateway
+
+    async with lockstep_gateway(1) as (swarm, _services, gw, thinker):
+        assert (await act(thinker, gw.take_off("d1", 12.0))).ok
+        ap, link = swarm.fleet.autopilots[0], swarm.links[0]
+        sent = link.statustext
+        lost: list[str] = []
+
+        def lossy(severity: int, text: str) -> None:
+            if text.startswith("Motor failure") and len(lost) < 2:
+                lost.append(text)  # what the vehicle says as the motor fails never arrives
+                return
+            sent(severity, text)
+
+        link.statustext = lossy  # type: ignore[method-assign]
+        failure_s = swarm.fleet.now_s + 5.0
+        swarm.faults.schedule(failure_s, "failure",
+                              lambda: ap.failures.fail("motor", "schedule"))
+        async with asyncio.timeout(60.0):  # without the report again it waits for ever
+            outcome = await act(thinker, gw.hover("d1", 40.0))
+        assert len(lost) == 2 and outcome.status is Status.FAILED, outcome
+        assert "Motor failure" in outcome.message
+        assert swarm.fleet.now_s < failure_s + 10.0  # at the failure, not the hover's end
