@@ -329,6 +329,10 @@ class Swarm:
         if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
             for k in bursts:
                 self.links[k].resend_mission_reached()
+        for k in bursts:  # so is a lost failure report (a motor, the GPS)
+            report = self.fleet.autopilots[k].failures.standing_report()
+            if report is not None:
+                self.links[k].statustext(*report)
         ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
         schedule = self.streams
         on = np.isfinite(schedule.period_s[ks])
