@@ -115,8 +115,9 @@ async def test_a_motor_failure_strikes_over_serve_at_its_time_and_the_verdict_is
             assert answer.status_code == 200, (route, answer.text)
             heard.append((live.services.clock_s(), answer.text))
 
-        for route in (base, f"{base}/task", f"{base}/drones", "/drones", "/sessions/current",
-                      "/sessions/current/tasks"):
+        for route in (base, f"{base}/task", f"{base}/drones", f"{base}/tools", "/drones",
+                      "/sessions/current", "/sessions/current/tasks",
+                      "/sessions/current/tasks/next", "/sessions/current/task-progress"):
             await agent_get(route)
         for steps in plans:
             for name, args in steps:
@@ -132,7 +133,7 @@ async def test_a_motor_failure_strikes_over_serve_at_its_time_and_the_verdict_is
         at_s = struck[0].t_s
         # before it struck, nothing an agent heard told of it; afterwards outcomes do
         before = [text for t_s, text in heard if t_s < at_s - 1e-9]
-        assert len(before) >= 7 and not _telling("\n".join(before), TELLING), before
+        assert len(before) >= 10 and not _telling("\n".join(before), TELLING), before
         after = "\n".join(text for t_s, text in heard if t_s >= at_s - 1e-9)
         assert "Motor failure" in after
         # the hidden schedule: the admin's task view only
