@@ -151,6 +151,11 @@ async def test_a_motor_failure_strikes_over_serve_at_its_time_and_the_verdict_is
                       emit=records.append)
     (record,) = records
     assert record["finish"] == "finished", record
+    # the same truth event at the same simulated time from the task's start
+    bench_t0_s = record["window_s"][0]
+    bench_struck = [(round(t_s - bench_t0_s, 2), drone, data["unit"], data["source"])
+                    for t_s, drone, kind, data in record["replay"]["events"] if kind == "failure"]
+    assert bench_struck == [(round(at_s - t0_s, 2), failure["drone"], "motor", "schedule")]
     assert not served["passed"] and not record["passed"]  # the failing drone's parcel is lost
     assert [leaf["passed"] for leaf in served["leaves"]] == \
         [leaf["passed"] for leaf in record["checks"]]
