@@ -33,6 +33,7 @@ from benchmark.templates.base import (
 )
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
+from benchmark.templates.common import spread_points
 from benchmark.templates.common import target_xy as _xy
 from emulator.scenario import VehicleSpec
 
@@ -64,20 +65,7 @@ def _hold(drone: VehicleSpec, alt: int, after_s: int) -> Node:
 
 
 def _points(view: SessionView, rng: random.Random, n: int, min_gap_m: float) -> list[Point]:
-    """n free points at least min_gap_m apart inside one random square of the map."""
-    side_x = min(SQUARE_M, view.map_w_m - 60.0)
-    side_y = min(SQUARE_M, view.map_h_m - 60.0)
-    for _ in range(_TRIES):
-        x0 = rng.uniform(30.0, view.map_w_m - 30.0 - side_x)
-        y0 = rng.uniform(30.0, view.map_h_m - 30.0 - side_y)
-        points: list[Point] = []
-        for _ in range(20 * n):
-            p = view.free_point(rng, region=(x0, y0, x0 + side_x, y0 + side_y))
-            if all(math.dist(p, q) >= min_gap_m for q in points):
-                points.append(p)
-                if len(points) == n:
-                    return points
-    raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart")
+    return spread_points(view, rng, n, min_gap_m, SQUARE_M, _TRIES)
 
 
 def _team(view: SessionView, rng: random.Random, lo: int, hi: int
