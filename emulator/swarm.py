@@ -410,9 +410,7 @@ class Swarm:
                 self._send_bursts()
             if wall >= next_link_tick:
                 next_link_tick = wall + LINK_TICK_S
-                for link in self.links:
-                    if link.missions.uploading or link.ap.mode.name == "OFFBOARD":
-                        link.tick(wall)
+                self.tick_links(wall)
             if wall >= next_peer_tick:
                 next_peer_tick = wall + 1.0
                 for network in self.networks:
@@ -439,6 +437,17 @@ class Swarm:
 
     def _send_telemetry(self, wall: float) -> None:
         self._send_streams(self.streams.due(wall))
+
+    def send_due_telemetry(self, wall_now_s: float) -> None:
+        """Send every telemetry stream due by `wall_now_s` (the scheduler does this every
+        turn; a driver of the networks without the scheduler calls it)."""
+        self._send_telemetry(wall_now_s)
+
+    def tick_links(self, wall_now_s: float) -> None:
+        """The links' wall-clock duties: mission item retries, the offboard failsafe."""
+        for link in self.links:
+            if link.missions.uploading or link.ap.mode.name == "OFFBOARD":
+                link.tick(wall_now_s)
 
     def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
         """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together

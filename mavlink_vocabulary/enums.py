@@ -10,8 +10,11 @@ __all__ = [
     "CameraCapFlags",
     "FailureType",
     "FailureUnit",
+    "GpsFixType",
     "MavAutopilot",
     "MavBatteryChargeState",
+    "MavBatteryFunction",
+    "MavBatteryType",
     "MavCmd",
     "MavComponent",
     "MavFrame",
@@ -26,6 +29,7 @@ __all__ = [
     "MavState",
     "MavSysStatusSensor",
     "MavType",
+    "MavVtolState",
     "MessageId",
     "PositionTargetTypemask",
 ]
@@ -343,3 +347,33 @@ class CameraCapFlags(IntFlag):
 
     CAPTURE_VIDEO = 1
     CAPTURE_IMAGE = 2
+
+
+class GpsFixType(IntEnum):
+    """GPS_FIX_TYPE_*."""
+
+    NO_GPS = 0
+    NO_FIX = 1
+    FIX_2D = 2
+    FIX_3D = 3
+
+
+class MavBatteryFunction(IntEnum):
+    """MAV_BATTERY_FUNCTION_*."""
+
+    UNKNOWN = 0
+    ALL = 1
+
+
+class MavBatteryType(IntEnum):
+    """MAV_BATTERY_TYPE_*."""
+
+    UNKNOWN = 0
+    LIPO = 1
+
+
+class MavVtolState(IntEnum):
+    """MAV_VTOL_STATE_*."""
+
+    UNDEFINED = 0
+    MC = 3

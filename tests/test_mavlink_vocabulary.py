@@ -31,7 +31,15 @@ DIALECT_ENUMS: dict[type[enum.Enum], tuple[str, str]] = {
     vocab.FailureType: ("FAILURE_TYPE", "FAILURE_TYPE_"),
     vocab.PositionTargetTypemask: ("POSITION_TARGET_TYPEMASK", "POSITION_TARGET_TYPEMASK_"),
     vocab.CameraCapFlags: ("CAMERA_CAP_FLAGS", "CAMERA_CAP_FLAGS_"),
+    vocab.GpsFixType: ("GPS_FIX_TYPE", "GPS_FIX_TYPE_"),
+    vocab.MavBatteryFunction: ("MAV_BATTERY_FUNCTION", "MAV_BATTERY_FUNCTION_"),
+    vocab.MavBatteryType: ("MAV_BATTERY_TYPE", "MAV_BATTERY_TYPE_"),
+    vocab.MavVtolState: ("MAV_VTOL_STATE", "MAV_VTOL_STATE_"),
 }
+
+
+# dialect names that are no Python identifier once their prefix is gone
+RENAMED = {"GPS_FIX_TYPE_2D_FIX": "FIX_2D", "GPS_FIX_TYPE_3D_FIX": "FIX_3D"}
 
 
 @pytest.mark.parametrize("cls", list(DIALECT_ENUMS), ids=lambda c: c.__name__)
@@ -40,7 +48,8 @@ def test_every_member_has_the_dialects_name_and_value(cls: type[enum.Enum]) -> N
     entries = mavlink.enums[name]
     for member in cls:
         assert member.value in entries, f"{cls.__name__}.{member.name}"
-        assert entries[member.value].name == prefix + member.name, (cls.__name__, member)
+        dialect = entries[member.value].name
+        assert RENAMED.get(dialect, dialect) in (prefix + member.name, member.name), member
 
 
 def test_message_ids_are_the_dialects() -> None:
