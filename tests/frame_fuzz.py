@@ -16,6 +16,7 @@ broken.
 
 from __future__ import annotations
 
+import itertools
 import math
 import random
 import struct
@@ -61,6 +62,7 @@ MUTATIONS = (("valid", 40), ("scrambled", 15), ("truncated", 10), ("bad_crc", 10
              ("bad_length", 10), ("unknown_id", 10), ("junk", 5))
 HEADER_V2 = 10
 CORPUS_SIZE = 8192
+UNKNOWN_IDS = (3, 9, 13, 14, 300, 9999, 60000, 0xFFFFFF)  # ids the dialect does not define
 DRIVING_EVERY = 10  # one corpus frame in this many is a command that makes vehicles move
 
 
@@ -80,7 +82,7 @@ class FrameFuzzer:
         for i in range(0, CORPUS_SIZE, DRIVING_EVERY):  # commands that make vehicles move
             self.corpus[i] = self._driving_command()
         self._kinds = [m for m, _ in MUTATIONS]
-        self._weights = [w for _, w in MUTATIONS]
+        self._cumulative = list(itertools.accumulate(w for _, w in MUTATIONS))
         self.counts: Counter[str] = Counter()
 
     # ------------------------------------------------------------ field values
@@ -177,13 +179,18 @@ class FrameFuzzer:
         return bytes(data)
 
     # --------------------------------------------------------------- mutations
-    def frame(self) -> bytes:
-        """One frame, valid or mutated."""
+    def frames(self, count: int) -> list[bytes]:
+        """`count` frames, each valid or mutated."""
         rng = self.rng
-        data = rng.choice(self.corpus)
-        kind = rng.choices(self._kinds, self._weights)[0]
-        self.counts[kind] += 1
-        if kind == "valid" or len(data) < HEADER_V2 + 3:
+        picked = rng.choices(self.corpus, k=count)
+        kinds = rng.choices(self._kinds, cum_weights=self._cumulative, k=count)
+        self.counts.update(kinds)
+        return [data if kind == "valid" else self._mutate(data, kind)
+                for data, kind in zip(picked, kinds, strict=True)]
+
+    def _mutate(self, data: bytes, kind: str) -> bytes:
+        rng = self.rng
+        if len(data) < HEADER_V2 + 3:
             return data
         if kind == "scrambled":  # absurd payload bytes, checksum valid again
             payload = bytearray(data[HEADER_V2:-2])
@@ -197,12 +204,12 @@ class FrameFuzzer:
         if kind == "bad_length":
             return data[:1] + bytes([rng.getrandbits(8)]) + data[2:]
         if kind == "unknown_id":
-            msg_id = rng.choice([2, 3, 9, 13, 300, 9999, 60000, 0xFFFFFF])
+            msg_id = rng.choice(UNKNOWN_IDS)
             return data[:7] + msg_id.to_bytes(3, "little") + data[10:]
-        return bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 40)))
+        return rng.randbytes(rng.randint(1, 40))  # junk
 
     def datagram(self, frames: int) -> bytes:
-        return b"".join(self.frame() for _ in range(frames))
+        return b"".join(self.frames(frames))
 
 
 def _with_crc(frame_without_crc: bytes) -> bytes:

@@ -198,3 +198,20 @@ def test_a_seeded_fuzz_storm_leaves_every_vehicle_answering_and_flying() -> None
     for system in range(1, n + 1):
         state = link.wait_for("EXTENDED_SYS_STATE", system=system, since=since, within_s=2.0)
         assert state.landed_state == MavLandedState.IN_AIR
+
+
+def test_a_float_mission_item_beyond_int32_degrees_is_refused_and_downloads_still_work() -> None:
+    link = MemoryLink(1, telemetry=False)
+    lat, lon, _ = link.fleet.world.origin.to_geodetic(10.0, 0.0, 0.0)
+    good = link.mission_item(1, 0, MavCmd.NAV_WAYPOINT, lat, lon, 10.0)
+    assert link.upload_mission(1, [good]).type == MavMissionResult.ACCEPTED
+    # a DO command carries no position, but its x/y must still fit MISSION_ITEM_INT
+    huge = link.mav.mission_item_encode(1, 1, 1, 3, MavCmd.DO_CHANGE_SPEED, 0, 1, 1.0, 5.0,
+                                        -1.0, 0.0, 1e30, 8.5, 0.0, 0)
+    count = link.mav.mission_count_encode(1, 1, 2, 0)
+    link.send(count)
+    link.send(good)
+    since = link.send(huge)
+    ack = link.wait_for("MISSION_ACK", since=since, within_s=0.0)
+    assert ack.type == MavMissionResult.INVALID_PARAM5_X
+    assert [m.seq for m in link.download_mission(1)] == [0]  # the old mission, encodable

@@ -27,7 +27,8 @@ __all__ = ["MAX_RETRIES", "RETRY_INTERVAL_S", "MissionTransfer", "wire_result"]
 
 RETRY_INTERVAL_S = 0.25
 MAX_RETRIES = 8
-NO_COORDINATE = 2**31 - 1  # an unset MISSION_ITEM_INT x / y
+INT32_LIMIT = 2**31
+NO_COORDINATE = INT32_LIMIT - 1  # an unset MISSION_ITEM_INT x / y
 Peer = tuple[int, int]
 Messages = list[mavlink.MAVLink_message]
 # emulator.flight.mission's result codes -> the dialect's, by name
@@ -117,14 +118,16 @@ class MissionTransfer:
             return [self._request(expected)]
         item = _to_item(m, is_int)
         ap = self.ap
-        code, reason = validate_item(
-            item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
-            ap.params["GF_MAX_HOR_DIST"],
-        )
-        if code == MissionResult.ACCEPTED:
-            code, reason = validate_item_limits(item, ap.params)
-        if code != MissionResult.ACCEPTED:
+        result, reason = _representable(item)
+        if result == MavMissionResult.ACCEPTED:
+            code, reason = validate_item(
+                item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
+                ap.params["GF_MAX_HOR_DIST"],
+            )
+            if code == MissionResult.ACCEPTED:
+                code, reason = validate_item_limits(item, ap.params)
             result = wire_result(code)
+        if result != MavMissionResult.ACCEPTED:
             self._upload = None
             self._ended = (peer, m.seq, result)
             return [_ack(peer, result), msgs.statustext(Severity.WARNING, reason)]
@@ -189,6 +192,17 @@ class MissionTransfer:
         except CommandRefused as refusal:
             return [msgs.statustext(Severity.WARNING, str(refusal)), msgs.mission_current(self.ap)]
         return []
+
+
+def _representable(item: MissionItem) -> tuple[MavMissionResult, str]:
+    """A float MISSION_ITEM's degrees may not fit MISSION_ITEM_INT's int32 (a download would
+    then be unencodable): such an item is refused whatever its command."""
+    where = f"Mission item {item.seq}"
+    if not -INT32_LIMIT <= item.x < INT32_LIMIT:
+        return MavMissionResult.INVALID_PARAM5_X, f"{where}: latitude out of range"
+    if not -INT32_LIMIT <= item.y < INT32_LIMIT:
+        return MavMissionResult.INVALID_PARAM6_Y, f"{where}: longitude out of range"
+    return MavMissionResult.ACCEPTED, ""
 
 
 def _to_item(m, is_int: bool) -> MissionItem:
