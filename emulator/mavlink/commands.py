@@ -16,14 +16,21 @@ from emulator.flight.refusal import CommandRefused
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.reply import Action, Reply, SendOnce
 from emulator.mavlink.vehicle import Vehicle
-from mavlink_vocabulary import FailureType, FailureUnit, MavCmd, MavFrame, MavResult, MessageId
+from mavlink_vocabulary import (
+    FailureType,
+    FailureUnit,
+    MavCmd,
+    MavFrame,
+    MavModeFlag,
+    MavResult,
+    MessageId,
+)
 
 __all__ = ["FAILURE_UNITS", "HANDLERS", "CommandArgs", "Reply", "execute_command"]
 
 FRAMES_AMSL = frozenset({MavFrame.GLOBAL, MavFrame.GLOBAL_INT})
 FRAMES_RELATIVE = frozenset({MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT})
 FORCE_DISARM_MAGIC = 21196.0  # MAV_CMD_COMPONENT_ARM_DISARM param2: disarm even in flight
-PX4_CUSTOM_MODE_FLAG = 1  # MAV_MODE_FLAG_CUSTOM_MODE_ENABLED in DO_SET_MODE's param1
 
 
 def _finite(value: float) -> bool:
@@ -93,7 +100,7 @@ def _rtl(v: Vehicle, a: CommandArgs) -> Reply:
 def _set_mode(v: Vehicle, a: CommandArgs) -> Reply:
     if not (_finite(a.p1) and _finite(a.p2)):
         return Reply.denied("Set mode: mode parameters must be numbers")
-    if not int(a.p1) & PX4_CUSTOM_MODE_FLAG:
+    if not int(a.p1) & MavModeFlag.CUSTOM_MODE_ENABLED:  # DO_SET_MODE's param1: base mode
         return Reply.denied("Set mode: only PX4 custom modes are supported")
     sub = int(a.p3) if _finite(a.p3) else 0
     mode = decode_px4_mode(int(a.p2), sub)
