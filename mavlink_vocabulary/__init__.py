@@ -34,6 +34,7 @@ from mavlink_vocabulary.enums import (
     MavVtolState,
     MessageId,
     PositionTargetTypemask,
+    SpeedType,
 )
 from mavlink_vocabulary.reasons import (
     FAILSAFE_TEXTS,
@@ -72,4 +73,5 @@ __all__ = [
     "MavVtolState",
     "MessageId",
     "PositionTargetTypemask",
+    "SpeedType",
 ]

@@ -32,6 +32,7 @@ __all__ = [
     "MavVtolState",
     "MessageId",
     "PositionTargetTypemask",
+    "SpeedType",
 ]
 
 
@@ -90,6 +91,7 @@ class MavCmd(IntEnum):
     NAV_RETURN_TO_LAUNCH = 20
     NAV_LAND = 21
     NAV_TAKEOFF = 22
+    NAV_DELAY = 93
     CONDITION_YAW = 115
     DO_SET_MODE = 176
     DO_CHANGE_SPEED = 178
@@ -377,3 +379,12 @@ class MavVtolState(IntEnum):
 
     UNDEFINED = 0
     MC = 3
+
+
+class SpeedType(IntEnum):
+    """SPEED_TYPE_*: MAV_CMD_DO_CHANGE_SPEED's param1."""
+
+    AIRSPEED = 0
+    GROUNDSPEED = 1
+    CLIMB_SPEED = 2
+    DESCENT_SPEED = 3

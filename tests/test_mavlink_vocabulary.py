@@ -35,6 +35,7 @@ DIALECT_ENUMS: dict[type[enum.Enum], tuple[str, str]] = {
     vocab.MavBatteryFunction: ("MAV_BATTERY_FUNCTION", "MAV_BATTERY_FUNCTION_"),
     vocab.MavBatteryType: ("MAV_BATTERY_TYPE", "MAV_BATTERY_TYPE_"),
     vocab.MavVtolState: ("MAV_VTOL_STATE", "MAV_VTOL_STATE_"),
+    vocab.SpeedType: ("SPEED_TYPE", "SPEED_TYPE_"),
 }
 
 
@@ -62,3 +63,26 @@ def test_every_exported_enum_is_checked() -> None:
     exported = {getattr(vocab, n) for n in vocab.__all__}
     enums = {c for c in exported if isinstance(c, type) and issubclass(c, enum.Enum)}
     assert enums == set(DIALECT_ENUMS) | {vocab.MessageId}
+
+
+def test_the_flight_logics_mavlink_tables_agree_with_the_vocabulary() -> None:
+    from emulator.flight.limits import SpeedKind
+    from emulator.flight.mission import Cmd, MissionResult
+    from emulator.flight.modes import LandedState
+    from emulator.flight.refusal import Severity
+    from emulator.mavlink.mission_transfer import wire_result
+
+    def members(table: object) -> dict[str, int]:
+        return {k: int(v) for k, v in vars(table).items()
+                if k.isupper() and isinstance(v, int | enum.Enum)}
+
+    for name, value in members(Cmd).items():
+        assert vocab.MavCmd[name] == value, name
+    for name, value in members(Severity).items():
+        assert vocab.MavSeverity[name] == value, name
+    for state in LandedState:
+        assert vocab.MavLandedState[state.name] == state.value, state
+    assert [int(k) for k in SpeedKind] == [int(t) for t in vocab.SpeedType]
+    # the mission results go out as the dialect's member of the same name
+    for name, value in members(MissionResult).items():
+        assert wire_result(value) is vocab.MavMissionResult[name], name
