@@ -9,13 +9,16 @@ import math
 
 import pytest
 
+from emulator.flight.modes import FlightMode
 from emulator.link_faults import LinkFaults, LinkProfile
 from emulator.scenario import default_scenario
 from mavlink_vocabulary import (
     MavCmd,
     MavComponent,
+    MavFrame,
     MavLandedState,
     MavMissionResult,
+    MavParamType,
     MavResult,
     MessageId,
 )
@@ -215,3 +218,50 @@ def test_a_float_mission_item_beyond_int32_degrees_is_refused_and_downloads_stil
     ack = link.wait_for("MISSION_ACK", since=since, within_s=0.0)
     assert ack.type == MavMissionResult.INVALID_PARAM5_X
     assert [m.seq for m in link.download_mission(1)] == [0]  # the old mission, encodable
+
+
+def test_offboard_set_points_fly_and_their_loss_holds_on_the_links_timer() -> None:
+    link = MemoryLink(1, telemetry=False)
+    link.arm_and_take_off(1)
+    ap = link.fleet.autopilots[0]
+    x0, y0, z0 = ap.position_m
+
+    def setpoint(north: float, east: float, down: float, frame: int = MavFrame.LOCAL_NED,
+                 mask: int = 0xDF8) -> int:  # position only
+        return link.send(link.mav.set_position_target_local_ned_encode(
+            0, 1, 1, frame, mask, north, east, down, 0, 0, 0, 0, 0, 0, 0, 0))
+
+    setpoint(y0 + 10.0, x0, -z0)
+    assert link.command_long(1, MavCmd.DO_SET_MODE, 1, 6, 0).result == MavResult.ACCEPTED
+    assert ap.mode is FlightMode.OFFBOARD
+    for _ in range(40):  # 4 s of set-points at 10 Hz
+        setpoint(y0 + 10.0, x0, -z0)
+        link.advance(0.1)
+    assert ap.position_m[1] == pytest.approx(y0 + 10.0, abs=1.0)
+    # malformed set-points are ignored, each kind reported once
+    since = setpoint(math.nan, 0.0, 0.0)
+    setpoint(math.nan, 0.0, 0.0)
+    setpoint(0.0, 0.0, 0.0, frame=MavFrame.MISSION)
+    texts = [m.text for m in link.messages("STATUSTEXT", since=since)]
+    assert texts == ["Offboard: set-point with NaN ignored", "Offboard: frame 2 unsupported"]
+    # set-points stop: after COM_OF_LOSS_T of wall time the vehicle holds
+    since = len(link.received)
+    link.advance(ap.params["COM_OF_LOSS_T"] + 0.2)
+    assert ap.mode is FlightMode.HOLD
+    assert any(m.text.startswith("Offboard setpoints lost")
+               for m in link.messages("STATUSTEXT", since=since))
+
+
+def test_parameters_are_read_and_set_bytewise() -> None:
+    link = MemoryLink(1, telemetry=False)
+    since = link.send(link.mav.param_request_list_encode(1, 1))
+    values = link.messages("PARAM_VALUE", since=since)
+    assert len(values) == values[0].param_count == len(link.fleet.autopilots[0].params)
+    since = link.send(link.mav.param_set_encode(1, 1, b"MPC_XY_CRUISE", 7.5,
+                                                MavParamType.REAL32))
+    echo = link.wait_for("PARAM_VALUE", since=since, within_s=0.0)
+    assert (echo.param_id, echo.param_value) == ("MPC_XY_CRUISE", 7.5)
+    assert link.fleet.autopilots[0].params["MPC_XY_CRUISE"] == 7.5
+    since = link.send(link.mav.param_set_encode(1, 1, b"NO_SUCH_PARAM", 1.0,
+                                                MavParamType.REAL32))
+    assert [m.get_type() for m in link.messages(since=since)] == ["STATUSTEXT"]
