@@ -9,9 +9,11 @@ import math
 
 import pytest
 
+from emulator.clock import ClockConfig
 from emulator.flight.modes import FlightMode
 from emulator.link_faults import LinkFaults, LinkProfile
 from emulator.scenario import default_scenario
+from emulator.swarm import PortPlan, Swarm
 from mavlink_vocabulary import (
     MavCmd,
     MavComponent,
@@ -24,7 +26,7 @@ from mavlink_vocabulary import (
 )
 from tests.frame_fuzz import FrameFuzzer
 from tests.memory_fuzz import recover_and_fly, storm
-from tests.memory_link import CLIENT, MemoryLink
+from tests.memory_link import CLIENT, MemoryLink, mavlink
 
 FUZZ_SEED = 20261125
 FUZZ_FRAMES = 20_000
@@ -265,3 +267,21 @@ def test_parameters_are_read_and_set_bytewise() -> None:
     since = link.send(link.mav.param_set_encode(1, 1, b"NO_SUCH_PARAM", 1.0,
                                                 MavParamType.REAL32))
     assert [m.get_type() for m in link.messages(since=since)] == ["STATUSTEXT"]
+
+
+def test_per_vehicle_networks_each_serve_their_own_vehicle() -> None:
+    swarm = Swarm(default_scenario(3), clock=ClockConfig(stepped=True),
+                  ports=PortPlan(bind_port=24600, api_port=24700, gcs_port=0, per_vehicle=True))
+    assert len(swarm.networks) == 3
+    mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+    for network in swarm.networks:
+        network.open()
+    arm_2 = mav.command_long_encode(2, 1, MavCmd.COMPONENT_ARM_DISARM, 0, 1, 0, 0, 0, 0, 0, 0)
+    swarm.networks[0].receive_datagram(arm_2.pack(mav), CLIENT, 0.0)
+    assert swarm.networks[0].stats.unroutable == 1 and not swarm.fleet.autopilots[1].armed
+    swarm.networks[1].receive_datagram(arm_2.pack(mav), CLIENT, 0.0)
+    assert swarm.fleet.autopilots[1].armed
+    sent = swarm.networks[1].datagrams_to_send(0.0)
+    # to the vehicle's own API port and to the client that spoke to it
+    assert {addr for _, addr in sent} == {("127.0.0.1", 24701), CLIENT}
+    assert not swarm.networks[0].datagrams_to_send(0.0)
