@@ -118,15 +118,13 @@ class MissionTransfer:
             return [self._request(expected)]
         item = _to_item(m, is_int)
         ap = self.ap
-        result, reason = _representable(item)
-        if result == MavMissionResult.ACCEPTED:
-            code, reason = validate_item(
-                item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
-                ap.params["GF_MAX_HOR_DIST"],
-            )
-            if code == MissionResult.ACCEPTED:
-                code, reason = validate_item_limits(item, ap.params)
-            result = wire_result(code)
+        code, reason = validate_item(
+            item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
+            ap.params["GF_MAX_HOR_DIST"],
+        )
+        if code == MissionResult.ACCEPTED:
+            code, reason = validate_item_limits(item, ap.params)
+        result = wire_result(code)
         if result != MavMissionResult.ACCEPTED:
             self._upload = None
             self._ended = (peer, m.seq, result)
@@ -194,23 +192,16 @@ class MissionTransfer:
         return []
 
 
-def _representable(item: MissionItem) -> tuple[MavMissionResult, str]:
-    """A float MISSION_ITEM's degrees may not fit MISSION_ITEM_INT's int32 (a download would
-    then be unencodable): such an item is refused whatever its command."""
-    where = f"Mission item {item.seq}"
-    if not -INT32_LIMIT <= item.x < INT32_LIMIT:
-        return MavMissionResult.INVALID_PARAM5_X, f"{where}: latitude out of range"
-    if not -INT32_LIMIT <= item.y < INT32_LIMIT:
-        return MavMissionResult.INVALID_PARAM6_Y, f"{where}: longitude out of range"
-    return MavMissionResult.ACCEPTED, ""
+def _int32(value: int) -> int:
+    return min(max(value, -INT32_LIMIT), INT32_LIMIT - 1)
 
 
 def _to_item(m, is_int: bool) -> MissionItem:
     if is_int:
         x, y = int(m.x), int(m.y)
-    else:
-        x = round(m.x * 1e7) if math.isfinite(m.x) else NO_COORDINATE
-        y = round(m.y * 1e7) if math.isfinite(m.y) else NO_COORDINATE
+    else:  # degrees as MISSION_ITEM_INT's int32 (clamped: a download must stay encodable)
+        x = _int32(round(m.x * 1e7)) if math.isfinite(m.x) else NO_COORDINATE
+        y = _int32(round(m.y * 1e7)) if math.isfinite(m.y) else NO_COORDINATE
     return MissionItem(
         seq=m.seq, frame=m.frame, command=m.command, param1=m.param1, param2=m.param2,
         param3=m.param3, param4=m.param4, x=x, y=y, z=m.z, autocontinue=m.autocontinue,
