@@ -60,7 +60,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="LLM agents: price per million completion tokens")
     group = run.add_mutually_exclusive_group()
     group.add_argument("--suite", choices=SUITES, default="smoke",
-                       help="smoke: 3 easy sessions, 6 tasks each; full: 100 sessions, 2000 tasks")
+                       help="smoke: 3 easy sessions, 6 tasks each; full: 125 sessions, 2500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
     run.add_argument("--workers", type=int, default=1, help="sessions run at once")

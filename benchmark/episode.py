@@ -25,7 +25,6 @@ from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
 from benchmark.live_channel import LiveChannel, TaskWatch
 from benchmark.replay_data import encode_window
 from benchmark.session_file import Session, TaskSpec
-from benchmark.task_faults import TaskFaults, task_faults
 from benchmark.tool_log import LoggedTools
 from benchmark.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from emulator.clock import ClockConfig
@@ -176,16 +175,6 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
     return swarm.fleet.now_s
 
 
-def _task_faults(session: Session, task: TaskSpec) -> TaskFaults | None:
-    """The hidden faults a task schedules (benchmark.task_faults), if any."""
-    raw_tasks = session.data.get("tasks")
-    index = next((i for i, t in enumerate(session.tasks) if t is task), None)
-    if index is None or not isinstance(raw_tasks, list) or index >= len(raw_tasks):
-        return None  # a task being drawn (generation), not one of the file's
-    return task_faults(raw_tasks[index], [v.id for v in session.scenario.vehicles],
-                       f"tasks[{index}]")
-
-
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
                 category: str, agent: str, trial: int) -> dict[str, Any]:
     """The fields that name a task's record."""
@@ -274,12 +263,6 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                 emit(task_error_record(session, task, agent.name, options.trial,
                                        f"{session.source}: {task.error}"))
                 continue
-            try:
-                _task_faults(session, task)
-            except ValueError as error:
-                emit(task_error_record(session, task, agent.name, options.trial,
-                                       f"{session.source}: {error}"))
-                continue
             emit(await run_task(session, task, agent, swarm, services, gateway, options,
                                 watch=watch))
 
@@ -300,7 +283,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     if watch is not None:
         watch.text, watch.tools = task.text, tools
     t0_s = services.clock_s()
-    faults = _task_faults(session, task)
+    faults = task.faults
     if faults is not None:
         faults.apply(swarm, t0_s)
     wall_agent = time.perf_counter()

@@ -28,6 +28,7 @@ from benchmark.session_file import (
     session_from_dict,
     task_from_dict,
 )
+from benchmark.task_faults import task_faults
 from benchmark.templates import CATALOGUE, SessionView, Template, TemplateUnfit
 from benchmark.validators import leaf_count, parse_tree
 from emulator.services import SwarmServices
@@ -52,6 +53,7 @@ CATEGORY_WEIGHTS = {
     "area_assignment_and_patrol": {"search": 3.0, "navigation": 2.0},
     "target_assignment": {"multi_drone_coordination": 3.0, "search": 2.0},
     "target_tracking": {"target_tracking": 12.0},
+    "resilience": {"resilience": 12.0},
 }
 
 
@@ -69,11 +71,15 @@ def build_task(template: Template, view: SessionView, rng: random.Random, task_i
     """One task object from a template (raises TemplateUnfit)."""
     draft = template.build(view, rng)
     parse_tree(draft.checks, view.scenario)  # a template bug surfaces here, not in a run
-    return {"id": task_id, "template": template.key, "category": template.category,
+    task = {"id": task_id, "template": template.key, "category": template.category,
             "difficulty": template.difficulty, "text": draft.phrasings[0],
             "aliases": draft.phrasings[1:],
             "budget": _budget(draft.flight_m, draft.hover_s, draft.steps),
             "checks": draft.checks, "oracle": draft.oracle}
+    if draft.faults is not None:
+        task_faults(task | {"faults": draft.faults}, [v.id for v in view.drones])  # checked
+        task["faults"] = draft.faults
+    return task
 
 
 class _Drawer:

@@ -100,17 +100,22 @@ def decode_paths(paths: Mapping[str, Mapping[str, Sequence[int]]], t0_s: float
     return out
 
 
+def _plain(value: Any) -> Any:
+    """An event's value as JSON: texts cut, floats rounded, nested (frozen) objects and
+    sequences made plain (a link_faults event holds its profiles as objects)."""
+    if isinstance(value, str) and len(value) > _MAX_TEXT:
+        return value[:_MAX_TEXT] + "..."
+    if isinstance(value, float):
+        return round(value, 2)
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
 def _event_json(t_s: float, vehicle: str, kind: str, data: Mapping[str, Any]) -> list[Any]:
-    plain: dict[str, Any] = {}
-    for key, value in data.items():
-        if isinstance(value, str) and len(value) > _MAX_TEXT:
-            value = value[:_MAX_TEXT] + "..."
-        elif isinstance(value, float):
-            value = round(value, 2)
-        elif isinstance(value, list | tuple) and all(isinstance(v, float) for v in value):
-            value = [round(v, 2) for v in value]
-        plain[key] = value
-    return [round(t_s, 2), vehicle, kind, plain]
+    return [round(t_s, 2), vehicle, kind, {key: _plain(value) for key, value in data.items()}]
 
 
 def encode_window(history: TruthHistory, t0_s: float | None = None,

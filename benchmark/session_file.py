@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract.protocol import TaskBudget
+from benchmark.task_faults import TaskFaults, task_faults
 from benchmark.validators import CheckDefinitionError, Node, parse_tree
 from emulator.scenario import Scenario, ScenarioError, scenario_from_dict
 
@@ -55,7 +56,7 @@ class SessionFileError(ValueError):
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """One task of a session. `checks` and `oracle` are hidden from agents."""
+    """One task of a session. `checks`, `oracle` and `faults` are hidden from agents."""
 
     id: str
     template: str
@@ -67,6 +68,7 @@ class TaskSpec:
     checks: Node | None
     oracle: tuple[tuple[Mapping[str, Any], ...], ...] | None
     error: str | None = None
+    faults: TaskFaults | None = None  # hidden, like checks and oracle
 
 
 @dataclass(frozen=True)
@@ -151,9 +153,10 @@ def task_from_dict(k: int, raw: Any, scenario: Scenario) -> TaskSpec:
         except CheckDefinitionError as error:
             raise ValueError(str(error)) from None
         oracle = _oracle(f"{where}.oracle", raw.get("oracle"))
+        faults = task_faults(raw, [v.id for v in scenario.vehicles], where)
         return TaskSpec(ident, _field(where, raw, "template", str, "custom"),
                         _field(where, raw, "category", str, "uncategorised"), difficulty,
-                        text, tuple(aliases), budget, checks, oracle)
+                        text, tuple(aliases), budget, checks, oracle, faults=faults)
     except ValueError as error:
         text = raw.get("text") if isinstance(raw, Mapping) else None
         return TaskSpec(ident, str(raw.get("template", "custom")) if isinstance(raw, Mapping)

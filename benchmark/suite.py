@@ -1,4 +1,4 @@
-"""The shipped benchmark suite (100 generated sessions under `benchmark/sessions/`) and its
+"""The shipped benchmark suite (125 generated sessions under `benchmark/sessions/`) and its
 named subsets, and generation of the whole suite."""
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def generate_suite(out_dir: Path, *, only: Sequence[str] | None = None, verify: 
                    on_start: Callable[[int], None] | None = None,
                    on_generated: Callable[[Path], None] = _print_generated,
                    progress: Callable[[str], None] = print) -> list[Path]:
-    """Generate the suite's session files (all 100, or the ids in `only`) into out_dir, in
+    """Generate the suite's session files (all 125, or the ids in `only`) into out_dir, in
     `workers` local processes or, with backend "ray", as Ray tasks (benchmark/backends.py).
     `on_start(n)` is told how many sessions will be generated, `on_generated(path)` each file
     as it is written, and `progress` (in this process) each redrawn task; `mavsdk_log`

@@ -3,9 +3,10 @@ with --run, the wall time of running it with an agent, with the per-task reset a
 evaluation overheads.
 
     ./dev bench bench_suite                       # counts only
-    ./dev bench bench_suite --run --workers 2     # full 1500-task oracle run, timed
+    ./dev bench bench_suite --run --workers 2     # full 2500-task oracle run, timed
     ./dev bench bench_suite --run --suite smoke
     ./dev bench bench_suite --family target_tracking --run --agent noop
+    ./dev bench bench_suite --family resilience --run --workers 2
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from _common import pct
 
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
+from benchmark.scenarios import FAMILIES
 from benchmark.session_file import load_session
 from benchmark.suite import suite_paths
 from benchmark.validators import endpoints_used, leaf_count
@@ -54,7 +56,8 @@ def main() -> None:
     parser.add_argument("--run", action="store_true", help="run the suite and time it")
     parser.add_argument("--agent", default="oracle")
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--family", default="", help="only the sessions of this family")
+    parser.add_argument("--family", default="", choices=("", *FAMILIES),
+                        help="only the sessions of this family")
     args = parser.parse_args()
     paths, limit = suite_paths(args.suite)
     if args.family:
@@ -81,6 +84,9 @@ def main() -> None:
         families[r["family"]] += 1
         family_passed[r["family"]] += bool(r["passed"])
     print("by family:", ", ".join(f"{f} {family_passed[f]}/{n}" for f, n in families.items()))
+    finishes = Counter(str(r["finish"]) for r in records)
+    print("task ends:", ", ".join(f"{k} {v}" for k, v in finishes.most_common()),
+          f"(agent wall max {max(r['wall_time_s'] for r in records):.1f} s)")
     print(f"{args.agent} on {args.suite}: {len(records)} tasks, {passed} passed, "
           f"{len(outcome.errors)} errors, wall {wall_s:.1f} s with {args.workers} workers "
           f"({wall_s / max(len(records), 1):.2f} s per task)")

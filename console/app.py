@@ -30,6 +30,7 @@ from console.editor import (
     generated_session,
     load_for_editing,
     save_session,
+    start_choices,
     validate_session,
 )
 from console.live import LiveFeed, LiveSwarm
@@ -207,6 +208,10 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
         if state.index.truth is None:
             raise HTTPException(404, "no truth file was opened")
         return state.index.truth.view()
+
+    @app.get("/api/editor/choices")
+    def editor_choices(role: Staff) -> dict[str, Any]:
+        return start_choices()
 
     @app.get("/api/editor/start")
     def editor_start(role: Staff, source: str = "blank", path: str = "", family: str = "",

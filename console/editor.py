@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmark.importer import load_any_session
+from benchmark.scenarios import FAMILIES, LEVELS, SESSION_INDICES
 from benchmark.scenarios.generator import generate_world
 from benchmark.session_file import (
     SCHEMA,
@@ -24,7 +25,7 @@ from benchmark.session_file import (
 )
 
 __all__ = ["EditorError", "blank_session", "generated_session", "load_for_editing",
-           "save_session", "validate_session"]
+           "save_session", "start_choices", "validate_session"]
 
 MIN_DRONE_SPACING_M = 1.0
 _ENTITY = re.compile(r"\b(drones|targets|obstacles|tasks)\[(\d+)\]")
@@ -53,6 +54,13 @@ def blank_session(width_m: float = 600.0, height_m: float = 600.0) -> dict[str, 
                                                                     "z": 0.0},
                         "max_speed": 15, "max_altitude": 120, "battery_capacity": 5000}],
             "targets": [], "obstacles": [], "tasks": []}
+
+
+def start_choices() -> dict[str, Any]:
+    """What a generated level to start from is picked among: the benchmark's families
+    (benchmark.scenarios.families), levels and session indices."""
+    return {"families": list(FAMILIES), "levels": list(LEVELS),
+            "indices": list(SESSION_INDICES)}
 
 
 def generated_session(family: str, level: str, index: int) -> dict[str, Any]:

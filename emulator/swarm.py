@@ -16,9 +16,11 @@ import numpy as np
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
+from emulator.flight.modes import FlightMode
 from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch, WatchBoard
 from emulator.mavlink.frames import FramePart, frame_batch
+from emulator.mavlink.protocol import Address, NetworkProtocol
 from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
@@ -118,18 +120,30 @@ class Swarm:
                 ap.set_param("COM_DISARM_PRFLT", -1.0)
         wall = time.monotonic()
         self.streams = StreamSchedule(self.fleet.n, wall, telemetry_hz)
-        self._endpoint_of: list[UdpEndpoint] = []
+        self.faults = SwarmFaults(self.fleet, link_faults)
+        # One MAVLink network (emulator.mavlink.protocol) per socket: all vehicles, or one
+        # each per-vehicle. A link's replies go straight into its network's queue.
+        p = self.ports
+        groups = [[k] for k in range(self.fleet.n)] if p.per_vehicle else [
+            list(range(self.fleet.n))]
+        self.networks = [NetworkProtocol(self._destinations(i), self.faults.gate)
+                         for i in range(len(groups))]
+        self._network_of = [self.networks[0]] * self.fleet.n
+        for network, group in zip(self.networks, groups, strict=True):
+            for k in group:
+                self._network_of[k] = network
         self.links = [
-            VehicleLink(ap, self._emit, self.streams, time.monotonic)
+            VehicleLink(ap, self._network_of[ap.k].send_frame, self.streams, time.monotonic)
             for ap in self.fleet.autopilots
         ]
+        for link in self.links:
+            self._network_of[link.k].add(link)
         # Periodic telemetry is built for all due vehicles at once; the links' encoders
         # share its sequence numbers, so every vehicle/component keeps one sequence.
         self.telemetry = FleetTelemetry(self.fleet)
         for link in self.links:
             for component, sequences in self.telemetry.sequences.items():
                 link.encoder(component).share_sequence(sequences, link.k)
-        self.faults = SwarmFaults(self.fleet, link_faults)
         for link in self.links:
             link.on_mavlink_signal = self.faults.mavlink_signal_changed
         self.endpoints: list[UdpEndpoint] = []
@@ -155,22 +169,24 @@ class Swarm:
     async def __aexit__(self, *exc: object) -> None:
         await self.close()
 
+    def _destinations(self, i: int) -> list[Address]:
+        """Where network i sends (besides the peers that talk to it)."""
+        p = self.ports
+        dests = []
+        if p.api_port:
+            dests.append((p.api_host, p.api_port + (i if p.per_vehicle else 0)))
+        if p.gcs_port:
+            dests.append((p.api_host, p.gcs_port))
+        return dests
+
     async def start(self) -> None:
         p = self.ports
-        groups = [[link] for link in self.links] if p.per_vehicle else [self.links]
         try:
-            for i, group in enumerate(groups):
-                dests = []
-                if p.api_port:
-                    dests.append((p.api_host, p.api_port + (i if p.per_vehicle else 0)))
-                if p.gcs_port:
-                    dests.append((p.api_host, p.gcs_port))
+            for i, network in enumerate(self.networks):
                 port = p.bind_port + i if p.per_vehicle else p.bind_port
-                endpoint = UdpEndpoint(group, dests, time.monotonic, self._wake.set)
-                endpoint.gate = self.faults.gate
+                endpoint = UdpEndpoint(network, time.monotonic, self._wake.set)
                 endpoint.open(p.bind_host, port)
                 self.endpoints.append(endpoint)
-                self._endpoint_of.extend([endpoint] * len(group))
         except OSError as error:
             for endpoint in self.endpoints:
                 endpoint.close()
@@ -196,8 +212,8 @@ class Swarm:
                 fut.cancel()
 
     def _emit(self, k: int, data: bytes) -> None:
-        if self._endpoint_of:
-            self._endpoint_of[k].emit(k, data)
+        """One telemetry frame of vehicle k into its network's queue."""
+        self._network_of[k].send_frame(k, data)
 
     # ----------------------------------------------------------------- access
     @property
@@ -232,14 +248,14 @@ class Swarm:
             sim_time_s=sim, wall_time_s=wall, real_time_factor=sim / wall if wall > 0 else 0.0,
             steps=self.fleet.step_count,
             slipped_s=self._pacer.slipped_s if self._pacer else 0.0,
-            frames_ok=sum(e.decoder.frames_ok for e in self.endpoints),
-            frames_bad=sum(e.decoder.frames_bad for e in self.endpoints),
-            datagrams_in=sum(e.stats.datagrams_in for e in self.endpoints),
-            datagrams_out=sum(e.stats.datagrams_out for e in self.endpoints),
-            frames_out=sum(e.stats.frames_out for e in self.endpoints),
-            unroutable=sum(e.stats.unroutable for e in self.endpoints),
+            frames_ok=sum(n.decoder.frames_ok for n in self.networks),
+            frames_bad=sum(n.decoder.frames_bad for n in self.networks),
+            datagrams_in=sum(n.stats.datagrams_in for n in self.networks),
+            datagrams_out=sum(n.stats.datagrams_out for n in self.networks),
+            frames_out=sum(n.stats.frames_out for n in self.networks),
+            unroutable=sum(n.stats.unroutable for n in self.networks),
             internal_errors=self._telemetry_errors
-            + sum(e.stats.handler_errors for e in self.endpoints),
+            + sum(n.stats.handler_errors for n in self.networks),
         )
 
     def set_link_faults(self, faults: LinkFaults) -> None:
@@ -329,6 +345,10 @@ class Swarm:
         if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
             for k in bursts:
                 self.links[k].resend_mission_reached()
+        for k in bursts:  # so is a lost failure report (a motor, the GPS)
+            report = self.fleet.autopilots[k].failures.standing_report()
+            if report is not None:
+                self.links[k].statustext(*report)
         ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
         schedule = self.streams
         on = np.isfinite(schedule.period_s[ks])
@@ -395,13 +415,11 @@ class Swarm:
                 self._send_bursts()
             if wall >= next_link_tick:
                 next_link_tick = wall + LINK_TICK_S
-                for link in self.links:
-                    if link.missions.uploading or link.ap.mode.name == "OFFBOARD":
-                        link.tick(wall)
+                self.tick_links(wall)
             if wall >= next_peer_tick:
                 next_peer_tick = wall + 1.0
-                for endpoint in self.endpoints:
-                    endpoint.expire_peers(wall)
+                for network in self.networks:
+                    network.expire_peers(wall)
             if self.clock.stepped and self._should_step():
                 await asyncio.sleep(0)
                 continue
@@ -425,11 +443,22 @@ class Swarm:
     def _send_telemetry(self, wall: float) -> None:
         self._send_streams(self.streams.due(wall))
 
+    def send_due_telemetry(self, wall_now_s: float) -> None:
+        """Send every telemetry stream due by `wall_now_s` (the scheduler does this every
+        turn; a driver of the networks without the scheduler calls it)."""
+        self._send_telemetry(wall_now_s)
+
+    def tick_links(self, wall_now_s: float) -> None:
+        """The links' wall-clock duties: mission item retries, the offboard failsafe."""
+        for link in self.links:
+            if link.missions.uploading or link.ap.mode is FlightMode.OFFBOARD:
+                link.tick(wall_now_s)
+
     def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
         """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together
         and packed several frames to a datagram."""
-        for endpoint in self.endpoints:
-            endpoint.batching = True
+        for network in self.networks:
+            network.begin_batch()
         try:
             parts: list[FramePart] = []
             order: list[np.ndarray] = []
@@ -448,9 +477,8 @@ class Swarm:
             if parts:
                 self._emit_parts(parts, order)
         finally:
-            for endpoint in self.endpoints:
-                endpoint.batching = False
-                endpoint.flush()
+            for network in self.networks:
+                network.end_batch()
 
     def _emit_parts(self, parts: list[FramePart], order: list[np.ndarray]) -> None:
         try:
@@ -462,8 +490,8 @@ class Swarm:
                 self._send_one_by_one(part.layout.msg_id, ks)
             return
         data, emit, start, ends = frames.data, self._emit, 0, frames.ends.tolist()
-        if len(self.endpoints) == 1 and self.endpoints[0].emit_frames(data, ends):
-            return  # one shared socket and a clean link: the whole batch at once
+        if len(self.networks) == 1 and self.networks[0].send_frames(data, ends):
+            return  # one shared network and a clean link: the whole batch at once
         for k, end in zip(np.concatenate(order).tolist(), ends, strict=True):
             emit(k, data[start:end])
             start = end

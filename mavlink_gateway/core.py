@@ -13,13 +13,12 @@ from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.lockstep_wait import (
     ARRIVED_SPEED_M_S,
-    FAILSAFE_TEXTS,
-    OBSTACLE_TEXT,
     judge_failure,
     wait_instant,
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
+from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
 
 __all__ = ["GatewayCore", "NoAnswer", "Refusal"]
 

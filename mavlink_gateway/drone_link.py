@@ -25,6 +25,7 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
+from mavlink_vocabulary import FAILURE_TEXTS, REPAIRED_TEXT
 
 __all__ = ["FAILURE_TEXTS", "UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
 
@@ -37,9 +38,6 @@ LANDED_STATE_HZ = 10.0
 # `DroneLink.seen` tell a wait whether every cached value was refreshed since some moment.
 PERIODIC = ("position", "velocity", "heading", "battery", "in_air", "landed_state", "armed",
             "flight_mode")
-# STATUSTEXTs of failures that take a drone out of the task (emulator.flight.failures, PX4)
-FAILURE_TEXTS = ("Motor failure", "GPS lost")
-REPAIRED_TEXT = "Failures cleared"
 # No telemetry at all for this long (every stream is at least 0.5 Hz): the drone is
 # unreachable, and its state is as last seen.
 UNREACHABLE_WALL_S = 5.0

@@ -19,12 +19,14 @@ from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import wrap_heading_deg
 from mavlink_gateway.outcomes import Outcome, Status
+from mavlink_vocabulary import MavCmd, MavFrame
 
 __all__ = ["FlightPrimitives"]
 
 ARRIVAL_M = 1.0
-FRAME_RELATIVE_ALT_INT = 6
-NAV_WAYPOINT, NAV_LOITER_TIME = 16, 19
+# MAVSDK's mission items take plain ints
+FRAME_RELATIVE_ALT = int(MavFrame.GLOBAL_RELATIVE_ALT_INT)
+NAV_WAYPOINT, NAV_LOITER_TIME = int(MavCmd.NAV_WAYPOINT), int(MavCmd.NAV_LOITER_TIME)
 CRUISE_M_S = 5.0  # a conservative speed for time budgets
 MAX_WAYPOINTS = 100
 MAX_HOVER_S = 3600.0
@@ -237,8 +239,8 @@ class FlightPrimitives(GatewayCore):
             items = []
             for seq, (x, y, z) in enumerate(points):
                 lat, lon, _ = link.geodetic(x, y, 0.0)
-                items.append(MissionItem(seq, FRAME_RELATIVE_ALT_INT, NAV_WAYPOINT, int(seq == 0),
-                                         1, 0.0, 0.0, 0.0, math.nan, round(lat * 1e7),
+                items.append(MissionItem(seq, FRAME_RELATIVE_ALT, NAV_WAYPOINT, int(seq == 0), 1,
+                                         0.0, 0.0, 0.0, math.nan, round(lat * 1e7),
                                          round(lon * 1e7), z, 0))
             start = link.position_m or points[0]
             length = sum(math.dist(a, b) for a, b in zip([start, *points], points, strict=False))
@@ -264,8 +266,8 @@ class FlightPrimitives(GatewayCore):
                 raise Refusal(f"duration_s must be within (0, {MAX_HOVER_S:g}], got {duration:g}")
             x, y, z = link.position_m or (0.0, 0.0, 0.0)
             altitude = round(link.state().altitude_m, 3)  # mm: see _goto
-            item = MissionItem(0, FRAME_RELATIVE_ALT_INT, NAV_LOITER_TIME, 1, 1, duration, 0.0,
-                               0.0, math.nan, 0, 0, altitude, 0)
+            item = MissionItem(0, FRAME_RELATIVE_ALT, NAV_LOITER_TIME, 1, 1, duration, 0.0, 0.0,
+                               math.nan, 0, 0, altitude, 0)
             outcome = await self._fly_mission(link, [item], "hover", duration + 30.0, (x, y, z))
             if outcome.ok:
                 return Outcome(Status.OK, f"{link.drone_id} hovered {duration:g} s at "

@@ -15,10 +15,11 @@ import math
 import time
 from collections.abc import Awaitable, Callable
 
-from mavlink_gateway.drone_link import FAILURE_TEXTS, DroneLink
+from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_gateway.pacing import current_thinker
+from mavlink_vocabulary import FAILSAFE_TEXTS, FAILURE_TEXTS, OBSTACLE_TEXT
 
 __all__ = ["judge_failure", "judge_stop", "settle_telemetry", "wait_instant", "wait_lockstep",
            "wait_world"]
@@ -26,9 +27,6 @@ __all__ = ["judge_failure", "judge_stop", "settle_telemetry", "wait_instant", "w
 SETTLE_WALL_S = 5.0  # a link that shows no settled state by then is judged as it is
 TEXT_GRACE_S = 0.2  # a halt that explains nothing: time for a STATUSTEXT still on its way
 POLL_S = 0.01
-OBSTACLE_TEXT = "Obstacle"
-FAILSAFE_TEXTS = ("Critical battery", "Emergency battery", "Offboard setpoints lost",
-                  "Data link lost")
 REBURST_WALL_S = 0.15  # telemetry lost on the way: ask the swarm for the stopped state again
 REJUDGE_ROUNDS = 2  # a halt that shows no outcome is looked at again this many times
 # The autopilot reports a goal reached once below 0.3 m/s; telemetry carries velocity in whole

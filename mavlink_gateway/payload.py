@@ -13,19 +13,18 @@ from mavlink_gateway.flight import FlightPrimitives
 from mavlink_gateway.interfaces import Sensed, SensedWorld
 from mavlink_gateway.lockstep_wait import wait_instant, wait_world
 from mavlink_gateway.outcomes import Outcome, Status
+from mavlink_vocabulary import MavCmd, MavComponent, MavResult
 
 __all__ = ["PayloadPrimitives", "perception_dict"]
 
-CAMERA_ID = 100
 CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targets
 FULL_PCT = 99.5
 MAX_WAIT_S = 3600.0
-IMAGE_START_CAPTURE = 2000
-MAV_RESULT_ACCEPTED = 0
 PHOTO_TRIES = 4
 PHOTO_REPORT_WALL_S = 0.6  # wall time a capture report may take before it is asked again
 
-MAV_RESULTS = {1: "temporarily rejected", 2: "denied", 3: "unsupported", 4: "failed"}
+MAV_RESULTS = {MavResult.TEMPORARILY_REJECTED: "temporarily rejected", MavResult.DENIED: "denied",
+               MavResult.UNSUPPORTED: "unsupported", MavResult.FAILED: "failed"}
 
 
 def _entity(e: Sensed) -> dict[str, Any]:
@@ -78,15 +77,16 @@ class PayloadPrimitives(FlightPrimitives):
     async def _capture(link: DroneLink, sequence: int) -> None:
         """IMAGE_START_CAPTURE (one image, with its capture sequence number) to the camera;
         a refusal by the camera is a Refusal; MAVSDK's errors (no answer) pass through."""
-        fields = {"target_system": link.profile.system_id, "target_component": CAMERA_ID,
-                  "command": IMAGE_START_CAPTURE, "confirmation": 0, "param1": 0.0,
+        fields = {"target_system": link.profile.system_id, "target_component": MavComponent.CAMERA,
+                  "command": MavCmd.IMAGE_START_CAPTURE, "confirmation": 0, "param1": 0.0,
                   "param2": 0.0, "param3": 1.0, "param4": float(sequence), "param5": 0.0,
                   "param6": 0.0, "param7": 0.0}
-        command = MavlinkMessage("COMMAND_LONG", 0, 0, link.profile.system_id, CAMERA_ID,
+        command = MavlinkMessage("COMMAND_LONG", 0, 0, link.profile.system_id,
+                                 MavComponent.CAMERA,
                                  json.dumps(fields))
         ack = await link.direct.send_command(command)
         result = json.loads(ack.fields_json or "{}").get("result")
-        if result != MAV_RESULT_ACCEPTED:
+        if result != MavResult.ACCEPTED:
             raise Refusal(f"the camera refused the photo: "
                           f"{MAV_RESULTS.get(result, f'MAV_RESULT {result}')}")
 

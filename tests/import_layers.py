@@ -1,7 +1,8 @@
 """The package layers of mavswarm and a scanner that finds every import crossing them.
 
-Each package may import only the packages listed for it: the emulator and the MAVLink gateway
-nothing of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
+Each package may import only the packages listed for it: every package the MAVLink vocabulary
+(`mavlink_vocabulary`, which imports nothing of ours), the emulator and the MAVLink gateway
+nothing else of ours, the agent contract the gateway, the LLM tools the gateway and the contract,
 the MQTT bus the emulator and the agent side (it reads what vehicles report, never ground
 truth), the benchmark all of them, the web console all of those, and the composition root
 (`mavswarm`) whatever it assembles. Every import counts wherever it stands: at the top, inside
@@ -18,18 +19,20 @@ from pathlib import Path
 
 __all__ = ["LAYERS", "Crossing", "crossings", "imports_of"]
 
+_BOTTOM = frozenset({"mavlink_vocabulary"})
 LAYERS: dict[str, frozenset[str]] = {
-    "emulator": frozenset(),
-    "mavlink_gateway": frozenset(),
-    "agent_contract": frozenset({"mavlink_gateway"}),
-    "llm_tools": frozenset({"mavlink_gateway", "agent_contract"}),
-    "mqtt_bus": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools"}),
-    "benchmark": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                            "mqtt_bus"}),
-    "console": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                          "mqtt_bus", "benchmark"}),
-    "mavswarm": frozenset({"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
-                           "mqtt_bus", "benchmark", "console"}),
+    "mavlink_vocabulary": frozenset(),
+    "emulator": _BOTTOM,
+    "mavlink_gateway": _BOTTOM,
+    "agent_contract": _BOTTOM | {"mavlink_gateway"},
+    "llm_tools": _BOTTOM | {"mavlink_gateway", "agent_contract"},
+    "mqtt_bus": _BOTTOM | {"emulator", "mavlink_gateway", "agent_contract", "llm_tools"},
+    "benchmark": _BOTTOM | {"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                            "mqtt_bus"},
+    "console": _BOTTOM | {"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                          "mqtt_bus", "benchmark"},
+    "mavswarm": _BOTTOM | {"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
+                           "mqtt_bus", "benchmark", "console"},
 }
 
 

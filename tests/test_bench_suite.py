@@ -1,4 +1,4 @@
-"""The shipped suite: 100 sessions of 20 tasks that load cleanly, cover the check endpoints,
+"""The shipped suite: 125 sessions of 20 tasks that load cleanly, cover the check endpoints,
 and regenerate byte for byte from their seeds."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from benchmark.validators import endpoints_used, leaf_count
 
 def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     paths, limit = suite_paths("full")
-    assert limit is None and len(paths) == 100
+    assert limit is None and len(paths) == 125
     assert [p.stem for p in paths] == [session_id(*k) for k in all_session_keys()]
     endpoints: set[str] = set()
     categories: Counter[str] = Counter()
@@ -37,10 +37,10 @@ def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     assert {"moving_target_tracked", "moving_target_reached_in_zone"} <= endpoints
     assert set(categories) == {"basic_operations", "navigation", "search",
                                "multi_drone_coordination", "delivery", "communication",
-                               "battery_management", "target_tracking"}
+                               "battery_management", "target_tracking", "resilience"}
     assert families == dict.fromkeys(("area_search", "area_assignment_and_patrol",
-                                      "target_assignment", "target_tracking"), 25)
-    assert checks >= 4 * 2000
+                                      "target_assignment", "target_tracking", "resilience"), 25)
+    assert checks >= 4 * 2500
 
 
 def test_unverified_generation_reproduces_a_shipped_session() -> None:
@@ -61,14 +61,14 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
     assert again == shipped, lines
 
 
-def test_every_tracking_session_redraws_from_its_seed() -> None:
-    """Every first draw of the 25 target_tracking sessions passed the oracle, so drawing alone
-    gives the shipped files."""
+@pytest.mark.parametrize("family", ["target_tracking", "resilience"])
+def test_every_tracking_and_resilience_session_redraws_from_its_seed(family: str) -> None:
+    """Every first draw of the 25 sessions of these families passed the oracle (faults
+    striking, for resilience), so drawing alone gives the shipped files."""
     for level in LEVELS:
         for index in SESSION_INDICES:
-            name = f"target_tracking-{level}-{index}"
-            again = dump_session(generate_session("target_tracking", level, index,
-                                                  verify=False))
+            name = f"{family}-{level}-{index}"
+            again = dump_session(generate_session(family, level, index, verify=False))
             assert again == (SESSIONS_DIR / f"{name}.json").read_text(), name
 
 
@@ -78,4 +78,15 @@ def test_the_oracle_proves_the_first_tracking_tasks_again() -> None:
     shipped = load_session(SESSIONS_DIR / "target_tracking-easy-2.json").data["tasks"][:3]
     lines: list[str] = []
     again = generate_session("target_tracking", "easy", 2, tasks=3, progress=lines.append)
+    assert again["tasks"] == shipped, lines
+
+
+@pytest.mark.mavsdk
+def test_the_oracle_proves_the_first_resilience_tasks_again() -> None:
+    """The first tasks of a resilience session, flown again by the oracle with their faults
+    striking: the same tasks, none redrawn."""
+    shipped = load_session(SESSIONS_DIR / "resilience-easy-1.json").data["tasks"][:4]
+    assert any("faults" in task for task in shipped)
+    lines: list[str] = []
+    again = generate_session("resilience", "easy", 1, tasks=4, progress=lines.append)
     assert again["tasks"] == shipped, lines

@@ -1,6 +1,7 @@
 """The scenario editor in headless Chromium: an invalid edit (a drone inside an obstacle) is
 shown and refused; a session edited (obstacle placed, drone dragged, task text and budget
-changed) and saved loads in `mavswarm up` and runs in `mavswarm bench run`."""
+changed) and saved loads in `mavswarm up` and runs in `mavswarm bench run`; a generated level
+to start from is picked among the benchmark's five families, as the server lists them."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from typing import Any
 
 import pytest
 
+from benchmark.scenarios import FAMILIES, LEVELS
 from benchmark.session_file import load_session
 from tests.browser_fixtures import (
     map_view,
@@ -126,3 +128,26 @@ def test_an_edited_session_is_validated_saved_and_loads(browser: Any,
     assert run.returncode == 0, run.stdout + run.stderr
     records = (folder / "run" / "results.jsonl").read_text().splitlines()
     assert len(records) == 1 and json.loads(records[0])["session"] == "edited-1"
+
+
+def test_a_generated_level_is_picked_among_every_family(browser: Any,
+                                                       editor: tuple[str, Path]) -> None:
+    url, _ = editor
+    with open_page(browser, f"{url}/editor") as page:
+        _status(page, "valid: 1 drones")
+        options = page.eval_on_selector_all("#start-family option", "els => els.map(e => e.value)")
+        assert options == list(FAMILIES) and len(options) == 5
+        levels = page.eval_on_selector_all("#start-level option", "els => els.map(e => e.value)")
+        assert levels == list(LEVELS)
+        assert page.get_attribute("#start-index", "max") == "5"
+        for family in ("target_tracking", "resilience"):  # the two the page used to miss
+            page.select_option("#start-source", "level")
+            page.select_option("#start-family", family)
+            page.select_option("#start-level", "easy")
+            page.evaluate("document.getElementById('editor-status').textContent = ''")
+            page.click("#start-load")
+            page.wait_for_function(
+                f"window.consoleView.state.session.family === {json.dumps(family)}",
+                timeout=15_000)
+            drones = page.evaluate("window.consoleView.state.session.drones.length")
+            assert drones >= 2 and "0 tasks" in _status(page, f"valid: {drones} drones")

@@ -174,9 +174,12 @@ def test_multiuav_plat_target_records_give_a_moving_target_where_it_is_now() -> 
     data = {"targets": [{"id": "m", "name": "Mover", "type": "moving",
                          "position": {"x": 100.0, "y": 0.0, "z": 0.0},
                          "velocity": {"x": 0.0, "y": 4.0, "z": 0.0}}]}
-    live = SimpleNamespace(session=SimpleNamespace(data=data),
-                           swarm=SimpleNamespace(fleet=fleet))
+    live = SimpleNamespace(
+        session=SimpleNamespace(data=data, scenario=fleet.scenario),
+        swarm=SimpleNamespace(fleet=fleet, recorder=fleet.recorder), task_start_s=0.0,
+        services=SimpleNamespace(clock_s=lambda: fleet.now_s))
     record = entity_records(live, "targets")["m"]  # type: ignore[arg-type]
     assert record["position"] == {"x": 100.0, "y": 8.0, "z": 0.0}
     assert record["velocity"] == {"x": 0.0, "y": 4.0, "z": 0.0}
+    assert record["tracking_status"] == "never_tracked"  # the drone stayed 52 m away
     assert data["targets"][0]["position"]["y"] == 0.0  # the session file is left alone

@@ -7,9 +7,12 @@ import asyncio
 import pytest
 
 from emulator.geo import DEFAULT_ORIGIN
+from mavlink_vocabulary import MavMissionResult
 from tests.mavlink_client import MavClient, running_swarm
 
-ACCEPTED, UNSUPPORTED, INVALID_SEQUENCE, DENIED, CANCELLED = 0, 3, 14, 15, 16
+M = MavMissionResult
+ACCEPTED, UNSUPPORTED, INVALID_SEQUENCE, DENIED, CANCELLED = (
+    M.ACCEPTED, M.UNSUPPORTED, M.INVALID_SEQUENCE, M.DENIED, M.OPERATION_CANCELLED)
 WAYPOINT, LAND, TAKEOFF = 16, 21, 22
 FENCE, RALLY = 1, 2
 
@@ -141,11 +144,11 @@ async def test_unsupported_item_is_refused_and_nothing_is_stored() -> None:
         # unsupported frame and out-of-range latitude are refused the same way
         bad = mission(client, 1, [(0, 30, 10)])
         bad[1] = client.mission_item(1, 1, WAYPOINT, 47.4, 8.5, 10.0, frame=1)
-        assert (await client.upload_mission(1, bad)).type == 2  # UNSUPPORTED_FRAME
+        assert (await client.upload_mission(1, bad)).type == MavMissionResult.UNSUPPORTED_FRAME
         bad[1] = client.mission_item(1, 1, WAYPOINT, 91.0, 8.5, 10.0)
-        assert (await client.upload_mission(1, bad)).type == 11  # INVALID_PARAM5_X
-        bad[1] = client.mission_item(1, 1, WAYPOINT, *geo(0, 30), 500.0)
-        assert (await client.upload_mission(1, bad)).type == 13  # INVALID_PARAM7 (ceiling)
+        assert (await client.upload_mission(1, bad)).type == MavMissionResult.INVALID_PARAM5_X
+        bad[1] = client.mission_item(1, 1, WAYPOINT, *geo(0, 30), 500.0)  # above the ceiling
+        assert (await client.upload_mission(1, bad)).type == MavMissionResult.INVALID_PARAM7
         assert summary(await client.download_mission(1)) == summary(old)
 
 

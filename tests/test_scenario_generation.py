@@ -30,7 +30,7 @@ from benchmark.scenarios import (
     session_id,
     session_seed,
 )
-from benchmark.scenarios.families import TRACKING_TARGETS
+from benchmark.scenarios.families import RESILIENCE_FIXED_TARGETS, TRACKING_TARGETS
 from benchmark.scenarios.placement import Layout, ShapeTemplate, clearance_m
 from emulator.scenario import CHARGE_AMOUNT_PERIOD_S, WIND_DIRECTIONS_DEG, scenario_from_dict
 
@@ -52,11 +52,11 @@ TOP_KEYS = ["schema", "id", "family", "level", "index", "seed", "name", "descrip
 
 @pytest.fixture(scope="module")
 def worlds() -> dict[tuple[str, str, int], Session]:
-    """All 100 sessions, generated once (the generation time is checked here too)."""
+    """All 125 sessions, generated once (the generation time is checked here too)."""
     start = time.perf_counter()
     result = {key: generate_world(*key) for key in all_session_keys()}
     elapsed = time.perf_counter() - start
-    assert elapsed < 10.0, f"generating the 100 worlds took {elapsed:.1f} s"
+    assert elapsed < 12.5, f"generating the 125 worlds took {elapsed:.1f} s"
     return result
 
 
@@ -69,11 +69,12 @@ def _dump(session: Session) -> str:
 
 def test_session_keys_and_ids() -> None:
     keys = all_session_keys()
-    assert len(keys) == 100 and len(set(keys)) == 100
+    assert len(keys) == 125 and len(set(keys)) == 125
     assert keys[0] == ("area_search", "easy", 1)
     assert keys[5] == ("area_search", "intermediate", 1)
     assert keys[74] == ("target_assignment", "extreme", 5)
-    assert keys[-1] == ("target_tracking", "extreme", 5)
+    assert keys[99] == ("target_tracking", "extreme", 5)
+    assert keys[-1] == ("resilience", "extreme", 5)
     assert {f for f, _, _ in keys} == set(FAMILIES) and {lv for _, lv, _ in keys} == set(LEVELS)
     assert session_id("target_assignment", "hard", 3) == "target_assignment-hard-3"
 
@@ -82,7 +83,7 @@ def test_session_seed_is_sha256_of_the_key() -> None:
     digest = hashlib.sha256(b"mavswarm/area_search/easy/1").digest()
     assert session_seed("area_search", "easy", 1) == int.from_bytes(digest[:8], "big") >> 11
     seeds = {session_seed(*key) for key in all_session_keys()}
-    assert len(seeds) == 100
+    assert len(seeds) == 125
     assert all(0 <= s < 2**53 for s in seeds)
 
 
@@ -108,7 +109,7 @@ def test_different_keys_give_different_worlds(
     def layout(session: Session) -> str:
         return json.dumps([session["drones"], session["targets"], session["obstacles"]])
 
-    assert len({layout(w) for w in worlds.values()}) == 100
+    assert len({layout(w) for w in worlds.values()}) == 125
     a, b = worlds["area_search", "easy", 1], worlds["area_search", "easy", 2]
     assert a["seed"] != b["seed"] and a["drones"] != b["drones"]
 
@@ -138,7 +139,7 @@ def test_bad_keys_raise_value_error_naming_the_value(family: Any, level: Any, in
 def test_level_spec_table_and_bad_level() -> None:
     assert LEVELS == ("easy", "intermediate", "moderate", "hard", "extreme")
     assert FAMILIES == ("area_search", "area_assignment_and_patrol", "target_assignment",
-                        "target_tracking")
+                        "target_tracking", "resilience")
     for level, (drones, fixed, area, obstacles, side) in TABLE.items():
         spec = level_spec(level)
         assert (spec.drone_count, spec.target_assignment_target_count, spec.area_target_count,
@@ -154,7 +155,7 @@ def test_level_spec_table_and_bad_level() -> None:
 # ------------------------------------------------------------------------ layout and counts
 
 
-def test_all_75_have_the_layout_and_exact_counts(
+def test_every_world_has_the_layout_and_exact_counts(
         worlds: dict[tuple[str, str, int], Session]) -> None:
     for (family, level, index), w in worlds.items():
         drones, fixed, area, obstacles, side = TABLE[level]
@@ -164,7 +165,8 @@ def test_all_75_have_the_layout_and_exact_counts(
             "mavswarm.session/1", family, level, index)
         assert w["id"] == f"{family}-{level}-{index}" and w["tasks"] == []
         assert w["seed"] == session_seed(family, level, index)
-        assert w["task_type"] == family and w["map_size_m"] == [side, side]
+        assert w["task_type"] == ("others" if family == "resilience" else family)
+        assert w["map_size_m"] == [side, side]
         assert f"{side} x {side} m" in w["description"]
         assert w["name"].endswith(f", {level}, #{index}")
         assert len(w["drones"]) == drones and len(w["obstacles"]) == obstacles
@@ -175,6 +177,11 @@ def test_all_75_have_the_layout_and_exact_counts(
             assert len(w["targets"]) == main + stations
             assert kinds["moving"] == round(0.7 * main) and kinds["fixed"] == main - kinds[
                 "moving"]
+            continue
+        if family == "resilience":
+            assert len(w["targets"]) == area + RESILIENCE_FIXED_TARGETS[level]
+            assert kinds["circle"] + kinds["polygon"] == area - stations
+            assert kinds["fixed"] == RESILIENCE_FIXED_TARGETS[level]
             continue
         assert len(w["targets"]) == (fixed if family == "target_assignment" else area)
         if family == "target_assignment":
@@ -196,6 +203,12 @@ def test_target_names_follow_the_family(worlds: dict[tuple[str, str, int], Sessi
             fixed = [t["name"] for t in main if t["type"] == "fixed"]
             assert movers == [f"Moving Target {k}" for k in range(1, len(movers) + 1)]
             assert fixed == [f"Fixed Target {k}" for k in range(1, len(fixed) + 1)]
+            continue
+        if family == "resilience":
+            areas = [t["name"] for t in main if t["type"] != "fixed"]
+            fixed = [t["name"] for t in main if t["type"] == "fixed"]
+            assert areas == [f"Search Area {k}" for k in range(1, len(areas) + 1)]
+            assert fixed == [f"Target {k}" for k in range(1, len(fixed) + 1)]
             continue
         stations = [t for t in w["targets"] if t["type"] == "waypoint"]
         assert [t["name"] for t in main] == [f"{expected[family]} {k}"

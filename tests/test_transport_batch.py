@@ -1,68 +1,72 @@
-"""A batch of frames handed to the transport at once leaves in the same datagrams, byte for
-byte, as the same frames emitted one by one (real UDP on 127.0.0.1)."""
+"""A batch of frames handed to the network at once leaves in the same datagrams, byte for
+byte, as the same frames sent one by one (the sans-I/O protocol, no socket needed)."""
 
 from __future__ import annotations
 
-import asyncio
 import random
-import socket
-import time
 
-from emulator.transport import MAX_BATCH_BYTES, UdpEndpoint
+from emulator.link_faults import LinkFaults, LinkGate
+from emulator.mavlink.protocol import MAX_BATCH_BYTES, NetworkProtocol
 
-
-def _received(sink: socket.socket, count: int) -> list[bytes]:
-    out: list[bytes] = []
-    deadline = time.monotonic() + 5.0
-    while len(out) < count and time.monotonic() < deadline:
-        try:
-            out.append(sink.recv(65536))
-        except BlockingIOError:
-            time.sleep(0.001)
-    return out
+SINK = ("127.0.0.1", 14550)
 
 
-async def _send_both_ways(frames: list[bytes], sink_port: int) -> tuple[int, int]:
-    endpoint = UdpEndpoint([], [("127.0.0.1", sink_port)], time.monotonic, lambda: None)
-    endpoint.open("127.0.0.1", 0)
-    try:
-        endpoint.batching = True
-        endpoint.emit(0, b"\xfd" + bytes(300))  # a partly filled datagram before the batch
-        for k, frame in enumerate(frames):
-            endpoint.emit(k, frame)
-        endpoint.batching = False
-        endpoint.flush()
-        one_by_one = endpoint.stats.datagrams_out
-        data = b"".join(frames)
-        ends, end = [], 0
-        for frame in frames:
-            end += len(frame)
-            ends.append(end)
-        assert not endpoint.emit_frames(data, ends)  # not batching: the caller emits each
-        endpoint.batching = True
-        endpoint.emit(0, b"\xfd" + bytes(300))
-        assert endpoint.emit_frames(data, ends)
-        endpoint.batching = False
-        endpoint.flush()
-        assert endpoint.stats.frames_out == 2 * (len(frames) + 1)
-        return one_by_one, endpoint.stats.datagrams_out - one_by_one
-    finally:
-        endpoint.close()
+def _network() -> NetworkProtocol:
+    network = NetworkProtocol([SINK])
+    network.open()
+    return network
 
 
-def test_a_batch_of_frames_leaves_in_the_datagrams_emit_would_send() -> None:
+def _one_by_one(frames: list[bytes]) -> list[bytes]:
+    network = _network()
+    network.begin_batch()
+    network.send_frame(0, b"\xfd" + bytes(300))  # a partly filled datagram before the batch
+    for k, frame in enumerate(frames):
+        network.send_frame(k, frame)
+    network.end_batch()
+    return [data for data, _ in network.datagrams_to_send(0.0)]
+
+
+def _at_once(frames: list[bytes]) -> list[bytes]:
+    network = _network()
+    data = b"".join(frames)
+    ends, end = [], 0
+    for frame in frames:
+        end += len(frame)
+        ends.append(end)
+    assert not network.send_frames(data, ends)  # not batching: the caller sends each
+    assert network.stats.frames_out == 0
+    network.begin_batch()
+    network.send_frame(0, b"\xfd" + bytes(300))
+    assert network.send_frames(data, ends)
+    network.end_batch()
+    assert network.stats.frames_out == len(frames) + 1
+    return [data for data, _ in network.datagrams_to_send(0.0)]
+
+
+def test_a_batch_of_frames_leaves_in_the_datagrams_sending_one_by_one_would_fill() -> None:
     rng = random.Random(7)
     frames = [bytes([0xFD]) + rng.randbytes(rng.randint(11, 279)) for _ in range(400)]
     frames.append(b"\xfd" + bytes(MAX_BATCH_BYTES + 10))  # larger than a datagram: alone
     frames += [b"\xfd" + bytes(20)] * 3
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sink:
-        sink.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
-        sink.bind(("127.0.0.1", 0))
-        sink.setblocking(False)
-        first, second = asyncio.run(_send_both_ways(frames, sink.getsockname()[1]))
-        got = _received(sink, first + second)
-    assert first == second > 10
-    assert len(got) == first + second
-    assert got[:first] == got[first:]
-    assert all(len(d) <= MAX_BATCH_BYTES for d in got if len(d) < MAX_BATCH_BYTES + 10)
-    assert b"".join(got[:first]) == b"\xfd" + bytes(300) + b"".join(frames)
+    one_by_one = _one_by_one(frames)
+    at_once = _at_once(frames)
+    assert len(one_by_one) > 10
+    assert at_once == one_by_one
+    assert all(len(d) <= MAX_BATCH_BYTES for d in at_once if len(d) < MAX_BATCH_BYTES + 10)
+    assert b"".join(at_once) == b"\xfd" + bytes(300) + b"".join(frames)
+
+
+def test_a_faulty_link_takes_no_batch_and_its_frames_go_through_the_gate() -> None:
+    faults = LinkFaults.from_json({"seed": 3, "downlink": {"loss": 1.0}}, vehicle_ids=["d1"])
+    gate = LinkGate(faults, ["d1"], lambda: (0.0, 0))
+    assert gate.active
+    network = NetworkProtocol([SINK], gate)
+    network.open()
+    network.begin_batch()
+    frame = b"\xfd" + bytes(20)
+    assert not network.send_frames(frame, [len(frame)])
+    network.send_frame(0, frame)  # what the caller then does: the gate drops it
+    network.end_batch()
+    assert network.datagrams_to_send(0.0) == []
+    assert gate.stats.dropped == 1

@@ -222,11 +222,27 @@ class OracleAgent:
         elif kind == "intercept":
             zx, zy, zr = (float(v) for v in op["zone"])
             await self._meet(tools, d, op["target"], float(op["altitude_m"]), zone=(zx, zy, zr))
+        elif kind == "until_fault":
+            await self._until_fault(tools, d, float(op["altitude_m"]), float(op["duration_s"]))
         elif kind == "photo_target":
             await self._meet(tools, d, op["target"], float(op["altitude_m"]))
             self._check(d, "photo", await tools.take_photo(d))
         else:
             raise OracleError(f"unknown plan operation {kind!r}")
+
+    async def _until_fault(self, tools: AgentTools, d: str, altitude_m: float,
+                           duration_s: float) -> None:
+        """Take off and hold while the task's scheduled fault strikes the drone: the fault
+        ends it (a failed, unknown or interrupted outcome is what the plan expects)."""
+        if not self._airborne(d):
+            outcome = await tools.take_off(d, max(altitude_m, 5.0))
+            if outcome.state is not None:
+                self._state[d] = outcome.state.to_dict()
+            if outcome.status is not Status.OK:
+                return
+        outcome = await tools.hover(d, duration_s)
+        if outcome.state is not None:
+            self._state[d] = outcome.state.to_dict()
 
     # ------------------------------------------------------------- moving targets
     async def _meet(self, tools: AgentTools, d: str, target: str, altitude_m: float,

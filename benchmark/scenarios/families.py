@@ -1,9 +1,11 @@
-"""The three scenario families of the benchmark and what kind of targets each one has.
+"""The five scenario families of the benchmark and what kind of targets each one has.
 
 The two area families (``area_search``, ``area_assignment_and_patrol``) have circle and polygon
 area targets; ``target_assignment`` has small ``fixed`` targets; ``target_tracking`` has
-``moving`` targets (70 %, rounded) and ``fixed`` ones, TRACKING_TARGETS by level. Every family
-also has its level's charging stations (``waypoint`` targets).
+``moving`` targets (70 %, rounded) and ``fixed`` ones, TRACKING_TARGETS by level;
+``resilience`` has the area families' area targets and RESILIENCE_FIXED_TARGETS ``fixed`` ones
+(its tasks schedule hidden faults: benchmark.templates.resilience). Every family also has its
+level's charging stations (``waypoint`` targets).
 """
 
 from __future__ import annotations
@@ -12,14 +14,17 @@ from dataclasses import dataclass
 
 from benchmark.scenarios.levels import level_spec
 
-__all__ = ["FAMILIES", "FAMILY_SPECS", "MOVING_SHARE", "TRACKING_TARGETS", "FamilySpec",
-           "family_spec", "moving_count", "target_count"]
+__all__ = ["FAMILIES", "FAMILY_SPECS", "MOVING_SHARE", "RESILIENCE_FIXED_TARGETS",
+           "TRACKING_TARGETS", "FamilySpec", "family_spec", "moving_count", "target_count"]
 
 FAMILIES: tuple[str, ...] = ("area_search", "area_assignment_and_patrol", "target_assignment",
-                             "target_tracking")
+                             "target_tracking", "resilience")
 # target_tracking: targets other than charging stations, by level, and the moving share.
 TRACKING_TARGETS = {"easy": 4, "intermediate": 6, "moderate": 8, "hard": 10, "extreme": 12}
 MOVING_SHARE = 0.7
+# resilience: fixed targets by level, beside the level's area targets.
+RESILIENCE_FIXED_TARGETS = {"easy": 4, "intermediate": 6, "moderate": 8, "hard": 10,
+                            "extreme": 12}
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,6 +47,7 @@ FAMILY_SPECS: dict[str, FamilySpec] = {
         "target_assignment", "Target assignment", "target_assignment", "Target", False),
     "target_tracking": FamilySpec(
         "target_tracking", "Target tracking", "target_tracking", "Target", False),
+    "resilience": FamilySpec("resilience", "Resilience", "others", "Search Area", True),
 }
 
 
@@ -57,6 +63,8 @@ def target_count(family: str, level: str) -> int:
     spec = level_spec(level)
     if family_spec(family).family == "target_tracking":
         return TRACKING_TARGETS[level] + spec.charging_station_count
+    if family == "resilience":
+        return spec.area_target_count + RESILIENCE_FIXED_TARGETS[level]
     return spec.target_count(family_spec(family).area_targets)
 
 

@@ -17,6 +17,7 @@ from typing import Any
 
 from benchmark.scenarios.families import (
     FAMILIES,
+    RESILIENCE_FIXED_TARGETS,
     TRACKING_TARGETS,
     FamilySpec,
     family_spec,
@@ -113,7 +114,7 @@ def session_seed(family: str, level: str, index: int) -> int:
 
 
 def all_session_keys() -> tuple[tuple[str, str, int], ...]:
-    """The 100 (family, level, index) keys: family-major, then level, then index."""
+    """The 125 (family, level, index) keys: family-major, then level, then index."""
     return tuple((f, lv, i) for f in FAMILIES for lv in LEVELS for i in SESSION_INDICES)
 
 
@@ -308,6 +309,9 @@ def generate_world(family: str, level: str, index: int) -> Session:
     stations = spec.charging_station_count
     if fam.family == "target_tracking":
         return _tracking_world(family, level, index, rng, layout, drones, environment, corner)
+    if fam.family == "resilience":
+        return _resilience_world(family, level, index, rng, layout, drones, environment,
+                                 corner)
     main = spec.target_count(fam.area_targets) - stations
     names = [f"{fam.target_name} {k}" for k in range(1, main + 1)]
     targets = [_area_target(rng, spec, layout, n) for n in names] if fam.area_targets else []
@@ -343,6 +347,30 @@ def _tracking_world(family: str, level: str, index: int, rng: random.Random, lay
                    f"drones at a base in the {corner} corner, {movers} moving targets, {fixed} "
                    f"fixed target{'' if fixed == 1 else 's'}, {stations} {station_text} and "
                    f"{spec.obstacle_count} obstacles.")
+    return _session(fam, spec, index, session_seed(family, level, index), description,
+                    environment, drones, targets, obstacles)
+
+
+def _resilience_world(family: str, level: str, index: int, rng: random.Random,
+                      layout: Layout, drones: list[dict[str, Any]],
+                      environment: dict[str, Any], corner: str) -> Session:
+    """resilience: the area families' area targets placed before the obstacles, then
+    RESILIENCE_FIXED_TARGETS fixed targets and the charging stations."""
+    fam, spec = _check_key(family, level, index)
+    stations = spec.charging_station_count
+    areas = spec.area_target_count - stations
+    targets = [_area_target(rng, spec, layout, f"Search Area {k}") for k in range(1, areas + 1)]
+    obstacles = _obstacles(rng, spec, layout)
+    fixed = RESILIENCE_FIXED_TARGETS[level]
+    targets += [_disc_target(rng, layout, f"Target {k}", "fixed") for k in range(1, fixed + 1)]
+    targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
+                for k in range(1, stations + 1)]
+    targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
+    station_text = "charging station" if stations == 1 else "charging stations"
+    description = (f"A {spec.map_width_m} x {spec.map_height_m} m map with {spec.drone_count} "
+                   f"drones at a base in the {corner} corner, {areas} area targets, {fixed} "
+                   f"fixed targets, {stations} {station_text} and {spec.obstacle_count} "
+                   f"obstacles.")
     return _session(fam, spec, index, session_seed(family, level, index), description,
                     environment, drones, targets, obstacles)
 

@@ -10,6 +10,7 @@ from agent_contract import AgentTask
 from benchmark.episode import reset_for_task
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
+from benchmark.server.live_faults import end_task_faults, start_task_faults
 from benchmark.session_file import TaskSpec
 from benchmark.tool_log import LoggedTools
 
@@ -18,9 +19,11 @@ __all__ = ["add_session_control_routes", "next_task"]
 
 async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
     """Move `live` on to the next usable task after the current one: the agent's running
-    primitives are cancelled, the drones reset as before every benchmark task (landed where
-    they are, batteries full, inboxes empty), and a fresh budget starts. Returns the task and
-    the ids of unusable tasks skipped; HTTP 409 when no usable task follows."""
+    primitives are cancelled, the current task's hidden faults undone (failures still pending
+    dropped, the session's link back), the drones reset as before every benchmark task (landed
+    where they are, failures repaired, batteries full, inboxes empty), and a fresh budget starts
+    with the new task's hidden faults scheduled from its start. Returns the task and the ids of
+    unusable tasks skipped; HTTP 409 when no usable task follows."""
     tasks = live.session.tasks
     index = next((k for k, t in enumerate(tasks) if t is live.task), -1)
     following = tasks[index + 1:] if index >= 0 else ()
@@ -37,10 +40,12 @@ async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
                                               if skipped else ""))
     assert task.budget is not None
     await live.tools.close()
+    end_task_faults(live)
     await reset_for_task(live.swarm, live.services, live.gateway)
     live.task = task
     live.tools = LoggedTools(live.gateway, AgentTask(live.id, task.id, task.text, task.budget))
     live.task_start_s = live.services.clock_s()
+    start_task_faults(live)
     return task, skipped
 
 

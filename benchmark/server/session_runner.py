@@ -13,6 +13,7 @@ from agent_contract import AgentTask, AgentTools, TaskBudget
 from benchmark.episode import session_link_faults, swarm_gateway
 from benchmark.importer import import_session
 from benchmark.server.hub import LiveSession
+from benchmark.server.live_faults import start_task_faults
 from benchmark.session_file import Session, TaskSpec, session_from_dict
 from benchmark.tool_log import LoggedTools
 from mavlink_gateway import Gateway
@@ -67,8 +68,9 @@ class SessionRunner:
         self._stacks: dict[str, contextlib.AsyncExitStack] = {}
 
     async def start(self, session: Session) -> LiveSession:
-        """Start `session` at its first task, with the session file's link faults. Nothing is
-        left running when it fails: a
+        """Start `session` at its first task, with the session file's link faults and the
+        task's hidden faults scheduled from now (live_faults). Nothing is left running when it
+        fails: a
         session whose first task is unusable raises ValueError before its swarm starts, and a
         swarm that cannot start (parameters out of range, no port) is closed again."""
         if session.id in self._stacks:
@@ -83,8 +85,10 @@ class SessionRunner:
             await stack.aclose()
             raise
         self._stacks[session.id] = stack
-        return LiveSession(session, task, swarm, services, gateway,
+        live = LiveSession(session, task, swarm, services, gateway,
                            current_task_tools(session, gateway), services.clock_s())
+        start_task_faults(live)
+        return live
 
     async def stop(self, session_id: str) -> None:
         """Close one session's swarm and gateway (nothing when it is not running)."""

@@ -9,7 +9,7 @@ from benchmark.server.hub import LiveSession, Role
 
 __all__ = ["session_view", "task_view"]
 
-_HIDDEN_TASK_KEYS = ("checks", "oracle")
+_HIDDEN_TASK_KEYS = ("checks", "oracle", "faults")
 
 
 def _summary(live: LiveSession) -> dict[str, Any]:
@@ -21,7 +21,7 @@ def _summary(live: LiveSession) -> dict[str, Any]:
 
 def task_view(live: LiveSession, role: Role) -> dict[str, Any]:
     """The current task: its text for an agent; budget and progress for an operator; the
-    whole task, check tree and oracle included, for an admin."""
+    whole task, check tree, oracle and scheduled faults included, for an admin."""
     task = live.task
     view: dict[str, Any] = {"id": task.id, "text": task.text}
     if role is Role.AGENT:

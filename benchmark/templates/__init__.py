@@ -8,6 +8,7 @@ from benchmark.templates import (
     coordination,
     delivery,
     navigation,
+    resilience,
     search,
     tracking,
 )
@@ -19,7 +20,7 @@ __all__ = ["CATALOGUE", "CATEGORIES", "SessionView", "TaskDraft", "Template", "T
 CATALOGUE: tuple[Template, ...] = (
     *basic.TEMPLATES, *navigation.TEMPLATES, *search.TEMPLATES, *coordination.TEMPLATES,
     *assignment.TEMPLATES, *delivery.TEMPLATES, *communication.TEMPLATES, *battery.TEMPLATES,
-    *tracking.TEMPLATES,
+    *tracking.TEMPLATES, *resilience.TEMPLATES,
 )
 
 _BY_KEY = {t.key: t for t in CATALOGUE}

@@ -30,6 +30,11 @@ run in order. Operations (all lengths in metres, angles in degrees):
   moving target at a time it is inside the zone
 - ``{"op": "photo_target", "drone", "target", "altitude_m"}``: meet a moving target and
   photograph it
+- ``{"op": "until_fault", "drone", "altitude_m", "duration_s"}``: take off and hold there
+  while the task's hidden faults strike the drone; whatever outcome the fault gives ends it
+
+A template may also schedule hidden faults (``TaskDraft.faults``, benchmark.task_faults): the
+agent is not told, and the oracle plan, written knowing them, works around them.
 """
 
 from __future__ import annotations
@@ -60,7 +65,8 @@ __all__ = [
 ]
 
 CATEGORIES = ("basic_operations", "navigation", "search", "multi_drone_coordination",
-              "delivery", "communication", "battery_management", "target_tracking")
+              "delivery", "communication", "battery_management", "target_tracking",
+              "resilience")
 
 
 class TemplateUnfit(Exception):
@@ -89,6 +95,7 @@ class TaskDraft:
     flight_m: float = 0.0  # rough flight distance of the plan (per drone, the longest)
     hover_s: float = 0.0  # time the plan spends hovering or charging on purpose
     steps: int = 4  # primitive calls of the plan (for the tool-call budget)
+    faults: dict[str, Any] | None = None  # hidden faults (benchmark.task_faults), if any
 
 
 @dataclass(frozen=True)

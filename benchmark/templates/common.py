@@ -3,16 +3,36 @@
 from __future__ import annotations
 
 import math
+import random
 from collections.abc import Sequence
 
 from benchmark.templates.base import SessionView, TemplateUnfit, fmt_xy, leaf
 from emulator.scenario import VehicleSpec
 from emulator.world import Target
 
-__all__ = ["diagonal_m", "home_xy", "inspectable", "names", "nearest_first", "target_xy",
-           "visited"]
+__all__ = ["diagonal_m", "home_xy", "inspectable", "names", "nearest_first", "spread_points",
+           "target_xy", "visited"]
 
 Point = tuple[float, float]
+
+
+def spread_points(view: SessionView, rng: random.Random, n: int, min_gap_m: float,
+                  side_m: float, tries: int = 60) -> list[Point]:
+    """n free points at least min_gap_m apart inside one random square of side side_m (or the
+    map less a 30 m margin, where the map is smaller)."""
+    sx = min(side_m, view.map_w_m - 60.0)
+    sy = min(side_m, view.map_h_m - 60.0)
+    for _ in range(tries):
+        x0 = rng.uniform(30.0, view.map_w_m - 30.0 - sx)
+        y0 = rng.uniform(30.0, view.map_h_m - 30.0 - sy)
+        points: list[Point] = []
+        for _ in range(20 * n):
+            p = view.free_point(rng, region=(x0, y0, x0 + sx, y0 + sy))
+            if all(math.dist(p, q) >= min_gap_m for q in points):
+                points.append(p)
+                if len(points) == n:
+                    return points
+    raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart")
 
 
 def diagonal_m(view: SessionView) -> float:

@@ -26,6 +26,7 @@ from benchmark.templates.base import (
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import nearest_first as _nearest_first
+from benchmark.templates.common import spread_points
 
 __all__ = ["AREA_SIDE_M", "TEMPLATES"]
 
@@ -37,20 +38,7 @@ Node = dict[str, Any]
 
 
 def _spots(view: SessionView, rng: random.Random, n: int, min_gap_m: float) -> list[Point]:
-    """n free points at least min_gap_m apart inside one random square of the map."""
-    sx = min(AREA_SIDE_M, view.map_w_m - 60.0)
-    sy = min(AREA_SIDE_M, view.map_h_m - 60.0)
-    for _ in range(_TRIES):
-        x0 = rng.uniform(30.0, view.map_w_m - 30.0 - sx)
-        y0 = rng.uniform(30.0, view.map_h_m - 30.0 - sy)
-        points: list[Point] = []
-        for _ in range(20 * n):
-            p = view.free_point(rng, region=(x0, y0, x0 + sx, y0 + sy))
-            if all(math.dist(p, q) >= min_gap_m for q in points):
-                points.append(p)
-                if len(points) == n:
-                    return points
-    raise TemplateUnfit(f"no {n} free points {min_gap_m:.0f} m apart")
+    return spread_points(view, rng, n, min_gap_m, AREA_SIDE_M, _TRIES)
 
 
 def _landed_at(drone_id: str, point: Point) -> Node:

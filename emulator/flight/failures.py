@@ -48,6 +48,16 @@ class VehicleFailures:
     def any(self) -> bool:
         return self.gps_off or self.motor_off or self.mavlink_off
 
+    def standing_report(self) -> tuple[int, str] | None:
+        """The STATUSTEXT a vehicle out of the task keeps telling (the swarm sends it again with
+        the vehicle's telemetry at a halt, so a report lost on the way still reaches the
+        client); None when no such failure is in force."""
+        if self.motor_off:
+            return Severity.EMERGENCY, "Motor failure: vehicle out of service"
+        if self.gps_off:
+            return Severity.CRITICAL, "GPS lost: no position estimate"
+        return None
+
     def check_arming(self) -> None:
         if self.motor_off:
             raise CommandRefused("Arming denied: motor failure")

@@ -9,11 +9,9 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from emulator.flight.camera import ImageCapture
-from emulator.flight.fleet_view import FleetView
+from emulator.flight.camera import CameraCarrier, ImageCapture
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode
-from emulator.flight.params import ParamStore
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
 
 __all__ = ["VehicleControl"]
@@ -21,17 +19,9 @@ __all__ = ["VehicleControl"]
 Vec3 = tuple[float, float, float]
 
 
-class VehicleControl(Protocol):
-    """One vehicle's autopilot as its parts see it."""
+class VehicleControl(CameraCarrier, Protocol):
+    """One vehicle's autopilot as its parts see it (a camera carrier among other things)."""
 
-    @property
-    def k(self) -> int: ...
-    @property
-    def vehicle_id(self) -> str: ...
-    @property
-    def fleet(self) -> FleetView: ...
-    @property
-    def params(self) -> ParamStore: ...
     @property
     def state(self) -> VehicleState: ...
     @property
@@ -40,8 +30,6 @@ class VehicleControl(Protocol):
     def armed(self) -> bool: ...
     @property
     def in_air(self) -> bool: ...
-    @property
-    def position_m(self) -> Vec3: ...
     @property
     def battery_pct(self) -> float: ...
 

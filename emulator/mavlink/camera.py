@@ -1,31 +1,50 @@
-"""The camera component (MAVLink component 100) of one vehicle: the camera protocol."""
+"""The camera component (MAVLink component 100) of one vehicle: the camera protocol.
+
+Nothing here sends: command handling returns a `Reply`, the other methods build messages
+that the vehicle link sends as the camera component.
+"""
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
-from emulator.flight.autopilot import ImageCapture
+from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.mavlink.codec import mavlink
-
-if TYPE_CHECKING:
-    from emulator.mavlink.commands import CommandArgs
-    from emulator.mavlink.vehicle_link import VehicleLink
-
-__all__ = ["CAMERA_COMPONENT_ID", "CameraComponent"]
-
-CAMERA_COMPONENT_ID = 100
-MAV_TYPE_CAMERA = 30
-MAV_AUTOPILOT_INVALID = 8
-_CAP_CAPTURE_IMAGE = 2
-_MSG_CAMERA_INFORMATION = 259
-_MSG_CAMERA_SETTINGS = 260
-_MSG_STORAGE_INFORMATION = 261
-_MSG_CAMERA_CAPTURE_STATUS = 262
-CAMERA_MESSAGES = frozenset(
-    {_MSG_CAMERA_INFORMATION, _MSG_CAMERA_SETTINGS, _MSG_STORAGE_INFORMATION,
-     _MSG_CAMERA_CAPTURE_STATUS}
+from emulator.mavlink.command_args import CommandArgs
+from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
+from mavlink_vocabulary import (
+    CameraCapFlags,
+    MavAutopilot,
+    MavCmd,
+    MavComponent,
+    MavResult,
+    MavState,
+    MavType,
+    MessageId,
 )
+
+__all__ = ["CAMERA_COMMANDS", "CAMERA_COMPONENT_ID", "CAMERA_MESSAGES", "MAV_AUTOPILOT_INVALID",
+           "MAV_TYPE_CAMERA", "CameraComponent"]
+
+CAMERA_COMPONENT_ID = MavComponent.CAMERA
+MAV_TYPE_CAMERA = MavType.CAMERA
+MAV_AUTOPILOT_INVALID = MavAutopilot.INVALID
+CAMERA_MESSAGES = frozenset({
+    MessageId.CAMERA_INFORMATION, MessageId.CAMERA_SETTINGS, MessageId.STORAGE_INFORMATION,
+    MessageId.CAMERA_CAPTURE_STATUS,
+})
+# the legacy camera requests: the message each asks for
+_REQUESTS = {
+    MavCmd.REQUEST_CAMERA_INFORMATION: MessageId.CAMERA_INFORMATION,
+    MavCmd.REQUEST_CAMERA_SETTINGS: MessageId.CAMERA_SETTINGS,
+    MavCmd.REQUEST_STORAGE_INFORMATION: MessageId.STORAGE_INFORMATION,
+    MavCmd.REQUEST_CAMERA_CAPTURE_STATUS: MessageId.CAMERA_CAPTURE_STATUS,
+}
+# what the camera component answers (anything else addressed to it is unsupported)
+CAMERA_COMMANDS = frozenset({
+    MavCmd.IMAGE_START_CAPTURE, MavCmd.IMAGE_STOP_CAPTURE, MavCmd.SET_CAMERA_MODE,
+    MavCmd.REQUEST_MESSAGE, *_REQUESTS,
+})
 
 
 def _fixed(text: str, size: int) -> list[int]:
@@ -40,73 +59,61 @@ class CameraComponent:
     repeats the last sequence number is a retransmission, so it takes no second photo and the
     camera sends that photo's CAMERA_IMAGE_CAPTURED again (its first copy may have been lost)."""
 
-    def __init__(self, link: VehicleLink) -> None:
-        self.link = link
+    def __init__(self) -> None:
         self._last_sequence = 0.0
         self._last_captured: mavlink.MAVLink_message | None = None
 
-    def _send(self, message: mavlink.MAVLink_message) -> None:
-        self.link.send(message, component_id=CAMERA_COMPONENT_ID)
+    @staticmethod
+    def heartbeat() -> mavlink.MAVLink_message:
+        return mavlink.MAVLink_heartbeat_message(
+            MavType.CAMERA, MavAutopilot.INVALID, 0, 0, MavState.ACTIVE, 3)
 
-    def heartbeat(self) -> mavlink.MAVLink_message:
-        return mavlink.MAVLink_heartbeat_message(MAV_TYPE_CAMERA, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3)
-
-    def build(self, msg_id: int) -> mavlink.MAVLink_message | None:
-        t_ms = self.link.time_boot_ms()
-        if msg_id == _MSG_CAMERA_INFORMATION:
+    @staticmethod
+    def build(ap: Autopilot, msg_id: int) -> mavlink.MAVLink_message | None:
+        t_ms = int(ap.now_s * 1000.0) & 0xFFFFFFFF
+        if msg_id == MessageId.CAMERA_INFORMATION:
             return mavlink.MAVLink_camera_information_message(
                 t_ms, _fixed("mavswarm", 32), _fixed("nadir-still", 32), 1, 4.5, 6.17, 4.55,
-                4000, 3000, 0, _CAP_CAPTURE_IMAGE, 0, b"",
+                4000, 3000, 0, CameraCapFlags.CAPTURE_IMAGE, 0, b"",
             )
-        if msg_id == _MSG_CAMERA_SETTINGS:
+        if msg_id == MessageId.CAMERA_SETTINGS:
             return mavlink.MAVLink_camera_settings_message(t_ms, 0, math.nan, math.nan)
-        if msg_id == _MSG_STORAGE_INFORMATION:
+        if msg_id == MessageId.STORAGE_INFORMATION:
             return mavlink.MAVLink_storage_information_message(
                 t_ms, 1, 1, 2, 65536.0, 0.0, 65536.0, 90.0, 60.0
             )
-        if msg_id == _MSG_CAMERA_CAPTURE_STATUS:
+        if msg_id == MessageId.CAMERA_CAPTURE_STATUS:
             return mavlink.MAVLink_camera_capture_status_message(
-                t_ms, 0, 0, 0.0, 0, 65536.0, self.link.ap.photo_count
+                t_ms, 0, 0, 0.0, 0, 65536.0, ap.photo_count
             )
         return None
 
-    def handle_command(self, a: CommandArgs) -> tuple[int, str | None]:
-        from emulator.mavlink.commands import Result
-
-        link = self.link
-        if a.command == 2000:  # IMAGE_START_CAPTURE: p2 interval, p3 total images
+    def handle_command(self, ap: Autopilot, a: CommandArgs) -> Reply:
+        if a.command == MavCmd.IMAGE_START_CAPTURE:  # p2 interval, p3 total images
             total = a.p3 if math.isfinite(a.p3) else 1.0
             if total != 1.0:
-                return Result.DENIED, "Camera: only single captures (total images = 1)"
+                return Reply.denied("Camera: only single captures (total images = 1)")
             sequence = a.p4 if math.isfinite(a.p4) and a.p4 >= 1.0 else 0.0
             if sequence and sequence == self._last_sequence:
                 captured = self._last_captured
-                if captured is not None:
-                    link.after_ack(lambda: self._send(captured))
-                return Result.ACCEPTED, None
+                if captured is None:
+                    return Reply.accepted()
+                return Reply.accepted(SendMessage(captured, MavComponent.CAMERA))
             self._last_sequence = sequence
-            link.after_ack(link.ap.take_photo)
-            return Result.ACCEPTED, None
-        if a.command == 2001:  # IMAGE_STOP_CAPTURE
-            return Result.ACCEPTED, None
-        if a.command == 530:  # SET_CAMERA_MODE: only image mode (0)
+            return Reply.accepted(Action(ap.take_photo))
+        if a.command == MavCmd.IMAGE_STOP_CAPTURE:
+            return Reply.accepted()
+        if a.command == MavCmd.SET_CAMERA_MODE:  # only image mode (0)
             mode = a.p2 if math.isfinite(a.p2) else 0.0
-            return (Result.ACCEPTED, None) if mode == 0.0 else (
-                Result.DENIED, "Camera: only image mode is supported"
-            )
-        legacy = {521: _MSG_CAMERA_INFORMATION, 522: _MSG_CAMERA_SETTINGS,
-                  525: _MSG_STORAGE_INFORMATION, 527: _MSG_CAMERA_CAPTURE_STATUS}
-        msg_id = legacy[a.command]
-        link.after_ack(lambda: self.send_once(msg_id))
-        return Result.ACCEPTED, None
+            return Reply.accepted() if mode == 0.0 else Reply.denied(
+                "Camera: only image mode is supported")
+        requested = _REQUESTS.get(MavCmd(a.command)) if a.command in _REQUESTS else None
+        if requested is None:
+            return Reply(MavResult.UNSUPPORTED)
+        return Reply.accepted(SendOnce(requested))
 
-    def send_once(self, msg_id: int) -> None:
-        message = self.build(msg_id)
-        if message is not None:
-            self._send(message)
-
-    def image_captured(self, capture: ImageCapture) -> None:
-        ap = self.link.ap
+    def image_captured(self, ap: Autopilot, capture: ImageCapture) -> mavlink.MAVLink_message:
+        """The CAMERA_IMAGE_CAPTURED of a photo just taken (kept for a retransmission)."""
         origin = ap.fleet.world.origin
         lat, lon, alt = origin.to_geodetic(*capture.position_m)
         yaw = math.radians(capture.yaw_deg)
@@ -117,4 +124,4 @@ class CameraComponent:
             round(alt * 1000.0), rel_mm, q, capture.index, 1,
             f"mavswarm://{ap.vehicle_id}/image_{capture.index:04d}.jpg".encode(),
         )
-        self._send(self._last_captured)
+        return self._last_captured

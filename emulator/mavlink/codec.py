@@ -64,8 +64,22 @@ class Encoder:
         return buf
 
 
+_V1, _V2 = mavlink.PROTOCOL_MARKER_V1, mavlink.PROTOCOL_MARKER_V2
+_SIGNED = mavlink.MAVLINK_IFLAG_SIGNED
+_SIGNATURE_BYTES = mavlink.MAVLINK_SIGNATURE_BLOCK_LEN
+
+
 class DatagramDecoder:
-    """Turns datagrams into messages; counts what it had to drop."""
+    """Turns datagrams into messages; counts what it had to drop.
+
+    Frames are cut out of a datagram here and each is decoded by pymavlink's `decode`, with
+    the outcome of pymavlink's robust parser (`parse_buffer` with `robust_parsing`) frame for
+    frame, without its per-byte buffer bookkeeping (tests/test_codec.py compares the two):
+    a run of bytes that starts no frame is one bad frame, a frame with unknown incompatibility
+    flags, a bad checksum or length is one bad frame, and a frame cut short by the end of the
+    datagram is one more. An unexpected error while decoding drops the whole datagram as one
+    bad frame.
+    """
 
     def __init__(self) -> None:
         self._mav = mavlink.MAVLink(None, srcSystem=0, srcComponent=0)
@@ -74,25 +88,52 @@ class DatagramDecoder:
         self.frames_bad = 0
 
     def decode(self, data: bytes) -> list[mavlink.MAVLink_message]:
-        mav = self._mav
-        out: list[mavlink.MAVLink_message] = []
         try:
-            msgs = mav.parse_buffer(data) or []
+            out, bad = self._split(data)
         except _DECODE_ERRORS:
             self.frames_bad += 1
-            msgs = []
-        else:
-            if mav.buf_len() > 0:  # a frame cut short by the end of the datagram
-                self.frames_bad += 1
-        finally:
-            mav.buf = bytearray()
-            mav.buf_index = 0
-            mav.expected_length = mavlink.HEADER_LEN_V1 + 2
-            mav.have_prefix_error = False
-        for msg in msgs:
-            if msg.get_msgId() < 0:  # MAVLink_bad_data
-                self.frames_bad += 1
-            else:
-                self.frames_ok += 1
-                out.append(msg)
+            return []
+        self.frames_ok += len(out)
+        self.frames_bad += bad
         return out
+
+    def _split(self, data: bytes) -> tuple[list[mavlink.MAVLink_message], int]:
+        decode = self._mav.decode
+        out: list[mavlink.MAVLink_message] = []
+        bad = 0
+        end = len(data)
+        i = 0
+        while i < end:
+            magic = data[i]
+            if magic != _V1 and magic != _V2:  # bytes that start no frame: one bad frame
+                i += 1
+                while i < end and data[i] != _V1 and data[i] != _V2:
+                    i += 1
+                bad += 1
+                continue
+            if end - i < 3:
+                return out, bad + 1  # cut short
+            length, flags = data[i + 1], data[i + 2]
+            if magic == _V2:
+                size = length + mavlink.HEADER_LEN_V2 + 2
+                if flags & _SIGNED:
+                    size += _SIGNATURE_BYTES
+            else:
+                size = length + mavlink.HEADER_LEN_V1 + 2
+            if end - i < size:
+                return out, bad + 1  # cut short
+            frame = bytearray(data[i:i + size])
+            i += size
+            if magic == _V2 and flags & ~_SIGNED:
+                bad += 1  # incompatibility flags this decoder does not know
+                continue
+            try:
+                m = decode(frame)
+            except mavlink.MAVError:
+                bad += 1
+                continue
+            if m.get_msgId() < 0:  # MAVLink_bad_data
+                bad += 1
+            else:
+                out.append(m)
+        return out, bad

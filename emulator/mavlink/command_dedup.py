@@ -17,17 +17,22 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
+from mavlink_vocabulary import MavCmd, MessageId
+
 __all__ = ["RETRANSMIT_WINDOW_S", "STATEFUL_COMMANDS", "CommandDedup", "command_key"]
 
 RETRANSMIT_WINDOW_S = 2.5  # MAVSDK retransmits 3 times, 0.5 s apart
-# arm/disarm, takeoff, land, RTL, set mode, reposition, set home, change speed, yaw, mission
-# start, set mission current, inject failure
-STATEFUL_COMMANDS = frozenset({400, 22, 21, 20, 176, 192, 179, 178, 115, 300, 224, 420})
+STATEFUL_COMMANDS = frozenset({
+    MavCmd.COMPONENT_ARM_DISARM, MavCmd.NAV_TAKEOFF, MavCmd.NAV_LAND,
+    MavCmd.NAV_RETURN_TO_LAUNCH, MavCmd.DO_SET_MODE, MavCmd.DO_REPOSITION, MavCmd.DO_SET_HOME,
+    MavCmd.DO_CHANGE_SPEED, MavCmd.CONDITION_YAW, MavCmd.MISSION_START,
+    MavCmd.DO_SET_MISSION_CURRENT, MavCmd.INJECT_FAILURE,
+})
 
 
 def command_key(m) -> tuple[object, ...]:
     """What identifies a command's content (NaN parameters compare equal by their bytes)."""
-    if m.get_type() == "COMMAND_INT":
+    if m.get_msgId() == MessageId.COMMAND_INT:
         return ("int", m.command, m.frame, target_component(m),
                 struct.pack("<4f", m.param1, m.param2, m.param3, m.param4), m.x, m.y,
                 struct.pack("<f", m.z))

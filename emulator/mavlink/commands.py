@@ -1,76 +1,45 @@
-"""The command protocol: COMMAND_LONG / COMMAND_INT -> autopilot calls -> COMMAND_ACK.
+"""The command protocol: COMMAND_LONG / COMMAND_INT -> autopilot calls -> a `Reply`.
 
-Each handler validates its parameters (NaN means 'unset' where PX4 says so), calls the
-autopilot, and returns a MAV_RESULT with an optional reason that becomes a STATUSTEXT.
+Each handler takes the vehicle and the normalised command, validates the parameters (NaN
+means 'unset' where PX4 says so), calls the autopilot, and returns a `Reply`: a MAV_RESULT,
+an optional reason that becomes a STATUSTEXT, and what follows an accepted ACK. Handlers are
+found by their `MavCmd` member.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from emulator.flight.modes import decode_px4_mode
 from emulator.flight.refusal import CommandRefused
+from emulator.mavlink.command_args import CommandArgs
+from emulator.mavlink.reply import Action, Reply, SendOnce
+from emulator.mavlink.vehicle import Vehicle
+from mavlink_vocabulary import (
+    FailureType,
+    FailureUnit,
+    MavCmd,
+    MavFrame,
+    MavModeFlag,
+    MavResult,
+    MessageId,
+)
 
-if TYPE_CHECKING:
-    from emulator.mavlink.vehicle_link import VehicleLink
+__all__ = ["FAILURE_UNITS", "HANDLERS", "CommandArgs", "Reply", "execute_command"]
 
-__all__ = ["CommandArgs", "Result", "execute_command"]
-
-INT32_MAX = 2**31 - 1
-FRAMES_AMSL = frozenset({0, 5})
-FRAMES_RELATIVE = frozenset({3, 6})
-
-
-class Result:
-    """MAV_RESULT values."""
-
-    ACCEPTED = 0
-    TEMPORARILY_REJECTED = 1
-    DENIED = 2
-    UNSUPPORTED = 3
-    FAILED = 4
-
-
-@dataclass(frozen=True, slots=True)
-class CommandArgs:
-    """One command, normalised: lat/lon in degrees (None when unset)."""
-
-    command: int
-    p1: float
-    p2: float
-    p3: float
-    p4: float
-    latitude_deg: float | None
-    longitude_deg: float | None
-    altitude_m: float
-    frame: int  # altitude frame: AMSL (0/5) or relative to home (3/6)
-
-    @classmethod
-    def from_long(cls, m) -> CommandArgs:
-        lat = m.param5 if math.isfinite(m.param5) else None
-        lon = m.param6 if math.isfinite(m.param6) else None
-        return cls(m.command, m.param1, m.param2, m.param3, m.param4, lat, lon, m.param7, 0)
-
-    @classmethod
-    def from_int(cls, m) -> CommandArgs:
-        lat = None if m.x in (INT32_MAX, 0) and m.y in (INT32_MAX, 0) else m.x * 1e-7
-        lon = None if lat is None else m.y * 1e-7
-        return cls(m.command, m.param1, m.param2, m.param3, m.param4, lat, lon, m.z, m.frame)
-
-
-Outcome = tuple[int, str | None]
+FRAMES_AMSL = frozenset({MavFrame.GLOBAL, MavFrame.GLOBAL_INT})
+FRAMES_RELATIVE = frozenset({MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT})
+FORCE_DISARM_MAGIC = 21196.0  # MAV_CMD_COMPONENT_ARM_DISARM param2: disarm even in flight
 
 
 def _finite(value: float) -> bool:
     return math.isfinite(value)
 
 
-def _local_target(link: VehicleLink, a: CommandArgs, what: str) -> tuple[float, float, float]:
+def _local_target(v: Vehicle, a: CommandArgs, what: str) -> tuple[float, float, float]:
     """Where a command's lat/lon/alt point is, in local metres (unset parts: current)."""
-    ap = link.ap
+    ap = v.ap
     origin = ap.fleet.world.origin
     x, y, z = ap.position_m
     if a.latitude_deg is not None and a.longitude_deg is not None:
@@ -89,204 +58,205 @@ def _local_target(link: VehicleLink, a: CommandArgs, what: str) -> tuple[float, 
     return x, y, z
 
 
-def _arm(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _arm(v: Vehicle, a: CommandArgs) -> Reply:
     if a.p1 == 1.0:
-        link.ap.arm()
+        v.ap.arm()
     elif a.p1 == 0.0:
-        link.ap.disarm(force=a.p2 == 21196.0)
+        v.ap.disarm(force=a.p2 == FORCE_DISARM_MAGIC)
     else:
-        return Result.DENIED, "Arm/disarm: param1 must be 0 or 1"
-    return Result.ACCEPTED, None
+        return Reply.denied("Arm/disarm: param1 must be 0 or 1")
+    return Reply.accepted()
 
 
-def _takeoff(link: VehicleLink, a: CommandArgs) -> Outcome:
-    ap = link.ap
+def _takeoff(v: Vehicle, a: CommandArgs) -> Reply:
+    ap = v.ap
     altitude = None
     if _finite(a.altitude_m):
         home_amsl = ap.fleet.world.origin.altitude_amsl_m + ap.home_m[2]
         if a.altitude_m <= home_amsl:
-            return Result.DENIED, (
-                f"Takeoff: {a.altitude_m:.1f} m AMSL is below home ({home_amsl:.1f} m AMSL)"
-            )
+            return Reply.denied(
+                f"Takeoff: {a.altitude_m:.1f} m AMSL is below home ({home_amsl:.1f} m AMSL)")
         altitude = a.altitude_m - home_amsl
     elif math.isinf(a.altitude_m):
-        return Result.DENIED, "Takeoff: altitude is infinite"
+        return Reply.denied("Takeoff: altitude is infinite")
     ap.takeoff(altitude)
-    return Result.ACCEPTED, None
+    return Reply.accepted()
 
 
-def _land(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _land(v: Vehicle, a: CommandArgs) -> Reply:
     at = None
     if a.latitude_deg is not None:
-        x, y, _ = _local_target(link, a, "Land")
+        x, y, _ = _local_target(v, a, "Land")
         at = (x, y)
-    link.ap.land(at)
-    return Result.ACCEPTED, None
+    v.ap.land(at)
+    return Reply.accepted()
 
 
-def _rtl(link: VehicleLink, a: CommandArgs) -> Outcome:
-    link.ap.return_to_launch()
-    return Result.ACCEPTED, None
+def _rtl(v: Vehicle, a: CommandArgs) -> Reply:
+    v.ap.return_to_launch()
+    return Reply.accepted()
 
 
-def _set_mode(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _set_mode(v: Vehicle, a: CommandArgs) -> Reply:
     if not (_finite(a.p1) and _finite(a.p2)):
-        return Result.DENIED, "Set mode: mode parameters must be numbers"
-    if not int(a.p1) & 1:
-        return Result.DENIED, "Set mode: only PX4 custom modes are supported"
+        return Reply.denied("Set mode: mode parameters must be numbers")
+    if not int(a.p1) & MavModeFlag.CUSTOM_MODE_ENABLED:  # DO_SET_MODE's param1: base mode
+        return Reply.denied("Set mode: only PX4 custom modes are supported")
     sub = int(a.p3) if _finite(a.p3) else 0
     mode = decode_px4_mode(int(a.p2), sub)
     if mode is None:
-        return Result.DENIED, f"Set mode: unknown PX4 mode {int(a.p2)}/{sub}"
-    link.ap.set_mode(mode, wall_now_s=link.wall_now_s)
-    return Result.ACCEPTED, None
+        return Reply.denied(f"Set mode: unknown PX4 mode {int(a.p2)}/{sub}")
+    v.ap.set_mode(mode, wall_now_s=v.wall_now_s)
+    return Reply.accepted()
 
 
-def _reposition(link: VehicleLink, a: CommandArgs) -> Outcome:
-    target = _local_target(link, a, "Reposition")
+def _reposition(v: Vehicle, a: CommandArgs) -> Reply:
+    target = _local_target(v, a, "Reposition")
     speed = a.p1 if a.p1 > 0 else None  # NaN, 0 or negative: the configured speed
     yaw = math.degrees(a.p4) % 360.0 if _finite(a.p4) else math.nan
-    link.ap.reposition(target, speed_m_s=speed, yaw_deg=yaw)
-    return Result.ACCEPTED, None
+    v.ap.reposition(target, speed_m_s=speed, yaw_deg=yaw)
+    return Reply.accepted()
 
 
-def _set_home(link: VehicleLink, a: CommandArgs) -> Outcome:
-    ap = link.ap
+def _set_home(v: Vehicle, a: CommandArgs) -> Reply:
+    ap = v.ap
     if a.p1 == 1.0:
         x, y, _ = ap.position_m
         ground_z = 0.0 if ap.in_air else ap.position_m[2]
         ap.set_home((x, y, ground_z))
     else:
         if a.latitude_deg is None or not _finite(a.altitude_m):
-            return Result.DENIED, "Set home: latitude, longitude and altitude required"
-        frame = a.frame if a.frame in FRAMES_RELATIVE else 0
+            return Reply.denied("Set home: latitude, longitude and altitude required")
+        frame = a.frame if a.frame in FRAMES_RELATIVE else MavFrame.GLOBAL
         args = CommandArgs(a.command, a.p1, a.p2, a.p3, a.p4, a.latitude_deg, a.longitude_deg,
                            a.altitude_m, frame)
-        ap.set_home(_local_target(link, args, "Set home"))
-    return Result.ACCEPTED, None
+        ap.set_home(_local_target(v, args, "Set home"))
+    return Reply.accepted()
 
 
-def _change_speed(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _change_speed(v: Vehicle, a: CommandArgs) -> Reply:
     kind = a.p1 if _finite(a.p1) else 1.0
-    link.ap.change_speed(kind, a.p2)
-    return Result.ACCEPTED, None
+    v.ap.change_speed(kind, a.p2)
+    return Reply.accepted()
 
 
-def _yaw(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _yaw(v: Vehicle, a: CommandArgs) -> Reply:
     rate = a.p2 if _finite(a.p2) else 0.0
     direction = -1 if _finite(a.p3) and a.p3 < 0 else 1
-    link.ap.set_yaw(a.p1, rate_deg_s=rate, relative=a.p4 == 1.0, direction=direction)
-    return Result.ACCEPTED, None
+    v.ap.set_yaw(a.p1, rate_deg_s=rate, relative=a.p4 == 1.0, direction=direction)
+    return Reply.accepted()
 
 
-def _mission_start(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _mission_start(v: Vehicle, a: CommandArgs) -> Reply:
     first = int(a.p1) if _finite(a.p1) and a.p1 > 0 else None
-    link.ap.mission.enter_mission_mode(first)
-    return Result.ACCEPTED, None
+    v.ap.mission.enter_mission_mode(first)
+    return Reply.accepted()
 
 
-def _set_mission_current(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _set_mission_current(v: Vehicle, a: CommandArgs) -> Reply:
     if not _finite(a.p1) or a.p1 < 0:
-        return Result.DENIED, "Set mission item: index must be >= 0"
-    link.ap.mission.set_current(int(a.p1))
-    return Result.ACCEPTED, None
+        return Reply.denied("Set mission item: index must be >= 0")
+    v.ap.mission.set_current(int(a.p1))
+    return Reply.accepted()
 
 
-def _message_interval(link: VehicleLink, a: CommandArgs) -> Outcome:
+def _message_interval(v: Vehicle, a: CommandArgs) -> Reply:
     if not (_finite(a.p1) and _finite(a.p2)):
-        return Result.DENIED, "Message interval: parameters must be numbers"
+        return Reply.denied("Message interval: parameters must be numbers")
     interval_us = a.p2
     if a.p1 < 0:
-        return Result.DENIED, f"Message interval: message id {a.p1:g} is invalid"
+        return Reply.denied(f"Message interval: message id {a.p1:g} is invalid")
     if interval_us < -1:
-        return Result.DENIED, f"Message interval: {interval_us:g} us is invalid"
+        return Reply.denied(f"Message interval: {interval_us:g} us is invalid")
     interval = None if interval_us == 0 else math.inf if interval_us == -1 else interval_us / 1e6
-    if not link.set_stream_interval(int(a.p1), interval):
-        return Result.DENIED, f"Message interval: message {int(a.p1)} rate cannot be set"
-    return Result.ACCEPTED, None
+    if not v.set_stream_interval(int(a.p1), interval):
+        return Reply.denied(f"Message interval: message {int(a.p1)} rate cannot be set")
+    return Reply.accepted()
 
 
-def _request_message(link: VehicleLink, a: CommandArgs) -> Outcome:
-    if not _finite(a.p1):
-        return Result.DENIED, None
-    if not link.can_send_once(int(a.p1)):
-        return Result.DENIED, None
-    link.after_ack(lambda: link.send_once(int(a.p1)))
-    return Result.ACCEPTED, None
+def _request_message(v: Vehicle, a: CommandArgs) -> Reply:
+    if not _finite(a.p1) or not v.can_send_once(int(a.p1)):
+        return Reply.denied()
+    return Reply.accepted(SendOnce(int(a.p1)))
 
 
-def _autopilot_capabilities(link: VehicleLink, a: CommandArgs) -> Outcome:
-    link.after_ack(lambda: link.send_once(148))
-    return Result.ACCEPTED, None
+def _autopilot_capabilities(v: Vehicle, a: CommandArgs) -> Reply:
+    return Reply.accepted(SendOnce(MessageId.AUTOPILOT_VERSION))
 
 
-def _get_home(link: VehicleLink, a: CommandArgs) -> Outcome:
-    link.after_ack(lambda: link.send_once(242))
-    return Result.ACCEPTED, None
+def _get_home(v: Vehicle, a: CommandArgs) -> Reply:
+    return Reply.accepted(SendOnce(MessageId.HOME_POSITION))
 
 
-def _camera(link: VehicleLink, a: CommandArgs) -> Outcome:
-    return link.camera.handle_command(a)
+def _camera(v: Vehicle, a: CommandArgs) -> Reply:
+    return v.camera.handle_command(v.ap, a)
 
 
 # MAV_CMD_INJECT_FAILURE: FAILURE_UNIT -> what emulator.flight.failures models
-FAILURE_UNITS = {4: "gps", 100: "battery", 101: "motor", 105: "mavlink"}
-FAILURE_OK, FAILURE_OFF = 0, 1
+FAILURE_UNITS = {
+    FailureUnit.SENSOR_GPS: "gps",
+    FailureUnit.SYSTEM_BATTERY: "battery",
+    FailureUnit.SYSTEM_MOTOR: "motor",
+    FailureUnit.SYSTEM_MAVLINK_SIGNAL: "mavlink",
+}
+_RESTORABLE = frozenset({"gps", "mavlink"})
 
 
-def _inject_failure(link: VehicleLink, a: CommandArgs) -> Outcome:
-    ap = link.ap
+def _inject_failure(v: Vehicle, a: CommandArgs) -> Reply:
+    ap = v.ap
     if ap.params["SYS_FAILURE_EN"] != 1.0:
-        return Result.DENIED, "Failure injection disabled: set SYS_FAILURE_EN to 1"
-    unit = FAILURE_UNITS.get(int(a.p1)) if _finite(a.p1) else None
+        return Reply.denied("Failure injection disabled: set SYS_FAILURE_EN to 1")
+    unit_id = int(a.p1) if _finite(a.p1) else -1
+    unit = FAILURE_UNITS[FailureUnit(unit_id)] if unit_id in FAILURE_UNITS else None
     kind = int(a.p2) if _finite(a.p2) else -1
-    if unit is None or kind not in (FAILURE_OK, FAILURE_OFF) or (
-            kind == FAILURE_OK and unit not in ("gps", "mavlink")):
-        return Result.UNSUPPORTED, None
-    if kind == FAILURE_OK:
+    if unit is None or kind not in (FailureType.OK, FailureType.OFF) or (
+            kind == FailureType.OK and unit not in _RESTORABLE):
+        return Reply(MavResult.UNSUPPORTED)
+    if kind == FailureType.OK:
         ap.failures.restore(unit, "injection")
-        return Result.ACCEPTED, None
+        return Reply.accepted()
+    failed_unit = unit
 
     def fail() -> None:  # after the ACK: a vehicle whose MAVLink goes off still answers this
-        ap.failures.fail(unit, "injection")
-        if unit == "mavlink" and link.on_mavlink_signal is not None:
-            link.on_mavlink_signal(ap)
-    link.after_ack(fail)
-    return Result.ACCEPTED, None
+        ap.failures.fail(failed_unit, "injection")
+        if failed_unit == "mavlink" and v.on_mavlink_signal is not None:
+            v.on_mavlink_signal(ap)
+    return Reply.accepted(Action(fail))
 
 
-HANDLERS: dict[int, Callable[[VehicleLink, CommandArgs], Outcome]] = {
-    400: _arm,
-    22: _takeoff,
-    21: _land,
-    20: _rtl,
-    176: _set_mode,
-    192: _reposition,
-    179: _set_home,
-    178: _change_speed,
-    115: _yaw,
-    300: _mission_start,
-    224: _set_mission_current,
-    511: _message_interval,
-    512: _request_message,
-    520: _autopilot_capabilities,
-    410: _get_home,
-    420: _inject_failure,
-    2000: _camera,
-    2001: _camera,
-    521: _camera,
-    522: _camera,
-    525: _camera,
-    527: _camera,
-    530: _camera,
+Handler = Callable[[Vehicle, CommandArgs], Reply]
+HANDLERS: dict[MavCmd, Handler] = {
+    MavCmd.COMPONENT_ARM_DISARM: _arm,
+    MavCmd.NAV_TAKEOFF: _takeoff,
+    MavCmd.NAV_LAND: _land,
+    MavCmd.NAV_RETURN_TO_LAUNCH: _rtl,
+    MavCmd.DO_SET_MODE: _set_mode,
+    MavCmd.DO_REPOSITION: _reposition,
+    MavCmd.DO_SET_HOME: _set_home,
+    MavCmd.DO_CHANGE_SPEED: _change_speed,
+    MavCmd.CONDITION_YAW: _yaw,
+    MavCmd.MISSION_START: _mission_start,
+    MavCmd.DO_SET_MISSION_CURRENT: _set_mission_current,
+    MavCmd.SET_MESSAGE_INTERVAL: _message_interval,
+    MavCmd.REQUEST_MESSAGE: _request_message,
+    MavCmd.REQUEST_AUTOPILOT_CAPABILITIES: _autopilot_capabilities,
+    MavCmd.GET_HOME_POSITION: _get_home,
+    MavCmd.INJECT_FAILURE: _inject_failure,
+    MavCmd.IMAGE_START_CAPTURE: _camera,
+    MavCmd.IMAGE_STOP_CAPTURE: _camera,
+    MavCmd.REQUEST_CAMERA_INFORMATION: _camera,
+    MavCmd.REQUEST_CAMERA_SETTINGS: _camera,
+    MavCmd.REQUEST_STORAGE_INFORMATION: _camera,
+    MavCmd.REQUEST_CAMERA_CAPTURE_STATUS: _camera,
+    MavCmd.SET_CAMERA_MODE: _camera,
 }
 
 
-def execute_command(link: VehicleLink, args: CommandArgs) -> Outcome:
-    handler = HANDLERS.get(args.command)
-    if handler is None:
-        return Result.UNSUPPORTED, None
+def execute_command(v: Vehicle, args: CommandArgs) -> Reply:
+    """Carry out one command on vehicle `v`: its reply (UNSUPPORTED for an unknown one)."""
+    if args.command not in HANDLERS:
+        return Reply(MavResult.UNSUPPORTED)
     try:
-        return handler(link, args)
+        return HANDLERS[MavCmd(args.command)](v, args)
     except CommandRefused as refusal:
-        return Result.DENIED, str(refusal)
+        return Reply.denied(str(refusal))

@@ -13,6 +13,19 @@ from emulator.flight.battery import (
 )
 from emulator.flight.modes import FlightMode
 from emulator.mavlink.codec import mavlink
+from mavlink_vocabulary import (
+    GpsFixType,
+    MavAutopilot,
+    MavBatteryChargeState,
+    MavBatteryFunction,
+    MavBatteryType,
+    MavModeFlag,
+    MavProtocolCapability,
+    MavState,
+    MavSysStatusSensor,
+    MavType,
+    MavVtolState,
+)
 
 __all__ = [
     "MAV_AUTOPILOT_PX4",
@@ -43,30 +56,36 @@ __all__ = [
     "vfr_hud",
 ]
 
-MAV_TYPE_QUADROTOR = 2
-MAV_AUTOPILOT_PX4 = 12
+# Plain ints named by the vocabulary: the batched telemetry (emulator.mavlink.telemetry) puts
+# them into numpy arrays.
+MAV_TYPE_QUADROTOR = int(MavType.QUADROTOR)
+MAV_AUTOPILOT_PX4 = int(MavAutopilot.PX4)
 GRAVITY_M_S2 = 9.80665
 
-MODE_FLAG_CUSTOM = 1
-MODE_FLAG_AUTO = 4
-MODE_FLAG_GUIDED = 8
-MODE_FLAG_STABILIZE = 16
-MODE_FLAG_ARMED = 128
-STATE_STANDBY, STATE_ACTIVE, STATE_CRITICAL, STATE_EMERGENCY = 3, 4, 5, 6
+MODE_FLAG_CUSTOM = int(MavModeFlag.CUSTOM_MODE_ENABLED)
+MODE_FLAG_AUTO = int(MavModeFlag.AUTO_ENABLED)
+MODE_FLAG_GUIDED = int(MavModeFlag.GUIDED_ENABLED)
+MODE_FLAG_STABILIZE = int(MavModeFlag.STABILIZE_ENABLED)
+MODE_FLAG_ARMED = int(MavModeFlag.SAFETY_ARMED)
+STATE_STANDBY, STATE_ACTIVE = int(MavState.STANDBY), int(MavState.ACTIVE)
+STATE_CRITICAL, STATE_EMERGENCY = int(MavState.CRITICAL), int(MavState.EMERGENCY)
+INT16_MAX = 32767  # BATTERY_STATUS.temperature: unknown
+MAVLINK_VERSION = 3  # HEARTBEAT.mavlink_version as PX4 sends it
 
-# SYS_STATUS sensor bits: gyro, accel, mag, baro, GPS, rate/attitude/yaw/z/xy control,
-# motor outputs, geofence, AHRS, battery, pre-arm check.
-SENSORS = (
-    0x1 | 0x2 | 0x4 | 0x8 | 0x20 | 0x400 | 0x800 | 0x1000 | 0x2000 | 0x4000 | 0x8000
-    | 0x100000 | 0x200000 | 0x2000000
+_S = MavSysStatusSensor
+SENSORS = int(
+    _S.SENSOR_3D_GYRO | _S.SENSOR_3D_ACCEL | _S.SENSOR_3D_MAG | _S.SENSOR_ABSOLUTE_PRESSURE
+    | _S.SENSOR_GPS | _S.SENSOR_ANGULAR_RATE_CONTROL | _S.SENSOR_ATTITUDE_STABILIZATION
+    | _S.SENSOR_YAW_POSITION | _S.SENSOR_Z_ALTITUDE_CONTROL | _S.SENSOR_XY_POSITION_CONTROL
+    | _S.SENSOR_MOTOR_OUTPUTS | _S.GEOFENCE | _S.AHRS | _S.SENSOR_BATTERY
 )
-PREARM_CHECK = 0x10000000
+PREARM_CHECK = int(_S.PREARM_CHECK)
 
-_CAP_MISSION_FLOAT, _CAP_PARAM_FLOAT, _CAP_MISSION_INT, _CAP_COMMAND_INT = 1, 2, 4, 8
-_CAP_PARAM_BYTEWISE, _CAP_POS_LOCAL_NED, _CAP_POS_GLOBAL_INT, _CAP_MAVLINK2 = 16, 256, 512, 8192
-CAPABILITIES = (
-    _CAP_MISSION_FLOAT | _CAP_PARAM_FLOAT | _CAP_MISSION_INT | _CAP_COMMAND_INT
-    | _CAP_PARAM_BYTEWISE | _CAP_POS_LOCAL_NED | _CAP_POS_GLOBAL_INT | _CAP_MAVLINK2
+_C = MavProtocolCapability
+CAPABILITIES = int(
+    _C.MISSION_FLOAT | _C.PARAM_FLOAT | _C.MISSION_INT | _C.COMMAND_INT
+    | _C.PARAM_ENCODE_BYTEWISE | _C.SET_POSITION_TARGET_LOCAL_NED
+    | _C.SET_POSITION_TARGET_GLOBAL_INT | _C.MAVLINK2
 )
 FLIGHT_SW_VERSION = (1 << 24) | (15 << 16) | (0 << 8) | 0xFF  # 1.15.0 release
 
@@ -95,7 +114,7 @@ def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:
     else:
         state = STATE_ACTIVE if ap.armed else STATE_STANDBY
     return mavlink.MAVLink_heartbeat_message(
-        MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, base, mode.custom_mode, state, 3
+        MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, base, mode.custom_mode, state, MAVLINK_VERSION
     )
 
 
@@ -115,7 +134,9 @@ def sys_status(ap: Autopilot) -> mavlink.MAVLink_message:
     )
 
 
-_CHARGE_STATE = {0: 1, BATTERY_LOW: 2, BATTERY_CRITICAL: 3, BATTERY_EMERGENCY: 4}
+_CHARGE_STATE = {0: MavBatteryChargeState.OK, BATTERY_LOW: MavBatteryChargeState.LOW,
+                 BATTERY_CRITICAL: MavBatteryChargeState.CRITICAL,
+                 BATTERY_EMERGENCY: MavBatteryChargeState.EMERGENCY}
 
 
 def battery_status(ap: Autopilot) -> mavlink.MAVLink_message:
@@ -123,18 +144,18 @@ def battery_status(ap: Autopilot) -> mavlink.MAVLink_message:
     pct = ap.battery_pct
     capacity = ap.params["BAT_CAPACITY"]
     charging = f.bat.charge_rate_pct_s[k] > 0.0
-    state = 7 if charging else _CHARGE_STATE[int(f.bat.level[k])]
+    state = MavBatteryChargeState.CHARGING if charging else _CHARGE_STATE[int(f.bat.level[k])]
     cells = [65535] * 10
     cells[0] = min(_voltage_mv(ap), 65534)
     remaining_s = int(pct / 100.0 * f.bat.hover_endurance_s[k])
     return mavlink.MAVLink_battery_status_message(
-        0, 1, 1, 32767, cells, -1, int((100.0 - pct) / 100.0 * capacity), -1, int(pct),
-        remaining_s, state,
+        0, MavBatteryFunction.ALL, MavBatteryType.LIPO, INT16_MAX, cells, -1,
+        int((100.0 - pct) / 100.0 * capacity), -1, int(pct), remaining_s, state,
     )
 
 
 def extended_sys_state(ap: Autopilot) -> mavlink.MAVLink_message:
-    return mavlink.MAVLink_extended_sys_state_message(0, ap.landed_state.value)
+    return mavlink.MAVLink_extended_sys_state_message(MavVtolState.UNDEFINED, ap.landed_state.value)
 
 
 def global_position_int(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_message:
@@ -177,7 +198,7 @@ def gps_raw_int(ap: Autopilot, time_usec: int) -> mavlink.MAVLink_message:
     v = f.dyn.velocity_m_s[k]
     ground = math.hypot(float(v[0]), float(v[1]))
     cog = round(math.degrees(math.atan2(v[0], v[1])) * 100.0) % 36000 if ground > 0.1 else 0
-    fix, satellites = (0, 0) if ap.failures.gps_off else (3, 14)
+    fix, satellites = (GpsFixType.NO_GPS, 0) if ap.failures.gps_off else (GpsFixType.FIX_3D, 14)
     return mavlink.MAVLink_gps_raw_int_message(
         time_usec, fix, lat, lon, alt, 80, 120, round(ground * 100.0), cog, satellites,
         alt, 500, 800, 100, 0, 0,

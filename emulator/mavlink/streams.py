@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mavlink_vocabulary import MessageId
+
 __all__ = ["CAMERA_HEARTBEAT", "DEFAULT_STREAMS", "StreamSchedule", "StreamSpec"]
 
 CAMERA_HEARTBEAT = -1  # pseudo message id: the camera component's heartbeat
@@ -25,19 +27,21 @@ class StreamSpec:
     default_hz: float
 
 
-DEFAULT_STREAMS: tuple[StreamSpec, ...] = (
-    StreamSpec(0, "HEARTBEAT", 1.0),
-    StreamSpec(1, "SYS_STATUS", 1.0),
-    StreamSpec(245, "EXTENDED_SYS_STATE", 1.0),
-    StreamSpec(33, "GLOBAL_POSITION_INT", 10.0),
-    StreamSpec(32, "LOCAL_POSITION_NED", 10.0),
-    StreamSpec(30, "ATTITUDE", 10.0),
-    StreamSpec(24, "GPS_RAW_INT", 1.0),
-    StreamSpec(74, "VFR_HUD", 2.0),
-    StreamSpec(42, "MISSION_CURRENT", 1.0),
-    StreamSpec(147, "BATTERY_STATUS", 0.5),
-    StreamSpec(242, "HOME_POSITION", 0.5),
-    StreamSpec(CAMERA_HEARTBEAT, "CAMERA_HEARTBEAT", 1.0),
+DEFAULT_STREAMS: tuple[StreamSpec, ...] = tuple(
+    StreamSpec(msg_id, name, hz) for msg_id, name, hz in (
+        (MessageId.HEARTBEAT, "HEARTBEAT", 1.0),
+        (MessageId.SYS_STATUS, "SYS_STATUS", 1.0),
+        (MessageId.EXTENDED_SYS_STATE, "EXTENDED_SYS_STATE", 1.0),
+        (MessageId.GLOBAL_POSITION_INT, "GLOBAL_POSITION_INT", 10.0),
+        (MessageId.LOCAL_POSITION_NED, "LOCAL_POSITION_NED", 10.0),
+        (MessageId.ATTITUDE, "ATTITUDE", 10.0),
+        (MessageId.GPS_RAW_INT, "GPS_RAW_INT", 1.0),
+        (MessageId.VFR_HUD, "VFR_HUD", 2.0),
+        (MessageId.MISSION_CURRENT, "MISSION_CURRENT", 1.0),
+        (MessageId.BATTERY_STATUS, "BATTERY_STATUS", 0.5),
+        (MessageId.HOME_POSITION, "HOME_POSITION", 0.5),
+        (CAMERA_HEARTBEAT, "CAMERA_HEARTBEAT", 1.0),
+    )
 )
 
 

@@ -1,35 +1,45 @@
-"""One vehicle's MAVLink endpoint, sans I/O: decoded messages in, messages out.
+"""One vehicle's MAVLink endpoint, sans I/O: decoded messages in, encoded frames out.
 
 It dispatches what a ground station sends (commands, parameters, missions, offboard
-set-points, camera requests) to the vehicle's autopilot and answers as PX4 does. Bytes go
-out through the `emit` callable the transport provides; nothing here touches a socket.
+set-points, camera requests) to the vehicle's autopilot and answers as PX4 does: handlers
+return replies (emulator.mavlink.reply) or messages, and the link encodes them and hands the
+frames to the `emit` callable of its network (emulator.mavlink.protocol); nothing here
+touches a socket. Messages are dispatched by their `MessageId`.
 """
 
 from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.flight.params import ParamError, ParamStore
 from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
-from emulator.mavlink.camera import CAMERA_COMPONENT_ID, CAMERA_MESSAGES, CameraComponent
+from emulator.mavlink.camera import CAMERA_COMMANDS, CAMERA_MESSAGES, CameraComponent
 from emulator.mavlink.codec import Encoder, mavlink
+from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
-from emulator.mavlink.commands import CommandArgs, Result, execute_command
+from emulator.mavlink.commands import execute_command
 from emulator.mavlink.mission_transfer import MissionTransfer
-from emulator.mavlink.offboard import apply_global_setpoint, apply_local_setpoint
+from emulator.mavlink.offboard import Complaint, apply_global_setpoint, apply_local_setpoint
+from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
+from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
 
 __all__ = ["HANDLED_MESSAGES", "VehicleLink"]
 
-PARAM_TYPE_INT32 = 6
-PARAM_TYPE_REAL32 = 9
-_INT_TYPES = frozenset({1, 2, 3, 4, 5, 6})
-AUTOPILOT_COMPONENT_ID = 1
+_INT_TYPES = frozenset({MavParamType.UINT8, MavParamType.INT8, MavParamType.UINT16,
+                        MavParamType.INT16, MavParamType.UINT32, MavParamType.INT32})
+AUTOPILOT_COMPONENT_ID = MavComponent.AUTOPILOT1
+CAMERA_COMPONENT_ID = MavComponent.CAMERA
 MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
+# MAVLink FTP is not offered: every request gets a NAK(UnknownCommand) so clients fall back
+FTP_OPCODE_NAK = 129
+FTP_ERR_UNKNOWN_COMMAND = 7
+FTP_PAYLOAD_BYTES = 251
+FTP_HEADER_BYTES = 12
 
 
 def _bytewise_int(value: float) -> int:
@@ -40,8 +50,16 @@ def _bytewise_float(value: int) -> float:
     return struct.unpack("<f", struct.pack("<i", value))[0]
 
 
-# SYS_STATUS, BATTERY_STATUS, GLOBAL_POSITION_INT, LOCAL_POSITION_NED, HOME_POSITION
-_OPERATOR_RESET_STREAMS = (1, 147, 33, 32, 242)
+_OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
+                           MessageId.GLOBAL_POSITION_INT, MessageId.LOCAL_POSITION_NED,
+                           MessageId.HOME_POSITION)
+# what a vehicle sends on request (MAV_CMD_REQUEST_MESSAGE), besides the camera's messages
+_ONE_SHOT = frozenset({
+    MessageId.HEARTBEAT, MessageId.SYS_STATUS, MessageId.GPS_RAW_INT, MessageId.ATTITUDE,
+    MessageId.LOCAL_POSITION_NED, MessageId.GLOBAL_POSITION_INT, MessageId.MISSION_CURRENT,
+    MessageId.VFR_HUD, MessageId.BATTERY_STATUS, MessageId.AUTOPILOT_VERSION,
+    MessageId.HOME_POSITION, MessageId.EXTENDED_SYS_STATE,
+})
 
 
 class VehicleLink:
@@ -54,14 +72,12 @@ class VehicleLink:
         self.system_id = ap.k + 1
         self._emit = emit
         self._streams = streams
-        self._wall_clock = wall_clock
-        self._encoders = {
+        self._encoders: dict[int, Encoder] = {
             AUTOPILOT_COMPONENT_ID: Encoder(self.system_id, AUTOPILOT_COMPONENT_ID),
             CAMERA_COMPONENT_ID: Encoder(self.system_id, CAMERA_COMPONENT_ID),
         }
-        self._after_ack: list[Callable[[], object]] = []
-        self.camera = CameraComponent(self)
-        self.missions = MissionTransfer(self)
+        self.camera = CameraComponent()
+        self.missions = MissionTransfer(ap)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
@@ -75,6 +91,10 @@ class VehicleLink:
              component_id: int = AUTOPILOT_COMPONENT_ID) -> None:
         self._emit(self.k, self._encoders[component_id].pack(message))
 
+    def send_all(self, messages: Iterable[mavlink.MAVLink_message]) -> None:
+        for message in messages:
+            self.send(message)
+
     def encoder(self, component_id: int) -> Encoder:
         return self._encoders[component_id]
 
@@ -84,36 +104,9 @@ class VehicleLink:
     def time_boot_ms(self) -> int:
         return int(self.ap.now_s * 1000.0) & 0xFFFFFFFF
 
-    def after_ack(self, action: Callable[[], object]) -> None:
-        self._after_ack.append(action)
-
     def build(self, msg_id: int) -> mavlink.MAVLink_message | None:
-        ap = self.ap
-        if msg_id == 0:
-            return msgs.heartbeat(ap)
-        if msg_id == 1:
-            return msgs.sys_status(ap)
-        if msg_id == 245:
-            return msgs.extended_sys_state(ap)
-        if msg_id == 33:
-            return msgs.global_position_int(ap, self.time_boot_ms())
-        if msg_id == 32:
-            return msgs.local_position_ned(ap, self.time_boot_ms())
-        if msg_id == 30:
-            return msgs.attitude(ap, self.time_boot_ms())
-        if msg_id == 24:
-            return msgs.gps_raw_int(ap, self.time_boot_ms() * 1000)
-        if msg_id == 74:
-            return msgs.vfr_hud(ap)
-        if msg_id == 42:
-            return msgs.mission_current(ap)
-        if msg_id == 147:
-            return msgs.battery_status(ap)
-        if msg_id == 242:
-            return msgs.home_position(ap, self.time_boot_ms() * 1000)
-        if msg_id == 148:
-            return msgs.autopilot_version(ap)
-        return None
+        builder = _BUILDERS.get(msg_id)
+        return None if builder is None else builder(self)
 
     def send_stream(self, msg_id: int) -> None:
         if msg_id == CAMERA_HEARTBEAT:
@@ -128,12 +121,14 @@ class VehicleLink:
 
     def send_once(self, msg_id: int) -> None:
         if msg_id in CAMERA_MESSAGES:
-            self.camera.send_once(msg_id)
+            message = self.camera.build(self.ap, msg_id)
+            if message is not None:
+                self.send(message, CAMERA_COMPONENT_ID)
         else:
             self.send_stream(msg_id)
 
     def set_stream_interval(self, msg_id: int, interval_s: float | None) -> bool:
-        if msg_id == 0:
+        if msg_id == MessageId.HEARTBEAT:
             return False  # the 1 Hz heartbeat is the link's pulse: its rate is fixed
         if interval_s is not None:
             interval_s = max(interval_s, MIN_STREAM_INTERVAL_S)
@@ -158,10 +153,10 @@ class VehicleLink:
         self.send(msgs.mission_current(self.ap))
 
     def on_home_changed(self) -> None:
-        self.send_once(242)
+        self.send_once(MessageId.HOME_POSITION)
 
     def on_image_captured(self, capture: ImageCapture) -> None:
-        self.camera.image_captured(capture)
+        self.send(self.camera.image_captured(self.ap, capture), CAMERA_COMPONENT_ID)
 
     def on_state_changed(self) -> None:
         """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
@@ -179,52 +174,53 @@ class VehicleLink:
     def handle(self, m: mavlink.MAVLink_message, wall_now_s: float) -> None:
         """Handle one message addressed to this vehicle (or broadcast)."""
         self.wall_now_s = wall_now_s
-        handler = _DISPATCH.get(m.get_type())
+        handler = _DISPATCH.get(m.get_msgId())
         if handler is not None:
             handler(self, m)
 
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
-        self.missions.tick(wall_now_s)
+        self.send_all(self.missions.tick(wall_now_s))
         self.ap.offboard.check_link(wall_now_s)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
 
     def _on_command(self, m, args: CommandArgs) -> None:
-        target_component = getattr(m, "target_component", 0)
-        if target_component not in (0, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID):
+        target_component = getattr(m, "target_component", MavComponent.ALL)
+        if target_component not in _COMMAND_COMPONENTS:
             return  # for a component this vehicle does not have: not ours to answer
-        if target_component == CAMERA_COMPONENT_ID and args.command not in (
-            2000, 2001, 521, 522, 525, 527, 530, 512
-        ):
-            result, reason = Result.UNSUPPORTED, None
-        elif args.command in STATEFUL_COMMANDS:
-            key, step = command_key(m), self.ap.fleet.step_count
-            repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s,
-                                            self._state_key())
-            if repeated is not None:  # a retransmission: the first copy's answer again
-                self._after_ack.clear()
-                self._ack(m, args.command, repeated, target_component)
-                return
-            result, reason = execute_command(self, args)
-            self._answer(m, args.command, result, reason, target_component)
-            self.dedup.answered(self._peer(m), key, step, self.wall_now_s, result,
-                                self._state_key())
+        if target_component == CAMERA_COMPONENT_ID and args.command not in CAMERA_COMMANDS:
+            self._answer(m, args.command, Reply(MavResult.UNSUPPORTED), target_component)
             return
-        else:
-            result, reason = execute_command(self, args)
-        self._answer(m, args.command, result, reason, target_component)
+        if args.command not in STATEFUL_COMMANDS:
+            self._answer(m, args.command, execute_command(self, args), target_component)
+            return
+        key, step = command_key(m), self.ap.fleet.step_count
+        repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s,
+                                        self._state_key())
+        if repeated is not None:  # a retransmission: the first copy's answer again
+            self._ack(m, args.command, repeated, target_component)
+            return
+        reply = execute_command(self, args)
+        self._answer(m, args.command, reply, target_component)
+        self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result,
+                            self._state_key())
 
-    def _answer(self, m, command: int, result: int, reason: str | None,
-                target_component: int) -> None:
-        self._ack(m, command, result, target_component)
-        if reason:
-            self.statustext(Severity.WARNING if result else Severity.INFO, reason)
-        actions, self._after_ack = self._after_ack, []
-        if result == Result.ACCEPTED:
-            for action in actions:
-                action()
+    def _answer(self, m, command: int, reply: Reply, target_component: int) -> None:
+        """The ACK, the reason as a STATUSTEXT, then what follows an accepted command."""
+        self._ack(m, command, reply.result, target_component)
+        if reply.reason:
+            self.statustext(Severity.WARNING if reply.result else Severity.INFO, reply.reason)
+        if reply.result != MavResult.ACCEPTED:
+            return
+        for follow_up in reply.follow_ups:
+            if isinstance(follow_up, SendOnce):
+                self.send_once(follow_up.msg_id)
+            elif isinstance(follow_up, SendMessage):
+                self.send(follow_up.message, follow_up.component)
+            elif isinstance(follow_up, Action):
+                follow_up.run()
 
     def _state_key(self) -> tuple[object, ...]:
         """What a command changes: mode, arming, landed state, goal, whether a goal runs."""
@@ -233,7 +229,8 @@ class VehicleLink:
                 bool(fleet.busy[self.k]))
 
     def _ack(self, m, command: int, result: int, target_component: int) -> None:
-        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID else 1
+        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID \
+            else AUTOPILOT_COMPONENT_ID
         src_system, src_component = self._peer(m)
         self.send(mavlink.MAVLink_command_ack_message(
             command, result, 0, 0, src_system, src_component
@@ -251,9 +248,9 @@ class VehicleLink:
         d = ParamStore.definition(name)
         value = store[name]
         if d.is_int:
-            wire, ptype = _bytewise_float(int(value)), PARAM_TYPE_INT32
+            wire, ptype = _bytewise_float(int(value)), MavParamType.INT32
         else:
-            wire, ptype = value, PARAM_TYPE_REAL32
+            wire, ptype = value, MavParamType.REAL32
         return mavlink.MAVLink_param_value_message(
             name.encode(), wire, ptype, len(store), ParamStore.index_of(name)
         )
@@ -294,38 +291,43 @@ class VehicleLink:
     def _mission_count(self, m) -> None:
         self.last_reached = None
         self.dedup.forget()  # a command after this one is no retransmission of one before
-        self.missions.on_count(m, self._peer(m), self.wall_now_s)
+        self.send_all(self.missions.on_count(m, self._peer(m), self.wall_now_s))
 
     def _mission_item_int(self, m) -> None:
-        self.missions.on_item(m, self._peer(m), self.wall_now_s, is_int=True)
+        self.send_all(self.missions.on_item(m, self._peer(m), self.wall_now_s, is_int=True))
 
     def _mission_item(self, m) -> None:
-        self.missions.on_item(m, self._peer(m), self.wall_now_s, is_int=False)
+        self.send_all(self.missions.on_item(m, self._peer(m), self.wall_now_s, is_int=False))
 
     def _mission_request_list(self, m) -> None:
-        self.missions.on_request_list(m, self._peer(m))
+        self.send_all(self.missions.on_request_list(m, self._peer(m)))
 
     def _mission_request_int(self, m) -> None:
-        self.missions.on_request(m, self._peer(m), wants_int=True)
+        self.send_all(self.missions.on_request(m, self._peer(m), wants_int=True))
 
     def _mission_request(self, m) -> None:
-        self.missions.on_request(m, self._peer(m), wants_int=False)
+        self.send_all(self.missions.on_request(m, self._peer(m), wants_int=False))
 
     def _mission_clear_all(self, m) -> None:
         self.last_reached = None
         self.dedup.forget()
-        self.missions.on_clear_all(m, self._peer(m))
+        self.send_all(self.missions.on_clear_all(m, self._peer(m)))
 
     def _mission_set_current(self, m) -> None:
         self.dedup.forget()
-        self.missions.on_set_current(m)
+        self.send_all(self.missions.on_set_current(m))
 
     # ------------------------------------------------------------------ others
+    def _complain(self, complaint: Complaint | None) -> None:
+        if complaint is not None and complaint.key not in self.warned:
+            self.warned.add(complaint.key)
+            self.statustext(Severity.WARNING, complaint.text)
+
     def _set_position_target_local_ned(self, m) -> None:
-        apply_local_setpoint(self, m)
+        self._complain(apply_local_setpoint(self.ap, m, self.wall_now_s))
 
     def _set_position_target_global_int(self, m) -> None:
-        apply_global_setpoint(self, m)
+        self._complain(apply_global_setpoint(self.ap, m, self.wall_now_s))
 
     def _ping(self, m) -> None:
         if m.target_system == self.system_id:  # broadcast pings are not answered
@@ -338,45 +340,60 @@ class VehicleLink:
             self.send(mavlink.MAVLink_timesync_message(now_ns, m.ts1))
 
     def _file_transfer(self, m) -> None:
-        # No MAVLink FTP: answer every request with NAK(UnknownCommand) so clients fall back.
         payload = bytes(m.payload)
-        if len(payload) < 12:
+        if len(payload) < FTP_HEADER_BYTES:
             return
         seq = (int.from_bytes(payload[0:2], "little") + 1) & 0xFFFF
-        reply = bytearray(251)
+        reply = bytearray(FTP_PAYLOAD_BYTES)
         reply[0:2] = seq.to_bytes(2, "little")
-        reply[2] = payload[2]
-        reply[3] = 129  # NAK
-        reply[4] = 1
-        reply[5] = payload[3]
-        reply[12] = 7  # kErrUnknownCommand
+        reply[2] = payload[2]  # session
+        reply[3] = FTP_OPCODE_NAK
+        reply[4] = 1  # payload size: one error byte
+        reply[5] = payload[3]  # the request's opcode
+        reply[12] = FTP_ERR_UNKNOWN_COMMAND
         src_system, src_component = self._peer(m)
         self.send(mavlink.MAVLink_file_transfer_protocol_message(
             0, src_system, src_component, list(reply)
         ))
 
 
-_ONE_SHOT = frozenset({0, 1, 24, 30, 32, 33, 42, 74, 147, 148, 242, 245})
+_COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
 
-_DISPATCH: dict[str, Callable[[VehicleLink, mavlink.MAVLink_message], None]] = {
-    "COMMAND_LONG": VehicleLink._command_long,
-    "COMMAND_INT": VehicleLink._command_int,
-    "PARAM_REQUEST_LIST": VehicleLink._param_request_list,
-    "PARAM_REQUEST_READ": VehicleLink._param_request_read,
-    "PARAM_SET": VehicleLink._param_set,
-    "MISSION_COUNT": VehicleLink._mission_count,
-    "MISSION_ITEM_INT": VehicleLink._mission_item_int,
-    "MISSION_ITEM": VehicleLink._mission_item,
-    "MISSION_REQUEST_LIST": VehicleLink._mission_request_list,
-    "MISSION_REQUEST_INT": VehicleLink._mission_request_int,
-    "MISSION_REQUEST": VehicleLink._mission_request,
-    "MISSION_CLEAR_ALL": VehicleLink._mission_clear_all,
-    "MISSION_SET_CURRENT": VehicleLink._mission_set_current,
-    "SET_POSITION_TARGET_LOCAL_NED": VehicleLink._set_position_target_local_ned,
-    "SET_POSITION_TARGET_GLOBAL_INT": VehicleLink._set_position_target_global_int,
-    "PING": VehicleLink._ping,
-    "TIMESYNC": VehicleLink._timesync,
-    "FILE_TRANSFER_PROTOCOL": VehicleLink._file_transfer,
+_BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
+    MessageId.HEARTBEAT: lambda v: msgs.heartbeat(v.ap),
+    MessageId.SYS_STATUS: lambda v: msgs.sys_status(v.ap),
+    MessageId.EXTENDED_SYS_STATE: lambda v: msgs.extended_sys_state(v.ap),
+    MessageId.GLOBAL_POSITION_INT: lambda v: msgs.global_position_int(v.ap, v.time_boot_ms()),
+    MessageId.LOCAL_POSITION_NED: lambda v: msgs.local_position_ned(v.ap, v.time_boot_ms()),
+    MessageId.ATTITUDE: lambda v: msgs.attitude(v.ap, v.time_boot_ms()),
+    MessageId.GPS_RAW_INT: lambda v: msgs.gps_raw_int(v.ap, v.time_boot_ms() * 1000),
+    MessageId.VFR_HUD: lambda v: msgs.vfr_hud(v.ap),
+    MessageId.MISSION_CURRENT: lambda v: msgs.mission_current(v.ap),
+    MessageId.BATTERY_STATUS: lambda v: msgs.battery_status(v.ap),
+    MessageId.HOME_POSITION: lambda v: msgs.home_position(v.ap, v.time_boot_ms() * 1000),
+    MessageId.AUTOPILOT_VERSION: lambda v: msgs.autopilot_version(v.ap),
 }
 
-HANDLED_MESSAGES: frozenset[str] = frozenset(_DISPATCH)  # what a vehicle acts on or answers
+_DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None]] = {
+    MessageId.COMMAND_LONG: VehicleLink._command_long,
+    MessageId.COMMAND_INT: VehicleLink._command_int,
+    MessageId.PARAM_REQUEST_LIST: VehicleLink._param_request_list,
+    MessageId.PARAM_REQUEST_READ: VehicleLink._param_request_read,
+    MessageId.PARAM_SET: VehicleLink._param_set,
+    MessageId.MISSION_COUNT: VehicleLink._mission_count,
+    MessageId.MISSION_ITEM_INT: VehicleLink._mission_item_int,
+    MessageId.MISSION_ITEM: VehicleLink._mission_item,
+    MessageId.MISSION_REQUEST_LIST: VehicleLink._mission_request_list,
+    MessageId.MISSION_REQUEST_INT: VehicleLink._mission_request_int,
+    MessageId.MISSION_REQUEST: VehicleLink._mission_request,
+    MessageId.MISSION_CLEAR_ALL: VehicleLink._mission_clear_all,
+    MessageId.MISSION_SET_CURRENT: VehicleLink._mission_set_current,
+    MessageId.SET_POSITION_TARGET_LOCAL_NED: VehicleLink._set_position_target_local_ned,
+    MessageId.SET_POSITION_TARGET_GLOBAL_INT: VehicleLink._set_position_target_global_int,
+    MessageId.PING: VehicleLink._ping,
+    MessageId.TIMESYNC: VehicleLink._timesync,
+    MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
+}
+
+# the names of the messages a vehicle acts on or answers
+HANDLED_MESSAGES: frozenset[str] = frozenset(m.name for m in _DISPATCH)

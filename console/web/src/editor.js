@@ -39,9 +39,10 @@ export async function showEditor(root) {
   const pathInput = el("input", { id: "save-path", value: "sessions/custom.json", size: 28 });
   const source = el("select", { id: "start-source" }, ["blank", "file", "level"].map((s) => el("option", { value: s }, s)));
   const fileInput = el("input", { id: "start-path", placeholder: "session file path", size: 28 });
-  const family = el("select", { id: "start-family" }, ["area_search", "area_assignment_and_patrol", "target_assignment"].map((f) => el("option", { value: f }, f)));
-  const level = el("select", { id: "start-level" }, ["easy", "intermediate", "moderate", "hard", "extreme"].map((f) => el("option", { value: f }, f)));
-  const index = el("input", { id: "start-index", type: "number", value: 1, min: 1, max: 5 });
+  // families, levels and indices come from the server (benchmark.scenarios), filled in below
+  const family = el("select", { id: "start-family" });
+  const level = el("select", { id: "start-level" });
+  const index = el("input", { id: "start-index", type: "number", value: 1, min: 1 });
   const toolSel = el("select", { id: "editor-tool", onchange: (e) => { state.tool = e.target.value; } },
     ["select", "add drone", ...TARGET_KINDS.map((k) => `add target ${k}`), ...OBSTACLE_KINDS.map((k) => `add obstacle ${k}`)].map((t) => el("option", { value: t }, t)));
   root.replaceChildren(
@@ -57,6 +58,21 @@ export async function showEditor(root) {
   map.toggles.labels = true;
   map.overlays.push((ctx, m, layer) => highlight(ctx, m, layer));
   window.consoleView = { map, state };
+  await loadChoices();
+
+  async function loadChoices() {
+    try {
+      const choices = await getJson("/api/editor/choices");
+      const options = (names) => names.map((n) => el("option", { value: n }, n));
+      family.replaceChildren(...options(choices.families));
+      level.replaceChildren(...options(choices.levels));
+      index.min = Math.min(...choices.indices);
+      index.max = Math.max(...choices.indices);
+    } catch (error) {
+      status.textContent = `cannot list the families and levels: ${error.message}`;
+      status.className = "bad";
+    }
+  }
 
   async function start() {
     const params = new URLSearchParams({ source: source.value, path: fileInput.value, family: family.value, level: level.value, index: index.value });

@@ -1,0 +1,77 @@
+"""MAVLink vocabulary shared by the emulator, the gateway and the tests.
+
+Named IntEnums for the MAVLink numbers the code uses, each member spelled as in the pymavlink
+common dialect without its enum's prefix (`MavCmd.NAV_TAKEOFF` is `MAV_CMD_NAV_TAKEOFF`;
+tests/test_mavlink_vocabulary.py checks every value against the dialect), and the STATUSTEXT
+reasons a ground station reads to tell why a vehicle stopped or refused.
+
+This is the bottom layer: it imports nothing of mavswarm (and not even pymavlink).
+"""
+
+from mavlink_vocabulary.enums import (
+    CameraCapFlags,
+    FailureType,
+    FailureUnit,
+    GpsFixType,
+    MavAutopilot,
+    MavBatteryChargeState,
+    MavBatteryFunction,
+    MavBatteryType,
+    MavCmd,
+    MavComponent,
+    MavFrame,
+    MavLandedState,
+    MavMissionResult,
+    MavMissionType,
+    MavModeFlag,
+    MavParamType,
+    MavProtocolCapability,
+    MavResult,
+    MavSeverity,
+    MavState,
+    MavSysStatusSensor,
+    MavType,
+    MavVtolState,
+    MessageId,
+    PositionTargetTypemask,
+    SpeedType,
+)
+from mavlink_vocabulary.reasons import (
+    FAILSAFE_TEXTS,
+    FAILURE_TEXTS,
+    OBSTACLE_TEXT,
+    REPAIRED_TEXT,
+)
+
+__all__ = [
+    "FAILSAFE_TEXTS",
+    "FAILURE_TEXTS",
+    "OBSTACLE_TEXT",
+    "REPAIRED_TEXT",
+    "CameraCapFlags",
+    "FailureType",
+    "FailureUnit",
+    "GpsFixType",
+    "MavAutopilot",
+    "MavBatteryChargeState",
+    "MavBatteryFunction",
+    "MavBatteryType",
+    "MavCmd",
+    "MavComponent",
+    "MavFrame",
+    "MavLandedState",
+    "MavMissionResult",
+    "MavMissionType",
+    "MavModeFlag",
+    "MavParamType",
+    "MavProtocolCapability",
+    "MavResult",
+    "MavSeverity",
+    "MavState",
+    "MavSysStatusSensor",
+    "MavType",
+    "MavVtolState",
+    "MessageId",
+    "PositionTargetTypemask",
+    "SpeedType",
+]
