@@ -13,7 +13,9 @@ exhaustive instead of drawn: every command with each of its seven parameters in 
 every absurd value and every parameter floor, the others plausible, so that each value
 reaches the check behind the plausible ones (a 1.4e-45 m/s speed with a valid speed type).
 
-Single messages rarely reach deep state, so there are episodes too: arm + take-off followed
+Single messages rarely reach deep state, so there are episodes too (and `plausible_missions`,
+one valid upload per vehicle then AUTO.MISSION and arm, so that a mission is flown whatever
+the absurd uploads drew): arm + take-off followed
 by absurd commands and by DO_SET_HOME, DO_CHANGE_SPEED and DO_REPOSITION with absurd or
 plausible values (they then hit a flying vehicle), complete mission uploads with absurd
 items followed by AUTO.MISSION, offboard set-points followed by OFFBOARD. Parameter values
@@ -35,10 +37,11 @@ from emulator.flight.params import PARAM_DEFINITIONS
 from emulator.geo import DEFAULT_ORIGIN
 from emulator.mavlink.commands import HANDLERS
 from emulator.mavlink.vehicle_link import HANDLED_MESSAGES
+from mavlink_vocabulary import MavCmd, MavFrame, MavMissionType
 from tests.mavlink_client import mavlink
 
-__all__ = ["BASELINES", "IGNORED_MESSAGES", "SYSTEMS", "TARGETS", "storms", "sweep",
-           "value_sweep"]
+__all__ = ["BASELINES", "IGNORED_MESSAGES", "SYSTEMS", "TARGETS", "plausible_missions", "storms",
+           "sweep", "value_sweep"]
 
 SYSTEMS = (1, 2, 3)
 TARGETS = (0, *SYSTEMS)
@@ -251,4 +254,23 @@ def value_sweep() -> list:
                 params[slot] = value
                 out.append(_long(SYSTEMS[i % len(SYSTEMS)], command, params))
                 i += 1
+    return out
+
+
+def plausible_missions() -> list:
+    """For every vehicle, a valid upload (take-off, one waypoint near the origin, land) sent
+    without waiting for the requests, then AUTO.MISSION and arm."""
+    out = []
+    for target in SYSTEMS:
+        items = [(MavCmd.NAV_TAKEOFF, 0.0, 0.0), (MavCmd.NAV_WAYPOINT, NEAR_LAT, NEAR_LON),
+                 (MavCmd.NAV_LAND, 0.0, 0.0)]
+        out.append(mavlink.MAVLink_mission_count_message(target, 1, len(items),
+                                                         MavMissionType.MISSION))
+        for seq, (command, lat, lon) in enumerate(items):
+            out.append(mavlink.MAVLink_mission_item_int_message(
+                target, 1, seq, MavFrame.GLOBAL_RELATIVE_ALT_INT, command, 0, 1,
+                0.0, 0.0, 0.0, math.nan, round(lat * 1e7), round(lon * 1e7), 8.0,
+                MavMissionType.MISSION))
+        out += [_long(target, MavCmd.DO_SET_MODE, [1.0, 4.0, 4.0, *[math.nan] * 4]),
+                _long(target, MavCmd.COMPONENT_ARM_DISARM, [1.0, *[math.nan] * 6])]
     return out

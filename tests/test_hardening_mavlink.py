@@ -11,7 +11,9 @@ The storm test at the end generalises them. Frames with valid checksums and absu
 values (tests/mavlink_strategies.py) of every message type a vehicle handles and every
 command id, addressed to every vehicle of a 3-vehicle swarm and to broadcast 0, are sent
 over loopback UDP in bursts: an exhaustive sweep of every command parameter through every
-absurd value first, then hypothesis examples, one burst each. Invariants:
+absurd value first, then one valid mission upload per vehicle followed by AUTO.MISSION and
+arm (so that the storm meets vehicles flying a mission whatever its own uploads drew), then
+hypothesis examples, one burst each. Invariants:
 
 * after every burst: no exception reached the event loop, `swarm.stats().internal_errors`
   is 0, the scheduler task and the socket are alive, the swarm read every datagram, and no
@@ -22,8 +24,10 @@ absurd value first, then hypothesis examples, one burst each. Invariants:
   (in-range values are configuration) and it is landed and disarmed, arms, takes off, flies
   one waypoint and lands there, per the ground truth `swarm.recorder`.
 
-Hypothesis draws in synchronous @given functions (derandomized or seeded, no database: the
-same frames on every run) that collect their examples; the async test sends them.
+Hypothesis draws in synchronous @given functions (derandomized or seeded, no database, and
+no constants taken from the project's imported source, tests/hypothesis_draws.py: the same
+frames on every run, whatever other test files the session collected) that collect their
+examples; the async test sends them.
 """
 
 from __future__ import annotations
@@ -50,8 +54,17 @@ from tests.flight_check import (
     recover_and_fly,
     wait_truth,
 )
+from tests.hypothesis_draws import seed_only_draws
 from tests.mavlink_client import MavClient, mavlink, running_swarm, send_datagram
-from tests.mavlink_strategies import BASELINES, SYSTEMS, TARGETS, storms, sweep, value_sweep
+from tests.mavlink_strategies import (
+    BASELINES,
+    SYSTEMS,
+    TARGETS,
+    plausible_missions,
+    storms,
+    sweep,
+    value_sweep,
+)
 
 ACCEPTED, DENIED = 0, 2
 MISSION_INVALID_PARAM2 = 7
@@ -323,8 +336,10 @@ async def test_storm_of_absurd_frames_leaves_every_vehicle_able_to_fly() -> None
     assert set(BASELINES) == set(HANDLERS)
     values = value_sweep()
     bursts: list[list] = [values[i:i + 100] for i in range(0, len(values), 100)]
-    _collect_sweeps(bursts)
-    _collect_storm(bursts)
+    bursts.append(plausible_missions())  # a mission flown, whatever the storm's uploads drew
+    with seed_only_draws():  # the same frames whatever else the session collected
+        _collect_sweeps(bursts)
+        _collect_storm(bursts)
     sent = [m for burst in bursts for m in burst]
     # the storm covers every handled message type, every command, every address
     assert {m.get_type() for m in sent} >= HANDLED_MESSAGES
