@@ -37,6 +37,25 @@ def _port() -> int:
     return unused_tcp_port("0.0.0.0")
 
 
+def _session_members(sid: int) -> list[int]:
+    """The processes of session `sid` (Linux /proc): a node's `ray start` began the session,
+    and every process of the node stays in it, though its workers lead process groups of
+    their own."""
+    members = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            with contextlib.suppress(OSError):  # gone meanwhile
+                if os.getsid(int(entry)) == sid:
+                    members.append(int(entry))
+    return members
+
+
+def _signal_all(pids: list[int], sig: signal.Signals) -> None:
+    for pid in pids:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, sig)
+
+
 @dataclass
 class RayNode:
     ip: str
@@ -48,22 +67,37 @@ class RayNode:
         return self.process.poll() is None
 
     def kill(self) -> None:
-        """SIGKILL every process of this node (its raylet, object store, workers) at once."""
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(self.process.pid, signal.SIGKILL)
+        """SIGKILL every process of this node (its raylet, object store, workers) at once:
+        all are stopped first, so no worker goes on running a task after its raylet died
+        (a task's results go straight to its driver, raylet or not)."""
+        members = _session_members(self.process.pid)
+        _signal_all(members, signal.SIGSTOP)
+        _signal_all(members, signal.SIGKILL)
         self.process.wait(timeout=30)
+        self._kill_rest()
 
     def stop(self, grace_s: float = 5.0) -> None:
-        """SIGTERM the node's process group; SIGKILL whatever is left after grace_s."""
+        """SIGTERM the node's process group; SIGKILL whatever of the node is left after
+        grace_s (workers outlive a stopped parent)."""
         if self.alive:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(self.process.pid, signal.SIGTERM)
             with contextlib.suppress(subprocess.TimeoutExpired):
                 self.process.wait(timeout=grace_s)
         with contextlib.suppress(ProcessLookupError):
-            os.killpg(self.process.pid, signal.SIGKILL)  # workers outlive a stopped parent
+            os.killpg(self.process.pid, signal.SIGKILL)
         with contextlib.suppress(subprocess.TimeoutExpired):
             self.process.wait(timeout=grace_s)
+        self._kill_rest()
+
+    def _kill_rest(self) -> None:
+        """SIGKILL any process of the node's session still there (one forked meanwhile)."""
+        for _ in range(10):
+            members = [p for p in _session_members(self.process.pid) if p != self.process.pid]
+            if not members:
+                return
+            _signal_all(members, signal.SIGKILL)
+            time.sleep(0.05)
 
 
 class LocalRayCluster:

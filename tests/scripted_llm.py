@@ -3,12 +3,15 @@
 Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
 calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded. With
 `by_drone`, each drone's agent (named in its first user message, "You are the agent of drone
-X") gets the replies of its own script. `delay_s` (a callable) makes each answer wait, like a
-model thinking.
+X") gets the replies of its own script. `answer` (a callable) instead makes each reply from its
+request, so concurrent agents get the same replies in any order. `delay_s` (a callable) makes
+each answer wait, like a model thinking; `hold` (a callable given the request) may block it
+until the test lets it go.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import threading
@@ -33,10 +36,14 @@ _AGENT_OF = re.compile(r"You are the agent of drone (\S+?) only")
 
 class ScriptedLLM:
     def __init__(self, replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
-                 delay_s: Callable[[], float] | None = None) -> None:
+                 delay_s: Callable[[], float] | None = None,
+                 answer: Callable[[dict[str, Any]], Any] | None = None,
+                 hold: Callable[[dict[str, Any]], None] | None = None) -> None:
         self.replies = list(replies)
         self.by_drone = {d: list(r) for d, r in (by_drone or {}).items()}
         self.delay_s = delay_s
+        self.answer = answer
+        self.hold = hold
         self.requests: list[dict[str, Any]] = []
         self.base_url = ""
         self._lock = threading.Lock()
@@ -53,15 +60,19 @@ class ScriptedLLM:
             delay = self.delay_s() if self.delay_s is not None else 0.0
         if delay > 0.0:
             time.sleep(delay)
+        if self.hold is not None:
+            self.hold(request)
         with self._lock:
             return self._reply(request)
 
     def _reply(self, request: dict[str, Any]) -> tuple[int, str]:
         self.requests.append(request)
         replies = self._script(request)
-        if not replies:
-            message: Any = {"role": "assistant", "content": "",
-                            "tool_calls": [call("finish", {"summary": "script ended"})]}
+        if self.answer is not None:
+            message: Any = self.answer(request)
+        elif not replies:
+            message = {"role": "assistant", "content": "",
+                       "tool_calls": [call("finish", {"summary": "script ended"})]}
         else:
             message = replies.pop(0)
         if isinstance(message, tuple):  # (status, raw body)
@@ -76,8 +87,11 @@ class ScriptedLLM:
 
 @contextmanager
 def scripted_llm(replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
-                 delay_s: Callable[[], float] | None = None) -> Iterator[ScriptedLLM]:
-    llm = ScriptedLLM(replies, by_drone=by_drone, delay_s=delay_s)
+                 delay_s: Callable[[], float] | None = None,
+                 answer: Callable[[dict[str, Any]], Any] | None = None,
+                 hold: Callable[[dict[str, Any]], None] | None = None
+                 ) -> Iterator[ScriptedLLM]:
+    llm = ScriptedLLM(replies, by_drone=by_drone, delay_s=delay_s, answer=answer, hold=hold)
 
     class Handler(BaseHTTPRequestHandler):
         def do_POST(self) -> None:
@@ -88,11 +102,13 @@ def scripted_llm(replies: list[Any], *, by_drone: dict[str, list[Any]] | None = 
             else:
                 status, body = llm.next_reply(request)
             data = body.encode()
-            self.send_response(status)
-            self.send_header("Content-Type", "application/json")
-            self.send_header("Content-Length", str(len(data)))
-            self.end_headers()
-            self.wfile.write(data)
+            # An agent may be gone by now (its process killed while its request was held).
+            with contextlib.suppress(BrokenPipeError, ConnectionResetError):
+                self.send_response(status)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                self.end_headers()
+                self.wfile.write(data)
 
         def log_message(self, *args: Any) -> None:
             pass

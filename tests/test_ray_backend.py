@@ -9,8 +9,10 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -23,6 +25,7 @@ from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
+from tests.scripted_llm import call, scripted_llm
 
 KEYS = ["takeoff_hold", "climb_and_face", "altitude_change", "new_home", "takeoff_hold",
         "climb_and_face"]
@@ -108,31 +111,82 @@ def test_a_ray_run_writes_what_the_local_backend_writes(
     assert order == sorted(order, key=order.index), order
 
 
+_DRONES = re.compile(r"Your drones: ([^.]+)\.")
+
+
+def _take_off_then_finish(request: dict[str, Any]) -> list[dict[str, Any]]:
+    """A model that takes the task's first drone up to 10 m, then calls finish: the same
+    reply to the same conversation, whichever session asks and in whichever order."""
+    messages = request["messages"]
+    if any(m["role"] == "tool" for m in messages):
+        return [call("finish", {"summary": "done"})]
+    drones = _DRONES.search(messages[1]["content"])
+    assert drones is not None, messages[1]
+    return [call("take_off", {"drone_id": drones.group(1).split(", ")[0], "altitude_m": 10})]
+
+
+class _SecondTaskGate:
+    """Holds every model request of each session's second task until opened: a session
+    whose first task is recorded then waits on its model, mid-run, for as long as it takes."""
+
+    def __init__(self, sessions: tuple[Path, ...]) -> None:
+        self.texts = {json.loads(p.read_text())["tasks"][1]["text"] for p in sessions}
+        self.opened = threading.Event()
+        self.held: set[str] = set()
+        self._lock = threading.Lock()
+
+    def __call__(self, request: dict[str, Any]) -> None:
+        task = request["messages"][1]["content"].split("\n")[0].removeprefix("Task: ")
+        if task in self.texts and not self.opened.is_set():
+            with self._lock:
+                self.held.add(task)
+            self.opened.wait()
+
+    def holds_every_session(self) -> bool:
+        with self._lock:
+            return self.held == self.texts
+
+
 @needs_ray
 @pytest.mark.mavsdk
 @pytest.mark.slow
 def test_a_node_killed_mid_run_loses_and_duplicates_no_record(
-        cluster: Any, sessions: tuple[Path, ...], local_records: list[dict[str, Any]],
-        tmp_path: Path) -> None:
+        cluster: Any, sessions: tuple[Path, ...], tmp_path: Path) -> None:
     node = cluster.nodes[-1]
     assert node.alive and node is not cluster.nodes[0]
+    gate = _SecondTaskGate(sessions)
+    assert len(gate.texts) == len(sessions)
+    with scripted_llm([], answer=_take_off_then_finish) as llm:
+        run_benchmark(RunPlan(sessions=sessions, out_dir=tmp_path / "local", workers=2,
+                              agent="react", model="scripted", base_url=llm.base_url),
+                      progress=lambda _: None)
+    local_records = read_records(tmp_path / "local" / "results.jsonl")
+    assert len(local_records) == len(sessions) * len(KEYS)
     out = tmp_path / "ray"
-    args = ("run", "--agent", "oracle", "--workers", "2", "--sessions", *map(str, sessions),
-            "--out", str(out))
-    proc = _bench(cluster, *args)
-    deadline = time.monotonic() + RUN_TIMEOUT_S
-    while _lines(out / "results.jsonl") < 1:  # a first task has ended: both are mid-session
-        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()[0]
-        time.sleep(0.05)
-    node.kill()
-    assert _lines(out / "results.jsonl") < len(local_records)
-    cluster.add_node(num_cpus=2)  # where the lost sessions go on
-    output = _finish(proc)
-    assert "running it again" in output, output[-4000:]
-    records = read_records(out / "results.jsonl")  # raises on a duplicate key
-    assert _verdicts(records) == _verdicts(local_records), output[-4000:]
-    # The rerun resumes: every task is recorded, nothing is run or written again.
-    again = _finish(_bench(cluster, *args))
+    with scripted_llm([], answer=_take_off_then_finish, hold=gate) as llm:
+        args = ("run", "--agent", "react", "--model", "scripted", "--base-url", llm.base_url,
+                "--workers", "2", "--sessions", *map(str, sessions), "--out", str(out))
+        proc = _bench(cluster, *args)
+        try:
+            # Both sessions run on the one worker node: each has its first task recorded and
+            # waits on the model in its second when the node dies.
+            deadline = time.monotonic() + RUN_TIMEOUT_S
+            while _lines(out / "results.jsonl") < len(sessions) or not gate.holds_every_session():
+                assert proc.poll() is None and time.monotonic() < deadline, \
+                    proc.communicate()[0]
+                time.sleep(0.05)
+            node.kill()
+            assert _lines(out / "results.jsonl") == len(sessions)
+        finally:
+            gate.opened.set()
+        cluster.add_node(num_cpus=2)  # where the lost sessions go on
+        output = _finish(proc)
+        assert output.count("running it again after its 1 recorded task(s)") == len(sessions), \
+            output[-4000:]
+        records = read_records(out / "results.jsonl")  # raises on a duplicate key
+        assert _verdicts(records) == _verdicts(local_records), output[-4000:]
+        # The rerun resumes: every task is recorded, nothing is run or written again.
+        again = _finish(_bench(cluster, *args))
     assert "0 new task records" in again, again[-4000:]
     assert [r["key"] for r in read_records(out / "results.jsonl")] == [r["key"] for r in records]
 
