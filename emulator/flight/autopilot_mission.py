@@ -7,7 +7,7 @@ its arrival comes back through `on_arrived`, a hold or loiter time through `on_t
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from emulator.flight import dynamics as dy
 from emulator.flight.mission import Cmd, MissionItem
@@ -261,7 +261,7 @@ class MissionRunner:
         self._execute(item.seq + 1)
 
 
-_HANDLERS = {
+_HANDLERS: dict[int, Callable[[MissionRunner, MissionItem], None]] = {
     Cmd.NAV_WAYPOINT: MissionRunner._waypoint,
     Cmd.NAV_TAKEOFF: MissionRunner._takeoff,
     Cmd.NAV_LOITER_TIME: MissionRunner._loiter_time,

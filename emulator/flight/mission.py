@@ -9,6 +9,7 @@ from emulator.flight.limits import SpeedKind, check_speed, check_yaw_rate
 from emulator.flight.params import ParamStore
 from emulator.flight.refusal import CommandRefused
 from emulator.geo import GeoOrigin
+from mavlink_vocabulary import MavCmd, MavFrame, MavMissionResult
 
 __all__ = [
     "NAV_COMMANDS",
@@ -21,38 +22,8 @@ __all__ = [
 ]
 
 
-class Cmd:
-    """MAV_CMD ids the mission executor understands."""
-
-    NAV_WAYPOINT = 16
-    NAV_LOITER_UNLIM = 17
-    NAV_LOITER_TIME = 19
-    NAV_RETURN_TO_LAUNCH = 20
-    NAV_LAND = 21
-    NAV_TAKEOFF = 22
-    NAV_DELAY = 93
-    CONDITION_YAW = 115
-    DO_CHANGE_SPEED = 178
-    IMAGE_START_CAPTURE = 2000
-
-
-class MissionResult:
-    """MAV_MISSION_RESULT codes."""
-
-    ACCEPTED = 0
-    ERROR = 1
-    UNSUPPORTED_FRAME = 2
-    UNSUPPORTED = 3
-    NO_SPACE = 4
-    INVALID = 5
-    INVALID_PARAM1 = 6
-    INVALID_PARAM2 = 7
-    INVALID_PARAM5_X = 11
-    INVALID_PARAM6_Y = 12
-    INVALID_PARAM7 = 13
-    INVALID_SEQUENCE = 14
-    DENIED = 15
-    OPERATION_CANCELLED = 16
+Cmd = MavCmd  # the MAV_CMD ids; SUPPORTED_COMMANDS are those the mission executor flies
+MissionResult = MavMissionResult  # a MISSION_ACK's type
 
 
 NAV_COMMANDS = frozenset(
@@ -62,9 +33,9 @@ SUPPORTED_COMMANDS = NAV_COMMANDS | {
     Cmd.NAV_RETURN_TO_LAUNCH, Cmd.NAV_DELAY, Cmd.CONDITION_YAW, Cmd.DO_CHANGE_SPEED,
     Cmd.IMAGE_START_CAPTURE,
 }
-FRAMES_AMSL = frozenset({0, 5})  # MAV_FRAME_GLOBAL, GLOBAL_INT
-FRAMES_RELATIVE = frozenset({3, 6})  # GLOBAL_RELATIVE_ALT, GLOBAL_RELATIVE_ALT_INT
-FRAME_MISSION = 2
+FRAMES_AMSL = frozenset({MavFrame.GLOBAL, MavFrame.GLOBAL_INT})
+FRAMES_RELATIVE = frozenset({MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT})
+FRAME_MISSION = MavFrame.MISSION
 MAX_ITEMS = 1000
 
 

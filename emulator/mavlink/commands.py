@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from emulator.flight.mission import FRAMES_AMSL, FRAMES_RELATIVE
 from emulator.flight.modes import decode_px4_mode
 from emulator.flight.refusal import CommandRefused
 from emulator.mavlink.command_args import CommandArgs
@@ -28,8 +29,6 @@ from mavlink_vocabulary import (
 
 __all__ = ["FAILURE_UNITS", "HANDLERS", "CommandArgs", "Reply", "execute_command"]
 
-FRAMES_AMSL = frozenset({MavFrame.GLOBAL, MavFrame.GLOBAL_INT})
-FRAMES_RELATIVE = frozenset({MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT})
 FORCE_DISARM_MAGIC = 21196.0  # MAV_CMD_COMPONENT_ARM_DISARM param2: disarm even in flight
 
 

@@ -31,14 +31,12 @@ INT32_LIMIT = 2**31
 NO_COORDINATE = INT32_LIMIT - 1  # an unset MISSION_ITEM_INT x / y
 Peer = tuple[int, int]
 Messages = list[mavlink.MAVLink_message]
-# emulator.flight.mission's result codes -> the dialect's, by name
-_WIRE = {value: MavMissionResult[name] for name, value in vars(MissionResult).items()
-         if name in MavMissionResult.__members__}
-
-
 def wire_result(code: int) -> MavMissionResult:
-    """The MAV_MISSION_RESULT of one of emulator.flight.mission's result codes."""
-    return _WIRE.get(code, MavMissionResult.ERROR)
+    """The MAV_MISSION_RESULT of a result code of emulator.flight.mission (ERROR if unknown)."""
+    try:
+        return MavMissionResult(code)
+    except ValueError:
+        return MavMissionResult.ERROR
 
 
 class _Upload:
