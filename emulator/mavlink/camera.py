@@ -11,6 +11,7 @@ import math
 from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.mavlink.codec import mavlink
 from emulator.mavlink.command_args import CommandArgs
+from emulator.mavlink.messages import MAVLINK_VERSION
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from mavlink_vocabulary import (
     CameraCapFlags,
@@ -66,7 +67,7 @@ class CameraComponent:
     @staticmethod
     def heartbeat() -> mavlink.MAVLink_message:
         return mavlink.MAVLink_heartbeat_message(
-            MavType.CAMERA, MavAutopilot.INVALID, 0, 0, MavState.ACTIVE, 3)
+            MavType.CAMERA, MavAutopilot.INVALID, 0, 0, MavState.ACTIVE, MAVLINK_VERSION)
 
     @staticmethod
     def build(ap: Autopilot, msg_id: int) -> mavlink.MAVLink_message | None:

@@ -23,6 +23,7 @@ from emulator.mavlink.camera import CAMERA_COMPONENT_ID, MAV_AUTOPILOT_INVALID, 
 from emulator.mavlink.codec import mavlink
 from emulator.mavlink.frames import FramePart, MessageLayout
 from emulator.mavlink.streams import CAMERA_HEARTBEAT
+from mavlink_vocabulary import MavState
 
 __all__ = ["BATCHED_STREAMS", "FleetTelemetry"]
 
@@ -129,10 +130,11 @@ class FleetTelemetry:
         state = np.where(level == BATTERY_CRITICAL, msgs.STATE_CRITICAL, state)
         state = np.where(level == BATTERY_EMERGENCY, msgs.STATE_EMERGENCY, state)
         custom = [m.custom_mode for m in modes]
-        return (msgs.MAV_TYPE_QUADROTOR, msgs.MAV_AUTOPILOT_PX4, base, custom, state, 3)
+        return (msgs.MAV_TYPE_QUADROTOR, msgs.MAV_AUTOPILOT_PX4, base, custom, state,
+                msgs.MAVLINK_VERSION)
 
     def _camera_heartbeat(self, ks: np.ndarray) -> Sequence[object]:
-        return (MAV_TYPE_CAMERA, MAV_AUTOPILOT_INVALID, 0, 0, 4, 3)
+        return (MAV_TYPE_CAMERA, MAV_AUTOPILOT_INVALID, 0, 0, MavState.ACTIVE, msgs.MAVLINK_VERSION)
 
     def _sys_status(self, ks: np.ndarray) -> Sequence[object]:
         f = self.fleet
