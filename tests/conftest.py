@@ -1,5 +1,5 @@
-"""Shared fixtures: free UDP ports, running swarms, a MAVSDK client that finds them, and a
-headless Chromium for the console pages."""
+"""Shared fixtures: free UDP ports, running swarms, a MAVSDK client that finds them, a
+headless Chromium for the console pages, and Hypothesis draws that depend on the seed alone."""
 
 from __future__ import annotations
 
@@ -17,11 +17,22 @@ from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
 from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path
+from tests.hypothesis_draws import seed_only_draws
 from tests.ports import unused_udp_port
 
 _executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
     weakref.WeakKeyDictionary()
 )
+
+
+@pytest.fixture(autouse=True)
+def hypothesis_seed_only_draws() -> Iterator[None]:
+    """Every test runs inside `seed_only_draws()` (tests/hypothesis_draws.py): a @given test,
+    or one nested in a test's body, draws the same examples for its seed (or derandomized)
+    whatever other test files the session collected and whatever literals the project's
+    source holds."""
+    with seed_only_draws():
+        yield
 
 
 @pytest.fixture
