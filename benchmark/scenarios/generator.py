@@ -287,10 +287,22 @@ def _obstacles(rng: random.Random, spec: LevelSpec, layout: Layout) -> list[dict
     return obstacles
 
 
+def _with_stations(rng: random.Random, layout: Layout, targets: list[dict[str, Any]],
+                   stations: int) -> list[dict[str, Any]]:
+    """`targets` followed by `stations` charging stations drawn after them, numbered t1, t2..."""
+    targets = targets + [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
+                         for k in range(1, stations + 1)]
+    return [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
+
+
+def _stations_text(stations: int) -> str:
+    return "charging station" if stations == 1 else "charging stations"
+
+
 def _description(fam: FamilySpec, spec: LevelSpec, corner: str, main: int, stations: int
                  ) -> str:
     things = "area targets" if fam.area_targets else "fixed targets"
-    station_text = "charging station" if stations == 1 else "charging stations"
+    station_text = _stations_text(stations)
     return (f"A {spec.map_width_m} x {spec.map_height_m} m map with {spec.drone_count} drones "
             f"at a base in the {corner} corner, {main} {things}, {stations} {station_text} "
             f"and {spec.obstacle_count} obstacles.")
@@ -318,9 +330,7 @@ def generate_world(family: str, level: str, index: int) -> Session:
     obstacles = _obstacles(rng, spec, layout)
     if not fam.area_targets:
         targets = [_disc_target(rng, layout, n, "fixed") for n in names]
-    targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
-                for k in range(1, stations + 1)]
-    targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
+    targets = _with_stations(rng, layout, targets, stations)
     return _session(fam, spec, index, seed, _description(fam, spec, corner, main, stations),
                     environment, drones, targets, obstacles)
 
@@ -339,10 +349,8 @@ def _tracking_world(family: str, level: str, index: int, rng: random.Random, lay
     targets += [_disc_target(rng, layout, f"Fixed Target {k}", "fixed")
                 for k in range(1, fixed + 1)]
     stations = spec.charging_station_count
-    targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
-                for k in range(1, stations + 1)]
-    targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
-    station_text = "charging station" if stations == 1 else "charging stations"
+    targets = _with_stations(rng, layout, targets, stations)
+    station_text = _stations_text(stations)
     description = (f"A {spec.map_width_m} x {spec.map_height_m} m map with {spec.drone_count} "
                    f"drones at a base in the {corner} corner, {movers} moving targets, {fixed} "
                    f"fixed target{'' if fixed == 1 else 's'}, {stations} {station_text} and "
@@ -363,10 +371,8 @@ def _resilience_world(family: str, level: str, index: int, rng: random.Random,
     obstacles = _obstacles(rng, spec, layout)
     fixed = RESILIENCE_FIXED_TARGETS[level]
     targets += [_disc_target(rng, layout, f"Target {k}", "fixed") for k in range(1, fixed + 1)]
-    targets += [_disc_target(rng, layout, f"Charging Station {k}", "waypoint")
-                for k in range(1, stations + 1)]
-    targets = [{"id": f"t{k}", **t} for k, t in enumerate(targets, start=1)]
-    station_text = "charging station" if stations == 1 else "charging stations"
+    targets = _with_stations(rng, layout, targets, stations)
+    station_text = _stations_text(stations)
     description = (f"A {spec.map_width_m} x {spec.map_height_m} m map with {spec.drone_count} "
                    f"drones at a base in the {corner} corner, {areas} area targets, {fixed} "
                    f"fixed targets, {stations} {station_text} and {spec.obstacle_count} "
