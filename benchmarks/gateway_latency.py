@@ -59,7 +59,8 @@ from emulator.swarm import PortPlan, Swarm
 from emulator.world import CALM, Obstacle, Target, World
 from mavlink_gateway import FleetConnection, Gateway, Outcome, profiles_from_scenario
 from mavlink_gateway import core as gateway_core
-from mavlink_gateway.payload import CAMERA_ID, perception_dict
+from mavlink_gateway.payload import perception_dict
+from mavlink_vocabulary import MavComponent
 
 CMD_TARGET_MS = 5.0
 NEARBY_TARGET_MS = 2.0
@@ -175,7 +176,8 @@ async def part1(args: argparse.Namespace) -> tuple[dict[str, Sample], list[str]]
                 await run("raw disarm (d2)", d2.action.disarm)
                 await run("raw takeoff, refused", d1.action.takeoff, "raised")
                 await run("raw set_home", lambda: d1.action.set_home(True, 0.0, 0.0, 0.0))
-                await run("raw camera.take_photo", lambda: d1.camera.take_photo(CAMERA_ID))
+                await run("raw camera.take_photo",
+                          lambda: d1.camera.take_photo(MavComponent.CAMERA))
             heading = round(d1.heading_deg)
             for _ in range(args.calls):
                 await run("move_to, refused by autopilot",

@@ -120,6 +120,7 @@ class GatewayCore:
             return no_answer_outcome(link, name, error)
         finally:
             del self._busy[link.drone_id]
+            self._command_s.pop(link.drone_id, None)  # a wait that never came drops it
 
     # -------------------------------------------------------- preconditions
     @staticmethod
@@ -152,9 +153,10 @@ class GatewayCore:
         all, then raises NoAnswer: the outcome cannot be known, and is never called a
         refusal."""
         tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
-        self._command_s[link.drone_id] = self.services.clock_s()
         for attempt in range(1, tries + 1):
             texts = len(link.status_texts)
+            # A budget starts when the command that counts was sent (the last try's).
+            self._command_s[link.drone_id] = self.services.clock_s()
             try:
                 await call()
                 return

@@ -27,7 +27,7 @@ from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
 from mavlink_vocabulary import FAILURE_TEXTS, REPAIRED_TEXT
 
-__all__ = ["FAILURE_TEXTS", "UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
+__all__ = ["UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
 
 HOVER_SPEED_M_S = 0.5
 # EXTENDED_SYS_STATE (landed state, in air) is 1 Hz by default (PX4 and the emulator): a

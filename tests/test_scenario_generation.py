@@ -10,7 +10,6 @@ import os
 import random
 import subprocess
 import sys
-import time
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -52,12 +51,8 @@ TOP_KEYS = ["schema", "id", "family", "level", "index", "seed", "name", "descrip
 
 @pytest.fixture(scope="module")
 def worlds() -> dict[tuple[str, str, int], Session]:
-    """All 125 sessions, generated once (the generation time is checked here too)."""
-    start = time.perf_counter()
-    result = {key: generate_world(*key) for key in all_session_keys()}
-    elapsed = time.perf_counter() - start
-    assert elapsed < 12.5, f"generating the 125 worlds took {elapsed:.1f} s"
-    return result
+    """All 125 sessions, generated once."""
+    return {key: generate_world(*key) for key in all_session_keys()}
 
 
 def _dump(session: Session) -> str:
