@@ -345,7 +345,7 @@ class Swarm:
         if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
             for k in bursts:
                 self.links[k].resend_mission_reached()
-        for k in bursts:  # so is a lost failure report (a motor, the GPS)
+        for k in bursts:  # a failure report (a motor, the GPS), on any link: UDP loses some
             report = self.fleet.autopilots[k].failures.standing_report()
             if report is not None:
                 self.links[k].statustext(*report)

@@ -105,12 +105,16 @@ class UdpEndpoint:
         sock = self._sock
         if sock is None:
             return
-        for data, addr in self.protocol.datagrams_to_send(self._wall_clock()):
+        now = self._wall_clock()
+        delivered = self.protocol.handle_timer(now)  # a delayed command due by now
+        for data, addr in self.protocol.datagrams_to_send(now):
             try:
                 sock.sendto(data, addr)
             except OSError:  # buffer full, or an unreachable port reported late
                 self.protocol.stats.send_errors += 1
         self._set_timer()
+        if delivered:
+            self._on_receive()
 
     def _set_timer(self) -> None:
         at = self.protocol.next_timer()
@@ -126,7 +130,4 @@ class UdpEndpoint:
         self._timer = self._timer_at = None
         if self._sock is None:
             return
-        delivered = self.protocol.handle_timer(self._wall_clock())
         self.transmit()
-        if delivered:
-            self._on_receive()

@@ -32,9 +32,9 @@ def entity_records(live: LiveSession, kind: str, only: Collection[str] | None = 
     if moving is not None:
         current = {ident: at for ident, at in moving.current().items()
                    if only is None or ident in only}
-        ctx = check_context(live) if current else None
+        ctx = check_context(live)
         for ident, (x, y, z) in current.items():
-            if ident in records and ctx is not None:
+            if ident in records:
                 records[ident] = {**records[ident], "position": {
                     "x": round(x, 2), "y": round(y, 2), "z": round(z, 2)},
                     **tracking_fields(ctx, ident)}

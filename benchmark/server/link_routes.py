@@ -20,7 +20,7 @@ it. A task whose hidden part schedules faults (benchmark.task_faults) keeps them
 operators too: only an admin reads the link while it runs.
 """
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Annotated, Any
 
@@ -58,9 +58,7 @@ def link_refusal(live: LiveSession) -> str | None:
 
 def hidden_faults(live: LiveSession) -> bool:
     """The current task's hidden part schedules faults (failures or link degradation)."""
-    raw = next((t for t in live.session.data.get("tasks", [])
-                if isinstance(t, Mapping) and t.get("id") == live.task.id), None)
-    return isinstance(raw, Mapping) and raw.get("faults") is not None
+    return live.task.faults is not None
 
 
 def session_link_target(live: LiveSession, admin: bool) -> LinkTarget:

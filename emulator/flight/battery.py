@@ -99,8 +99,7 @@ class FleetBattery:
         """`count` calls of `step` with the same inputs (steady flight), at once; returns the
         charge before and after each, (count + 1, n). Level changes are not reported (the
         levels are brought up to date)."""
-        rate = self.drain_pct_s(airborne, armed, airspeed_m_s, climb_m_s)
-        delta = (self.charge_rate_pct_s - rate) * dt_s
+        delta = self.deltas(dt_s, airborne, armed, airspeed_m_s, climb_m_s)
         charge = np.empty((count + 1, self.pct.size))
         charge[0] = self.pct
         charge[1:] = delta

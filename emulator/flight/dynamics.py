@@ -262,17 +262,6 @@ class FleetDynamics:
         """Whether there is any wind."""
         return self._windy
 
-    @property
-    def last_yaw_step_deg(self) -> float:
-        """The largest yaw change of the last step."""
-        step = self.yaw_step_deg
-        return 0.0 if step is None else float(np.abs(step).max())
-
-    def yaw_stepped_over(self, deg: float) -> bool:
-        """Whether some vehicle's yaw changed by more than deg in the last step."""
-        step = self.yaw_step_deg
-        return step is not None and bool(_count(np.abs(step) > deg))
-
     def _step_yaw(self, dt_s: float, active: np.ndarray, every: bool, err: np.ndarray,
                   d_xy: np.ndarray) -> np.ndarray:
         goal = self.goal_yaw_deg
