@@ -33,7 +33,9 @@ from console.editor import (
     start_choices,
     validate_session,
 )
+from console.editor_routes import add_editor_routes
 from console.live import LiveFeed, LiveSwarm
+from console.live_routes import add_live_routes
 from console.results_index import ReplayIndex
 
 __all__ = ["ConsoleState", "create_console_app"]
@@ -153,23 +155,8 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
         finally:
             feed.unsubscribe(queue)
 
-    @app.post("/api/live/{live_id}/command")
-    async def command(live_id: str, request: Request, role: Staff) -> JSONResponse:
-        live = live_or_404(live_id)
-        if live.commander is None:
-            raise HTTPException(409, "this live view takes no commands")
-        try:
-            body = json.loads(await request.body() or b"{}")
-        except ValueError as error:
-            raise HTTPException(422, f"the body is not JSON: {error}") from None
-        if not isinstance(body, dict) or not isinstance(body.get("drone_id"), str) \
-                or not isinstance(body.get("tool"), str):
-            raise HTTPException(422, "send {drone_id: str, tool: str, args: {...}}")
-        drone = body["drone_id"]
-        if drone not in {d["id"] for d in live.scene["drones"]}:
-            raise HTTPException(404, f"unknown drone {drone[:40]!r}")
-        result = await live.commander.run(drone, body["tool"], body.get("args") or {})
-        return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
+    add_live_routes(app, state, staff)
+    add_editor_routes(app, staff)
 
     def link_target(live_id: str, role: str) -> LinkTarget:
         live = live_or_404(live_id)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import functools
 import sys
 from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
@@ -20,10 +21,12 @@ from benchmark import cli as bench_cli
 from benchmark.replay_data import session_world
 from benchmark.server import Hub
 from benchmark.server.link_routes import LinkTarget, session_link_target
+from benchmark.server.operator_rule import served_refusal
 from benchmark.server.serve import ApiKey, serve_asgi
 from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
 from console.bench_watch import LiveBoard, serve_in_thread
+from console.bundle import bundle_problem
 from console.commands import Commander
 from console.live import DEFAULT_RATE_HZ, LiveSwarm
 from console.results_index import open_paths
@@ -82,7 +85,15 @@ def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
 
 
 def _print(text: str) -> None:
+    """Print a console URL; where the page is not built, say so (once) and how to build it."""
     print(text, flush=True)
+    problem = bundle_problem()
+    if problem is not None and not _warned:
+        _warned.append(problem)
+        print(f"mavswarm: {problem}", file=sys.stderr, flush=True)
+
+
+_warned: list[str] = []
 
 
 @contextlib.asynccontextmanager
@@ -175,7 +186,8 @@ def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str
         for sid, session in hub.sessions.items():
             if sid in state.lives:
                 continue
-            commanders[sid] = Commander(sid, session.gateway)
+            commanders[sid] = Commander(sid, session.gateway, refusal=functools.partial(
+                served_refusal, hub, sid, "flight commands from the console"))
 
             def activity(sid: str = sid) -> dict[str, dict[str, Any]]:
                 tools = hub.sessions[sid].tools

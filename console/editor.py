@@ -23,6 +23,7 @@ from benchmark.session_file import (
     read_session_json,
     session_from_dict,
 )
+from console.shipped import edited_id, shipped_ids
 
 __all__ = ["EditorError", "blank_session", "generated_session", "load_for_editing",
            "save_session", "start_choices", "validate_session"]
@@ -119,6 +120,10 @@ def validate_session(data: Any) -> dict[str, Any]:
 def save_session(data: Any, path: Path, root: Path) -> dict[str, Any]:
     """Validate, then write `data` to `path` (inside `root`, ending in .json)."""
     summary = validate_session(data)
+    if summary["id"] in shipped_ids():
+        raise EditorError(f"session id {summary['id']!r} is a shipped session's: save the edited "
+                          f"copy under a new id (e.g. {edited_id(summary['id'])!r}) so its "
+                          "results never mix with the shipped session's")
     target = (root / path).resolve() if not path.is_absolute() else path.resolve()
     if not target.is_relative_to(root.resolve()):
         raise EditorError(f"{path}: sessions are saved under {root}")

@@ -28,6 +28,7 @@ from fastapi import Depends, FastAPI, HTTPException, Request
 
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
+from benchmark.server.operator_rule import operator_refusal
 from emulator.link_faults import LinkFaultError
 from emulator.services import SwarmServices
 from llm_tools.input_limits import parse_json, preview
@@ -47,13 +48,9 @@ class LinkTarget:
 
 
 def link_refusal(live: LiveSession) -> str | None:
-    """Why the session's links may not be changed now (a benchmark task is running for its
-    agent), or None."""
-    if live.task.checks is None:
-        return None
-    return (f"session {live.id} is running benchmark task {live.task.id} for its agent; link "
-            "changes are refused while a task runs (they would change its result): serve a "
-            "world without tasks to change its links")
+    """Why the session's links may not be changed now (benchmark.server.operator_rule), or
+    None."""
+    return operator_refusal(live, "link changes")
 
 
 def hidden_faults(live: LiveSession) -> bool:

@@ -30,6 +30,7 @@ import uvicorn
 from benchmark.importer import load_any_session
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.hub import LiveSession
+from benchmark.server.operator_rule import served_refusal
 from benchmark.server.session_runner import (
     FREE_FLIGHT,
     SessionRunner,
@@ -187,16 +188,9 @@ async def serve_asgi(app: Any, *, host: str, port: int,
 
 
 def mqtt_refusal(hub: Hub, session_id: str) -> str | None:
-    """Why an operator's command over MQTT may not run in a served session now: while a
-    benchmark task runs for the session's agent it would change that task's result."""
-    live = hub.sessions.get(session_id)
-    if live is None:
-        return f"session {session_id} is no longer served"
-    if live.task.checks is None:
-        return None
-    return (f"session {session_id} is running benchmark task {live.task.id} for its agent; "
-            "commands over MQTT are refused while a task runs (they would change its "
-            "result): serve a world without tasks to command its drones")
+    """Why an operator's command over MQTT may not run in a served session now
+    (benchmark.server.operator_rule)."""
+    return served_refusal(hub, session_id, "commands over MQTT")
 
 
 async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT_HOST,

@@ -39,8 +39,13 @@ async function answer(response) {
 }
 
 export async function getJson(path) {
+  return (await getAnswer(path)).body;
+}
+
+// {status, body} of a GET: 200 or 422 (a refusal to show); any other status throws ApiError.
+export async function getAnswer(path) {
   const response = await fetch(url(path), { headers: { "X-API-Key": apiKey() } });
-  return (await answer(response)).body;
+  return answer(response);
 }
 
 export async function postJson(path, data) {

@@ -1,9 +1,12 @@
 // The scenario editor: start from a blank map, a session file or a generated level; place,
 // move (drag), resize (fields) and delete drones, targets and obstacles; edit tasks' text and
 // budgets; every edit is validated by the server, an invalid one is shown (the entity in red)
-// and the session cannot be saved until it is fixed.
+// and the session cannot be saved until it is fixed. Every edit can be undone and redone (a
+// loaded session too); a load that fails leaves the session on the page as it was. A session
+// started from a shipped one or a generated level is proposed a new id (saving under a shipped
+// session's id is refused: the copy's results would mix with the shipped session's).
 
-import { getJson, postJson } from "./api.js";
+import { getAnswer, getJson, postJson } from "./api.js";
 import { Map2D } from "./map2d.js";
 import { el } from "./panel.js";
 import { buildWorld, shapeOutline } from "./world.js";
@@ -11,6 +14,7 @@ import { buildWorld, shapeOutline } from "./world.js";
 const TARGET_KINDS = ["fixed", "moving", "waypoint", "circle", "polygon"];
 const OBSTACLE_KINDS = ["circle", "point", "ellipse", "polygon"];
 const LISTS = ["drones", "targets", "obstacles"];
+const HISTORY = 200;  // undo steps kept
 
 function square(x, y, half) {
   return [[x - half, y - half], [x + half, y - half], [x + half, y + half], [x - half, y + half]].map(([a, b]) => ({ x: a, y: b }));
@@ -37,8 +41,15 @@ export async function showEditor(root) {
   const tasks = el("div", { id: "editor-tasks" });
   const canvas = el("canvas", { id: "map2d" });
   const pathInput = el("input", { id: "save-path", value: "sessions/custom.json", size: 28 });
-  const source = el("select", { id: "start-source" }, ["blank", "file", "level"].map((s) => el("option", { value: s }, s)));
+  const idInput = el("input", { id: "save-id", size: 28, onchange: (e) => renameSession(e.target.value) });
+  const source = el("select", { id: "start-source", onchange: () => showSourceFields() },
+    ["shipped", "blank", "file", "level"].map((s) => el("option", { value: s, ...(s === "blank" ? { selected: "" } : {}) }, s)));
   const fileInput = el("input", { id: "start-path", placeholder: "session file path", size: 28 });
+  const shipped = el("select", { id: "start-shipped" });
+  const undoButton = el("button", { id: "undo", title: "undo (Ctrl+Z)", onclick: () => undo() }, "undo");
+  const redoButton = el("button", { id: "redo", title: "redo (Ctrl+Y, Ctrl+Shift+Z)", onclick: () => redo() }, "redo");
+  const history = { undo: [], redo: [] };
+  let shippedIds = new Set();
   // families, levels and indices come from the server (benchmark.scenarios), filled in below
   const family = el("select", { id: "start-family" });
   const level = el("select", { id: "start-level" });
@@ -47,18 +58,66 @@ export async function showEditor(root) {
     ["select", "add drone", ...TARGET_KINDS.map((k) => `add target ${k}`), ...OBSTACLE_KINDS.map((k) => `add obstacle ${k}`)].map((t) => el("option", { value: t }, t)));
   root.replaceChildren(
     el("header", {}, el("h1", {}, "Scenario editor")),
-    el("div", { class: "filters" }, "start from ", source, fileInput, family, level, index,
-      el("button", { id: "start-load", onclick: () => start() }, "load")),
+    el("div", { class: "filters" }, "start from ", source, shipped, fileInput, family, level, index,
+      el("button", { id: "start-load", onclick: () => start() }, "load"), undoButton, redoButton),
     el("main", { class: "live" },
       el("section", { class: "views" }, el("div", { class: "pane wide" }, canvas)),
       el("aside", { class: "side" }, el("label", {}, "click to ", toolSel),
         el("button", { id: "delete-selected", onclick: () => removeSelected() }, "delete selected"),
-        props, status, el("div", { class: "buttons" }, pathInput, el("button", { id: "save", onclick: () => save() }, "save")), tasks)));
+        props, status,
+        el("label", { class: "field" }, "session id ", idInput),
+        el("div", { class: "buttons" }, pathInput, el("button", { id: "save", onclick: () => save() }, "save as")), tasks)));
   const map = new Map2D(canvas, { onClick: (hit) => clicked(hit), onDragStart: (xy) => dragStart(xy) });
   map.toggles.labels = true;
   map.overlays.push((ctx, m, layer) => highlight(ctx, m, layer));
-  window.consoleView = { map, state };
+  window.consoleView = { map, state, history };
+  document.addEventListener("keydown", (e) => {
+    if (!(e.ctrlKey || e.metaKey) || ["INPUT", "TEXTAREA", "SELECT"].includes(e.target.tagName)) return;
+    const key = e.key.toLowerCase();
+    if (key === "z" && !e.shiftKey) { e.preventDefault(); undo(); }
+    else if (key === "y" || (key === "z" && e.shiftKey)) { e.preventDefault(); redo(); }
+  });
   await loadChoices();
+  showSourceFields();
+
+  function showSourceFields() {
+    const shown = { shipped: [shipped], file: [fileInput], level: [family, level, index], blank: [] }[source.value] || [];
+    for (const node of [shipped, fileInput, family, level, index]) node.hidden = !shown.includes(node);
+  }
+
+  // ----------------------------------------------------------------- history
+  function record() {
+    if (!state.session) return;
+    history.undo.push(JSON.stringify({ session: state.session, selected: state.selected }));
+    if (history.undo.length > HISTORY) history.undo.shift();
+    history.redo.length = 0;
+    renderHistory();
+  }
+
+  function restore(from, to) {
+    if (!from.length) return;
+    if (state.session) to.push(JSON.stringify({ session: state.session, selected: state.selected }));
+    const back = JSON.parse(from.pop());
+    state.session = back.session;
+    state.selected = back.selected;
+    refresh(false);
+    renderHistory();
+  }
+
+  function undo() { restore(history.undo, history.redo); }
+  function redo() { restore(history.redo, history.undo); }
+
+  function renderHistory() {
+    undoButton.disabled = !history.undo.length;
+    redoButton.disabled = !history.redo.length;
+  }
+
+  function renameSession(id) {
+    if (!state.session || id === state.session.id) return;
+    record();
+    state.session.id = id;
+    validate();
+  }
 
   async function loadChoices() {
     try {
@@ -68,6 +127,14 @@ export async function showEditor(root) {
       level.replaceChildren(...options(choices.levels));
       index.min = Math.min(...choices.indices);
       index.max = Math.max(...choices.indices);
+      const listed = (await getJson("/api/editor/shipped")).sessions;
+      shippedIds = new Set(listed.map((s) => s.id));
+      const groups = new Map();
+      for (const s of listed) {
+        if (!groups.has(s.family)) groups.set(s.family, el("optgroup", { label: s.family }));
+        groups.get(s.family).append(el("option", { value: s.id }, s.id));
+      }
+      shipped.replaceChildren(...groups.values());
     } catch (error) {
       status.textContent = `cannot list the families and levels: ${error.message}`;
       status.className = "bad";
@@ -75,15 +142,31 @@ export async function showEditor(root) {
   }
 
   async function start() {
-    const params = new URLSearchParams({ source: source.value, path: fileInput.value, family: family.value, level: level.value, index: index.value });
+    // The new session replaces the one on the page only once it loaded.
+    const what = source.value === "shipped" ? shipped.value : source.value === "file" ? fileInput.value : source.value;
+    let loaded = null;
     try {
-      state.session = await getJson(`/api/editor/start?${params}`);
-      state.selected = null;
-      refresh(true);
+      if (source.value === "shipped") {
+        const { status: code, body } = await getAnswer(`/api/editor/shipped/${encodeURIComponent(shipped.value)}`);
+        if (code !== 200) throw new Error(body.detail || body.error);
+        loaded = { ...body.session, id: body.proposed_id };
+      } else {
+        const params = new URLSearchParams({ source: source.value, path: fileInput.value, family: family.value, level: level.value, index: index.value });
+        const { status: code, body } = await getAnswer(`/api/editor/start?${params}`);
+        if (code !== 200) throw new Error(body.detail || body.error);
+        loaded = body;
+        if (source.value === "level" || shippedIds.has(loaded.id)) loaded.id = `${loaded.id}-edit`;
+      }
     } catch (error) {
-      status.textContent = `cannot start: ${error.message}`;
+      status.textContent = `cannot load ${what}: ${error.message}; the session on the page is unchanged`;
       status.className = "bad";
+      return;
     }
+    record();
+    state.session = loaded;
+    state.selected = null;
+    pathInput.value = `sessions/${loaded.id}.json`;
+    refresh(true);
   }
 
   function refresh(fit = false) {
@@ -91,6 +174,7 @@ export async function showEditor(root) {
     if (fit) map.setWorld(world); else { map.world = world; }
     map.drones = world.drones.map((d) => ({ ...d, yaw: 0 }));
     map.redraw();
+    idInput.value = state.session.id ?? "";
     renderProps();
     renderTasks();
     validate();
@@ -145,9 +229,12 @@ export async function showEditor(root) {
     const hit = hitTest(xy);
     if (!hit) return null;
     state.selected = hit;
-    let last = xy;
+    let last = xy, recorded = false;
     return {
-      move: (now) => { moveBy(entity(hit), now[0] - last[0], now[1] - last[1]); last = now; refreshQuiet(); },
+      move: (now) => {
+        if (!recorded) { record(); recorded = true; }
+        moveBy(entity(hit), now[0] - last[0], now[1] - last[1]); last = now; refreshQuiet();
+      },
       end: () => refresh(),
     };
   }
@@ -163,6 +250,7 @@ export async function showEditor(root) {
     const x = +hit.x.toFixed(1), y = +hit.y.toFixed(1);
     const s = state.session;
     if (state.tool === "select") { state.selected = hitTest([hit.x, hit.y]); renderProps(); map.redraw(); return; }
+    record();
     if (state.tool === "add drone") {
       const id = nextId(s.drones, "d");
       s.drones.push({ id, name: `Drone ${id.slice(1)}`, position: { x, y, z: 0 }, max_speed: 15, max_altitude: 120, battery_capacity: 5000 });
@@ -189,6 +277,7 @@ export async function showEditor(root) {
 
   function removeSelected() {
     if (!state.selected) return;
+    record();
     state.session[state.selected.list].splice(state.selected.index, 1);
     state.selected = null;
     refresh();
@@ -198,7 +287,7 @@ export async function showEditor(root) {
     const holder = sub ? e[sub] : e;
     if (!holder || !(key in holder)) return null;
     return el("label", { class: "field" }, `${label} `, el("input", { id: `prop-${sub ? `${sub}-` : ""}${key}`, value: holder[key], type: number ? "number" : "text", step: "any",
-      onchange: (ev) => { holder[key] = number ? Number(ev.target.value) : ev.target.value; refresh(); } }));
+      onchange: (ev) => { record(); holder[key] = number ? Number(ev.target.value) : ev.target.value; refresh(); } }));
   }
 
   function renderProps() {
@@ -210,7 +299,7 @@ export async function showEditor(root) {
       field(e, "length", "half-length y (m)"), field(e, "height", "height (m, 0 = all altitudes)"),
       field(e, "max_altitude", "max altitude (m)"), field(e, "max_speed", "max speed (m/s)"),
       e.vertices ? el("label", { class: "field" }, "scale polygon ", el("input", { id: "prop-scale", type: "number", value: 1, step: 0.1, min: 0.1,
-        onchange: (ev) => { scalePolygon(e, Number(ev.target.value)); refresh(); } })) : null].filter(Boolean));
+        onchange: (ev) => { record(); scalePolygon(e, Number(ev.target.value)); refresh(); } })) : null].filter(Boolean));
   }
 
   function scalePolygon(e, factor) {
@@ -223,11 +312,11 @@ export async function showEditor(root) {
   function renderTasks() {
     const list = state.session.tasks || [];
     tasks.replaceChildren(el("h3", {}, `Tasks (${list.length})`), ...list.map((t, k) => el("div", { class: "task-edit" },
-      el("b", {}, t.id), el("textarea", { id: `task-text-${k}`, rows: 2, onchange: (ev) => { t.text = ev.target.value; validate(); } }, t.text || ""),
+      el("b", {}, t.id), el("textarea", { id: `task-text-${k}`, rows: 2, onchange: (ev) => { record(); t.text = ev.target.value; validate(); } }, t.text || ""),
       el("label", {}, "tool calls ", el("input", { id: `task-calls-${k}`, type: "number", value: t.budget?.tool_calls ?? 0,
-        onchange: (ev) => { t.budget = { ...t.budget, tool_calls: Number(ev.target.value) }; validate(); } })),
+        onchange: (ev) => { record(); t.budget = { ...t.budget, tool_calls: Number(ev.target.value) }; validate(); } })),
       el("label", {}, " sim s ", el("input", { id: `task-sim-${k}`, type: "number", value: t.budget?.sim_time_s ?? 0,
-        onchange: (ev) => { t.budget = { ...t.budget, sim_time_s: Number(ev.target.value) }; validate(); } })))));
+        onchange: (ev) => { record(); t.budget = { ...t.budget, sim_time_s: Number(ev.target.value) }; validate(); } })))));
   }
 
   function highlight(ctx, m, layer) {
@@ -255,4 +344,6 @@ export async function showEditor(root) {
   }
 
   await start();
+  history.undo.length = 0;  // the first (blank) map is where history starts
+  renderHistory();
 }

@@ -6,16 +6,38 @@ import { showCompare, showRuns, showTask, showTruth } from "./inspector.js";
 import { showLive } from "./live.js";
 import { el } from "./panel.js";
 
-async function showHome(root) {
-  const info = await getJson("/api/info");
-  root.replaceChildren(el("header", {}, el("h1", {}, "mavswarm console")),
+const HOME_POLL_MS = 2000;  // the home page asks for new live swarms and runs this often
+
+function homeLists(info) {
+  return [
     el("h2", {}, "Live"), info.live.length
-      ? el("ul", {}, info.live.map((l) => el("li", {}, el("a", { href: pageUrl(`/live/${encodeURIComponent(l.id)}`) }, `${l.name} (${l.drones} drones)`))))
-      : el("p", { class: "muted" }, "no live swarm here"),
+      ? el("ul", { id: "live-list" }, info.live.map((l) => el("li", {}, el("a", { href: pageUrl(`/live/${encodeURIComponent(l.id)}`) }, `${l.name} (${l.drones} drones)`))))
+      : el("p", { class: "muted", id: "live-list" }, "no live swarm here (yet: this page shows new ones as they start)"),
     el("h2", {}, "Recorded"),
-    el("ul", {}, info.runs.map((r) => el("li", {}, el("a", { href: pageUrl(`/runs/${r.id}`) }, `${r.id}: ${r.passed}/${r.tasks} tasks passed`))),
+    el("ul", { id: "run-list" }, info.runs.map((r) => el("li", {}, el("a", { href: pageUrl(`/runs/${r.id}`) }, `${r.id}: ${r.passed}/${r.tasks} tasks passed`))),
       info.truth ? el("li", {}, el("a", { href: pageUrl("/replay") }, `replay ${info.truth}`)) : null),
+  ];
+}
+
+async function showHome(root) {
+  // Sessions that start after the page was opened (a benchmark run's next session, a session
+  // an operator loads) appear without a reload: the page asks again every HOME_POLL_MS.
+  let seen = JSON.stringify(await getJson("/api/info"));
+  const lists = el("div", { id: "home-lists" }, homeLists(JSON.parse(seen)));
+  const note = el("p", { id: "home-note", class: "muted" }, "");
+  root.replaceChildren(el("header", {}, el("h1", {}, "mavswarm console")), lists, note,
     el("h2", {}, "Edit"), el("a", { href: pageUrl("/editor") }, "scenario editor"));
+  window.consoleView = { polls: 0 };
+  setInterval(async () => {
+    try {
+      const text = JSON.stringify(await getJson("/api/info"));
+      window.consoleView.polls += 1;
+      note.textContent = "";
+      if (text !== seen) { seen = text; lists.replaceChildren(...homeLists(JSON.parse(text))); }
+    } catch (error) {
+      note.textContent = `cannot reach the console server (${error.message}); trying again`;
+    }
+  }, HOME_POLL_MS);
 }
 
 async function route() {

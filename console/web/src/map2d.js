@@ -1,6 +1,9 @@
 // The 2D top-down map: metres east (x) and north (y), north up, with a scale bar; obstacles,
 // targets, drones with heading and fading trails; pan (drag) and zoom (wheel); clicks report
-// the world point and the drone under the pointer.
+// the world point and the drone under the pointer. Drones closer on screen than a dot's width
+// are drawn as a cluster (one count badge, one label naming them); labels are placed where they
+// overprint nothing (around the dot, further out with a leader line, or left out). Point
+// obstacles are crossed squares, never dots a drone could be taken for.
 
 import { shapeOutline } from "./world.js";
 
@@ -11,6 +14,10 @@ export const COLORS = {
   trail: [230, 0, 126], perception: "rgba(46, 134, 222, 0.55)", task: "rgba(230, 0, 126, 0.5)",
 };
 export const DRONE_RADIUS_PX = 6;
+const CLUSTER_PX = 2 * DRONE_RADIUS_PX;  // drones closer than this on screen are one cluster
+const POINT_OBSTACLE_PX = 10;  // an obstacle drawn smaller than this gets the point glyph
+const MAX_LABELLED = 400;  // beyond this many drones only the selected ones are labelled
+const STATUS_COLORS = { ok: "#1e8449", accepted: "#1f5fbf", partial: "#b9770e", blocked: "#b9770e" };
 const TRAIL_FADE_S = 120;
 
 export class Map2D {
@@ -24,6 +31,9 @@ export class Map2D {
     this.trails = new Map();
     this.now = 0;
     this.selected = null;
+    this.chosen = new Set();  // drones picked for a command (live view)
+    this.labelBoxes = [];  // where drone labels went in the last draw: {text, x, y, w, h}
+    this._occupied = [];
     this.toggles = { perception: false, task: false, labels: true };
     this.overlays = [];
     this.view = { scale: 1, cx: 0, cy: 0 };
@@ -148,6 +158,7 @@ export class Map2D {
     ctx.setTransform(this.dpr, 0, 0, this.dpr, 0, 0);
     ctx.fillStyle = COLORS.background;
     ctx.fillRect(0, 0, this.width, this.height);
+    this._occupied = [];
     if (!this.world) return;
     this._grid();
     this._targets();
@@ -197,17 +208,40 @@ export class Map2D {
   _obstacles() {
     const ctx = this.ctx;
     for (const o of this.world.obstacles) {
-      this._path(shapeOutline(o.shape, 48));
+      const s = o.shape;
+      const small = s.type !== "polygon" && 2 * Math.max(s.rx, s.ry) * this.view.scale < POINT_OBSTACLE_PX;
+      if (o.kind === "point" || small) {
+        this._pointObstacle(o);
+        continue;
+      }
+      this._path(shapeOutline(s, 48));
       ctx.fillStyle = o.allAltitudes ? COLORS.wall : COLORS.building;
       ctx.fill();
       ctx.strokeStyle = o.allAltitudes ? COLORS.wallEdge : COLORS.buildingEdge;
       ctx.lineWidth = o.allAltitudes ? 2 : 1;
       ctx.stroke();
       if (this.toggles.labels && this.view.scale > 0.25) {
-        const c = o.shape.type === "polygon" ? centroid(o.shape.points) : [o.shape.x, o.shape.y];
+        const c = s.type === "polygon" ? centroid(s.points) : [s.x, s.y];
         this._label(o.allAltitudes ? "all alt." : `${o.height.toFixed(0)} m`, c, "#ffffff", 0, true);
       }
     }
+  }
+
+  _pointObstacle(o) {
+    // A crossed square (its footprint, at least POINT_OBSTACLE_PX wide): never a filled dot.
+    const ctx = this.ctx;
+    const [sx, sy] = this.toScreen(o.shape.x, o.shape.y);
+    const half = Math.max(POINT_OBSTACLE_PX / 2, Math.max(o.shape.rx, o.shape.ry) * this.view.scale);
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(sx - half, sy - half, 2 * half, 2 * half);
+    ctx.strokeStyle = o.allAltitudes ? COLORS.wallEdge : COLORS.buildingEdge;
+    ctx.lineWidth = 2;
+    ctx.strokeRect(sx - half, sy - half, 2 * half, 2 * half);
+    ctx.beginPath();
+    ctx.moveTo(sx - half, sy - half); ctx.lineTo(sx + half, sy + half);
+    ctx.moveTo(sx + half, sy - half); ctx.lineTo(sx - half, sy + half);
+    ctx.strokeStyle = COLORS.wall; ctx.lineWidth = 1.5; ctx.stroke();
+    this._occupied.push({ x: sx - half, y: sy - half, w: 2 * half, h: 2 * half });
   }
 
   _label(text, [x, y], color, dy = 0, center = false) {
@@ -218,6 +252,8 @@ export class Map2D {
     ctx.textBaseline = center ? "middle" : "bottom";
     ctx.fillStyle = color;
     ctx.fillText(text, sx, sy - dy);
+    const w = ctx.measureText(text).width;
+    this._occupied.push({ x: sx - w / 2, y: center ? sy - 6 : sy - dy - 12, w, h: 12 });
   }
 
   _trails() {
@@ -261,23 +297,88 @@ export class Map2D {
         ctx.strokeStyle = COLORS.task; ctx.lineWidth = 1; ctx.stroke();
       }
     }
-    for (const d of this.drones) {
-      const [sx, sy] = this.toScreen(d.x, d.y);
+    const placed = this.drones.map((d) => ({ d, at: this.toScreen(d.x, d.y) }));
+    for (const { d, at: [sx, sy] } of placed) {
       const yaw = ((d.yaw || 0) * Math.PI) / 180;
       const hx = sx + Math.sin(yaw) * (DRONE_RADIUS_PX + 7), hy = sy - Math.cos(yaw) * (DRONE_RADIUS_PX + 7);
       ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 2;
       ctx.beginPath(); ctx.moveTo(sx, sy); ctx.lineTo(hx, hy); ctx.stroke();
-      if (d.id === this.selected) {
+      if (d.id === this.selected || this.chosen.has(d.id)) {
         ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX + 4, 0, 2 * Math.PI);
-        ctx.strokeStyle = COLORS.selected; ctx.lineWidth = 3; ctx.stroke();
+        ctx.strokeStyle = COLORS.selected; ctx.lineWidth = d.id === this.selected ? 3 : 2; ctx.stroke();
       }
       ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX, 0, 2 * Math.PI);
       ctx.fillStyle = COLORS.drone; ctx.fill();
-      if (this.toggles.labels && (this.drones.length <= 40 || this.view.scale > 4 || d.id === this.selected)) {
-        ctx.font = "bold 11px sans-serif"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
-        ctx.fillStyle = "#1b1b1b"; ctx.fillText(d.id, sx + DRONE_RADIUS_PX + 3, sy + 8);
-      }
+      this._occupied.push({ x: sx - DRONE_RADIUS_PX, y: sy - DRONE_RADIUS_PX, w: 2 * DRONE_RADIUS_PX, h: 2 * DRONE_RADIUS_PX });
     }
+    const clusters = clusterOf(placed, CLUSTER_PX);
+    for (const c of clusters) if (c.members.length > 1) this._badge(c);
+    this.clusters = clusters.map((c) => ({ ids: c.members.map((m) => m.d.id), x: c.x, y: c.y }));
+    this.labelBoxes = [];
+    if (!this.toggles.labels) return;
+    const rank = (c) => (c.members.some((m) => m.d.id === this.selected) ? 0 : c.members.some((m) => this.chosen.has(m.d.id)) ? 1 : 2);
+    const ordered = [...clusters].sort((a, b) => rank(a) - rank(b));
+    for (const c of ordered) {
+      if (this.drones.length > MAX_LABELLED && rank(c) === 2) continue;
+      this._droneLabel(c, rank(c) === 0);
+    }
+  }
+
+  _badge(c) {
+    const ctx = this.ctx;
+    const bx = c.x + DRONE_RADIUS_PX + 2, by = c.y - DRONE_RADIUS_PX - 2;
+    ctx.beginPath(); ctx.arc(bx, by, 7, 0, 2 * Math.PI);
+    ctx.fillStyle = "#ffffff"; ctx.fill();
+    ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 1.5; ctx.stroke();
+    ctx.font = "bold 10px sans-serif"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
+    ctx.fillStyle = "#1b1b1b"; ctx.fillText(String(c.members.length), bx, by + 0.5);
+    this._occupied.push({ x: bx - 7, y: by - 7, w: 14, h: 14 });
+  }
+
+  _droneLabel(c, force) {
+    // The cluster's label (one drone: its id and the status of its last command) where it
+    // overlaps nothing drawn so far: next to the dot, further out with a leader line, or not
+    // at all (the selected drone's label always shows).
+    const ctx = this.ctx;
+    const ids = c.members.map((m) => m.d.id);
+    const title = ids.length === 1 ? ids[0] : ids.length <= 3 ? ids.join(", ") : `${ids.slice(0, 2).join(", ")} +${ids.length - 2}`;
+    const outcome = ids.length === 1 ? c.members[0].d.outcome : null;
+    ctx.font = "bold 11px sans-serif";
+    const titleW = ctx.measureText(title).width;
+    ctx.font = "10px sans-serif";
+    const lineW = outcome ? ctx.measureText(outcome.text).width : 0;
+    const w = Math.max(titleW, lineW) + 4, h = outcome ? 26 : 14;
+    const r = DRONE_RADIUS_PX + 3;
+    let box = null, leader = false;
+    for (const [ring, far] of [[r, false], [r + 22, true], [r + 46, true]]) {
+      for (const [ux, uy] of LABEL_SPOTS) {
+        const x = c.x + ux * ring + (ux < 0 ? -w : ux === 0 ? -w / 2 : 0);
+        const y = c.y + uy * ring + (uy < 0 ? -h : uy === 0 ? -h / 2 : 0);
+        const spot = { x, y, w, h };
+        if (x < 0 || y < 0 || x + w > this.width || y + h > this.height) continue;
+        if (this._occupied.some((o) => overlaps(o, spot))) continue;
+        box = spot; leader = far; break;
+      }
+      if (box) break;
+    }
+    if (!box && !force) return;
+    if (!box) { box = { x: c.x + r, y: c.y - h / 2, w, h }; }
+    if (leader) {
+      ctx.strokeStyle = "rgba(27, 27, 27, 0.6)"; ctx.lineWidth = 1;
+      ctx.beginPath(); ctx.moveTo(c.x, c.y);
+      ctx.lineTo(Math.min(Math.max(c.x, box.x), box.x + box.w), Math.min(Math.max(c.y, box.y), box.y + box.h)); ctx.stroke();
+    }
+    ctx.fillStyle = "rgba(255, 255, 255, 0.8)";
+    ctx.fillRect(box.x, box.y, box.w, box.h);
+    ctx.textAlign = "left"; ctx.textBaseline = "top";
+    ctx.font = "bold 11px sans-serif"; ctx.fillStyle = "#1b1b1b";
+    ctx.fillText(title, box.x + 2, box.y + 1);
+    if (outcome) {
+      ctx.font = "10px sans-serif"; ctx.fillStyle = STATUS_COLORS[outcome.status] || "#c0392b";
+      ctx.fillText(outcome.text, box.x + 2, box.y + 14);
+    }
+    this._occupied.push(box);
+    this.labelBoxes.push({ text: title, ids, ...box });
   }
 
   _scaleBar() {
@@ -292,6 +393,39 @@ export class Map2D {
     ctx.font = "11px sans-serif"; ctx.fillStyle = "#1b1b1b"; ctx.textAlign = "center"; ctx.textBaseline = "bottom";
     ctx.fillText(metres >= 1000 ? `${metres / 1000} km` : `${metres} m`, x + px / 2, y - 4);
   }
+}
+
+// Where a label may go around a dot, in order of preference (unit offsets, y down).
+const LABEL_SPOTS = [[1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [-1, 1], [1, -1], [-1, -1]];
+
+function overlaps(a, b) {
+  return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+}
+
+// Drones closer than `px` on screen, greedily grouped (in scene order) around the first of each.
+export function clusterOf(placed, px) {
+  const clusters = [];
+  const cell = new Map();
+  const key = (x, y) => `${Math.floor(x / px)},${Math.floor(y / px)}`;
+  for (const item of placed) {
+    const [x, y] = item.at;
+    let home = null;
+    const gx = Math.floor(x / px), gy = Math.floor(y / px);
+    for (let i = -1; i <= 1 && !home; i++) {
+      for (let j = -1; j <= 1 && !home; j++) {
+        for (const c of cell.get(`${gx + i},${gy + j}`) || []) {
+          if (Math.hypot(c.x - x, c.y - y) < px) { home = c; break; }
+        }
+      }
+    }
+    if (home) { home.members.push(item); continue; }
+    const c = { x, y, members: [item] };
+    clusters.push(c);
+    const k = key(x, y);
+    if (!cell.has(k)) cell.set(k, []);
+    cell.get(k).push(c);
+  }
+  return clusters;
 }
 
 export function niceStep(raw) {

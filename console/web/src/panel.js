@@ -52,6 +52,6 @@ export function toggleBar(map, onChange = () => {}) {
 export function legend() {
   const item = (cls, text) => el("span", { class: "legend-item" }, el("i", { class: cls }), text);
   return el("div", { class: "legend" }, item("lg-drone", "drone"), item("lg-building", "building (height)"),
-    item("lg-wall", "obstacle, all altitudes"), item("lg-area", "area target"), item("lg-point", "point target"),
+    item("lg-wall", "obstacle, all altitudes"), item("lg-mast", "point obstacle"), item("lg-area", "area target"), item("lg-point", "point target"),
     item("lg-station", "charging station"));
 }
