@@ -7,7 +7,6 @@ A shipped session is named by its id, never by a path, and opened from the shipp
 folder only. Saving under a shipped session's id is refused (console.editor.save_session).
 """
 
-from __future__ import annotations
 
 from collections.abc import Callable
 from typing import Annotated, Any

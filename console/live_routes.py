@@ -12,7 +12,6 @@ drone a 422, and while a benchmark task runs in the session (benchmark.server.op
 every command is refused with 409.
 """
 
-from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Mapping
@@ -62,7 +61,7 @@ def _drones(body: Mapping[str, Any], known: list[str]) -> tuple[list[str], bool]
     return list(dict.fromkeys(chosen)), "drone_id" in body
 
 
-def add_live_routes(app: FastAPI, state: ConsoleState, staff: Callable[..., str]) -> None:
+def add_live_routes(app: FastAPI, state: "ConsoleState", staff: Callable[..., str]) -> None:
     """Add the command route to the console's `app` (`staff`: its key dependency)."""
     Staff = Annotated[str, Depends(staff)]
 

@@ -14,7 +14,7 @@ export const COLORS = {
   trail: [230, 0, 126], perception: "rgba(46, 134, 222, 0.55)", task: "rgba(230, 0, 126, 0.5)",
 };
 export const DRONE_RADIUS_PX = 6;
-const CLUSTER_PX = 2 * DRONE_RADIUS_PX;  // drones closer than this on screen are one cluster
+const CLUSTER_PX = 2 * DRONE_RADIUS_PX + 2;  // drones closer than this on screen: one cluster
 const POINT_OBSTACLE_PX = 10;  // an obstacle drawn smaller than this gets the point glyph
 const MAX_LABELLED = 400;  // beyond this many drones only the selected ones are labelled
 const STATUS_COLORS = { ok: "#1e8449", accepted: "#1f5fbf", partial: "#b9770e", blocked: "#b9770e" };
@@ -220,11 +220,21 @@ export class Map2D {
       ctx.strokeStyle = o.allAltitudes ? COLORS.wallEdge : COLORS.buildingEdge;
       ctx.lineWidth = o.allAltitudes ? 2 : 1;
       ctx.stroke();
-      if (this.toggles.labels && this.view.scale > 0.25) {
+      const text = o.allAltitudes ? "all alt." : `${o.height.toFixed(0)} m`;
+      if (this.toggles.labels && this._fits(text, s)) {
         const c = s.type === "polygon" ? centroid(s.points) : [s.x, s.y];
-        this._label(o.allAltitudes ? "all alt." : `${o.height.toFixed(0)} m`, c, "#ffffff", 0, true);
+        this._label(text, c, "#ffffff", 0, true);
       }
     }
+  }
+
+  _fits(text, shape) {
+    // An obstacle's label is drawn only inside its footprint, never spilling over its edge.
+    const outline = shapeOutline(shape, 16).map(([x, y]) => this.toScreen(x, y));
+    const xs = outline.map((p) => p[0]), ys = outline.map((p) => p[1]);
+    this.ctx.font = "11px sans-serif";
+    const w = this.ctx.measureText(text).width;
+    return Math.max(...xs) - Math.min(...xs) > w + 6 && Math.max(...ys) - Math.min(...ys) > 16;
   }
 
   _pointObstacle(o) {
@@ -326,7 +336,7 @@ export class Map2D {
 
   _badge(c) {
     const ctx = this.ctx;
-    const bx = c.x + DRONE_RADIUS_PX + 2, by = c.y - DRONE_RADIUS_PX - 2;
+    const bx = c.right + DRONE_RADIUS_PX + 2, by = c.top - DRONE_RADIUS_PX - 2;
     ctx.beginPath(); ctx.arc(bx, by, 7, 0, 2 * Math.PI);
     ctx.fillStyle = "#ffffff"; ctx.fill();
     ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 1.5; ctx.stroke();
@@ -402,30 +412,40 @@ function overlaps(a, b) {
   return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
 }
 
-// Drones closer than `px` on screen, greedily grouped (in scene order) around the first of each.
+// Drones linked by gaps under `px` on screen (single link: a chain of close drones is one
+// cluster), each cluster at the centre of its members, in scene order of their first member.
 export function clusterOf(placed, px) {
-  const clusters = [];
-  const cell = new Map();
-  const key = (x, y) => `${Math.floor(x / px)},${Math.floor(y / px)}`;
-  for (const item of placed) {
-    const [x, y] = item.at;
-    let home = null;
-    const gx = Math.floor(x / px), gy = Math.floor(y / px);
-    for (let i = -1; i <= 1 && !home; i++) {
-      for (let j = -1; j <= 1 && !home; j++) {
-        for (const c of cell.get(`${gx + i},${gy + j}`) || []) {
-          if (Math.hypot(c.x - x, c.y - y) < px) { home = c; break; }
+  const parent = placed.map((_, k) => k);
+  const find = (k) => { while (parent[k] !== k) { parent[k] = parent[parent[k]]; k = parent[k]; } return k; };
+  const cells = new Map();
+  placed.forEach((item, k) => {
+    const gx = Math.floor(item.at[0] / px), gy = Math.floor(item.at[1] / px);
+    for (let i = -1; i <= 1; i++) {
+      for (let j = -1; j <= 1; j++) {
+        for (const other of cells.get(`${gx + i},${gy + j}`) || []) {
+          const [ox, oy] = placed[other].at;
+          if (Math.hypot(ox - item.at[0], oy - item.at[1]) < px) {
+            const a = find(k), b = find(other);
+            if (a !== b) parent[Math.max(a, b)] = Math.min(a, b);
+          }
         }
       }
     }
-    if (home) { home.members.push(item); continue; }
-    const c = { x, y, members: [item] };
-    clusters.push(c);
-    const k = key(x, y);
-    if (!cell.has(k)) cell.set(k, []);
-    cell.get(k).push(c);
-  }
-  return clusters;
+    const key = `${gx},${gy}`;
+    if (!cells.has(key)) cells.set(key, []);
+    cells.get(key).push(k);
+  });
+  const byRoot = new Map();
+  placed.forEach((item, k) => {
+    const root = find(k);
+    if (!byRoot.has(root)) byRoot.set(root, { members: [] });
+    byRoot.get(root).members.push(item);
+  });
+  return [...byRoot.values()].map((c) => {
+    const xs = c.members.map((m) => m.at[0]), ys = c.members.map((m) => m.at[1]);
+    return { ...c, x: xs.reduce((a, v) => a + v, 0) / xs.length, y: ys.reduce((a, v) => a + v, 0) / ys.length,
+             right: Math.max(...xs), top: Math.min(...ys) };
+  });
 }
 
 export function niceStep(raw) {
