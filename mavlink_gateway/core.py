@@ -10,17 +10,19 @@ from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.goals import Goal, Interrupted
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.lockstep_wait import (
     ARRIVED_SPEED_M_S,
     judge_failure,
+    settle_telemetry,
     wait_instant,
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
 
-__all__ = ["GatewayCore", "NoAnswer", "Refusal"]
+__all__ = ["GatewayCore", "Interrupted", "NoAnswer", "Refusal"]
 
 POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry arrives
 STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
@@ -30,6 +32,9 @@ FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.
 # A command MAVSDK got no answer to (it retransmits 3 times itself) is sent again this many
 # times in all; the vehicle acts on a command once (emulator.mavlink.command_dedup).
 COMMAND_TRIES = 3
+# An interrupted primitive's last look at the world: these streams, sent after the interruption
+JUDGED_STREAMS = ("position", "velocity", "landed_state", "in_air", "flight_mode")
+JUDGE_WALL_S = 1.0
 SILENT_WALL_S = 5.0  # a drone whose telemetry stopped this long ago is tried only once
 # MAVSDK results that mean "no answer came", not "the vehicle said no"
 NO_ANSWER_RESULTS = frozenset({"TIMEOUT", "CONNECTION_ERROR", "NO_SYSTEM", "UNKNOWN", "BUSY"})
@@ -79,6 +84,9 @@ class GatewayCore:
         self.drones = dict(drones)
         self.services = services
         self._busy: dict[str, str] = {}
+        self._goals: dict[str, Goal] = {}
+        # The primitive that a replacing primitive interrupted, while the latter runs.
+        self._replaced: dict[str, str] = {}
         # Simulated time of each drone's last command: a stepped clock runs on while the
         # answer travels back, so an outcome's budget starts there, not when the wait begins.
         self._command_s: dict[str, float] = {}
@@ -97,30 +105,63 @@ class GatewayCore:
         return link
 
     async def _run(self, name: str, drone: object,
-                   body: Callable[[DroneLink], Awaitable[Outcome]]) -> Outcome:
-        """Run one primitive for one drone; a second one for the same drone is refused."""
+                   body: Callable[[DroneLink], Awaitable[Outcome]], *,
+                   replace: bool = False) -> Outcome:
+        """Run one primitive for one drone. A second one for the same drone is refused, or
+        with `replace` it interrupts the running one (which ends with Status.INTERRUPTED),
+        HOLD is sent, and then this one runs."""
         try:
             link = self._link(drone)
         except Refusal as refusal:
             return Outcome(Status.REJECTED, str(refusal))
-        current = self._busy.get(link.drone_id)
-        if current is not None:
-            return Outcome(Status.REJECTED,
-                           f"drone {link.drone_id} is busy with {current}: wait for it to end",
-                           link.state())
+        replaced: str | None = None
+        held = False
+        while (current := self._busy.get(link.drone_id)) is not None:
+            if not replace:
+                return Outcome(Status.REJECTED,
+                               f"drone {link.drone_id} is busy with {current}: wait for it to "
+                               f"end", link.state())
+            replaced = current
+            held = await self._interrupt(link.drone_id, name)
         if link.failure is not None:
             return Outcome(Status.FAILED, f"{name}: drone {link.drone_id} is out of the task: "
                            f"{link.failure}", link.state())
         self._busy[link.drone_id] = name
+        goal = self._goals[link.drone_id] = Goal(name)
         try:
+            if replaced is not None:
+                self._replaced[link.drone_id] = replaced
+                if not held:
+                    await self._mavsdk(link, f"hold (to end {replaced})", link.action.hold)
             return await body(link)
         except Refusal as refusal:
             return Outcome(Status.REJECTED, f"{name} refused: {refusal}", link.state())
         except NoAnswer as error:
             return no_answer_outcome(link, name, error)
+        except Interrupted as stop:
+            return Outcome(Status.INTERRUPTED, f"{name} interrupted by {stop.by}: "
+                           f"{link.drone_id} no longer pursues its goal", link.state())
         finally:
             del self._busy[link.drone_id]
+            del self._goals[link.drone_id]
+            self._replaced.pop(link.drone_id, None)
             self._command_s.pop(link.drone_id, None)  # a wait that never came drops it
+            goal.ended.set()
+
+    async def _interrupt(self, drone_id: str, by: str) -> bool:
+        """Ask the primitive running for `drone_id` to end, and wait until it has: it ends
+        at its next look at the world (sending HOLD itself), or once the command in flight is
+        answered (a command is never abandoned half-sent: a late copy would undo the hold).
+        True if it sent HOLD."""
+        goal = self._goals.get(drone_id)
+        if goal is None:
+            return False
+        goal.interrupt(by)
+        await goal.ended.wait()
+        return goal.held
+
+    def _goal(self, link: DroneLink) -> Goal | None:
+        return self._goals.get(link.drone_id)
 
     # -------------------------------------------------------- preconditions
     @staticmethod
@@ -153,7 +194,10 @@ class GatewayCore:
         all, then raises NoAnswer: the outcome cannot be known, and is never called a
         refusal."""
         tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
+        goal = self._goal(link)
         for attempt in range(1, tries + 1):
+            if goal is not None:
+                goal.check()  # interrupted: send nothing more
             texts = len(link.status_texts)
             # A budget starts when the command that counts was sent (the last try's).
             self._command_s[link.drone_id] = self.services.clock_s()
@@ -198,18 +242,52 @@ class GatewayCore:
         budget's end, so a time-out happens at exactly `budget_s` of simulated time. With a
         lockstep clock, the outcome is judged where the clock stops (see
         mavlink_gateway.lockstep_wait). `instant`: the outcome needs no simulated time."""
+        try:
+            if self.services.lockstep:
+                if instant:
+                    return await wait_instant(link, what, done, budget_s)
+                texts = len(link.status_texts) if texts_from is None else texts_from
+                return await wait_lockstep(self.services, link, budget_s, what, done,
+                                           self._hold, watch_obstacles=watch_obstacles,
+                                           texts=texts, goal=self._goal(link))
+            now = self.services.clock_s()
+            start = min(self._command_s.pop(link.drone_id, now), now)
+            with self.services.clock_limit(start + budget_s):
+                return await self._wait_for_outcome(link, budget_s, what, done,
+                                                    watch_obstacles=watch_obstacles,
+                                                    texts_from=texts_from, start_s=start)
+        except Interrupted:
+            # No command is in flight here: HOLD at once, then judge once more on telemetry
+            # sent after it (telemetry lags the vehicle: the goal may have been reached
+            # before the hold).
+            goal = self._goal(link)
+            held = await self._hold(link)
+            if goal is not None:
+                goal.held = held
+            outcome = await self._judge_now(link, done)
+            if outcome is not None:
+                return outcome
+            raise
+
+    async def _judge_now(self, link: DroneLink,
+                         done: Callable[[], Outcome | Awaitable[Outcome | None] | None]
+                         ) -> Outcome | None:
+        """`done()` on telemetry sent after this call (a lockstep clock is asked for it)."""
         if self.services.lockstep:
-            if instant:
-                return await wait_instant(link, what, done, budget_s)
-            texts = len(link.status_texts) if texts_from is None else texts_from
-            return await wait_lockstep(self.services, link, budget_s, what, done, self._hold,
-                                       watch_obstacles=watch_obstacles, texts=texts)
-        now = self.services.clock_s()
-        start = min(self._command_s.pop(link.drone_id, now), now)
-        with self.services.clock_limit(start + budget_s):
-            return await self._wait_for_outcome(link, budget_s, what, done,
-                                                watch_obstacles=watch_obstacles,
-                                                texts_from=texts_from, start_s=start)
+            self.services.refresh_telemetry(link.drone_id)
+            await settle_telemetry(link, self.services)
+        else:
+            mark, deadline = dict(link.seen), time.monotonic() + JUDGE_WALL_S
+            while not link.refreshed_since(mark, JUDGED_STREAMS) and \
+                    time.monotonic() < deadline:
+                await link.wait_update(link.updates, POLL_S)
+        try:
+            outcome = done()
+            if inspect.isawaitable(outcome):
+                outcome = await outcome
+        except Exception:  # a MAVSDK query that got no answer: not judged
+            return None
+        return outcome
 
     async def _wait_for_outcome(
         self, link: DroneLink, budget_s: float, what: str,
@@ -229,6 +307,7 @@ class GatewayCore:
         start_sim = self.services.clock_s() if start_s is None else start_s
         wall_deadline = time.monotonic() + budget_s + WALL_MARGIN_S
         obstacle_mark: dict[str, int] | None = None  # telemetry seen when the obstacle text came
+        goal = self._goal(link)
         while True:
             seen = link.updates
             outcome = done()
@@ -236,6 +315,8 @@ class GatewayCore:
                 outcome = await outcome
             if outcome is not None:
                 return outcome
+            if goal is not None:
+                goal.check()
             new_texts = link.status_texts[texts:]
             failure = judge_failure(link, what, texts)
             if failure is not None:
@@ -276,6 +357,17 @@ class GatewayCore:
                 return Outcome(Status.TIMEOUT, f"{what} did not finish within {budget_s:.0f} s "
                                f"of simulated time{'; holding' if held else ''}", link.state())
             await link.wait_update(seen, POLL_S)
+
+    async def _show_mode(self, link: DroneLink, mode: str) -> None:
+        """Wait (briefly, in wall time) until telemetry shows the mode the drone was just put
+        in; a lockstep clock stands still meanwhile, so the swarm is asked for its state."""
+        if self.services.lockstep:
+            self.services.refresh_telemetry(link.drone_id)
+            await settle_telemetry(link, self.services)
+            return
+        deadline = time.monotonic() + FRESH_WAIT_S
+        while link.mode != mode and time.monotonic() < deadline:
+            await link.wait_update(link.updates, POLL_S)
 
     @staticmethod
     async def _hold(link: DroneLink) -> bool:

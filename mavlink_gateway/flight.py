@@ -70,7 +70,9 @@ class FlightPrimitives(GatewayCore):
 
         return await self._run("take_off", drone, body)
 
-    async def land(self, drone: str) -> Outcome:
+    async def land(self, drone: str, *, replace: bool = False) -> Outcome:
+        """Land where the drone is. `replace`: interrupt the running primitive (as `hold`
+        does) instead of being refused while the drone is busy."""
         async def body(link: DroneLink) -> Outcome:
             self._require_air(link)
             height = link.state().altitude_m
@@ -86,7 +88,7 @@ class FlightPrimitives(GatewayCore):
 
             return await self._wait(link, height / 0.5 + 30.0, "land", done, texts_from=texts)
 
-        return await self._run("land", drone, body)
+        return await self._run("land", drone, body, replace=replace)
 
     async def _goto(self, link: DroneLink, target: tuple[float, float, float], what: str,
                     yaw_deg: float = math.nan) -> Outcome:
@@ -117,13 +119,16 @@ class FlightPrimitives(GatewayCore):
         budget = math.dist(start, goal) / CRUISE_M_S * 2.0 + 30.0
         return await self._wait(link, budget, what, done, texts_from=texts)
 
-    async def move_to(self, drone: str, x: float, y: float, z: float) -> Outcome:
+    async def move_to(self, drone: str, x: float, y: float, z: float, *,
+                      replace: bool = False) -> Outcome:
+        """Fly to (x, y) at altitude z. `replace`: interrupt the running primitive (as `hold`
+        does) instead of being refused while the drone is busy (a ground station's Go-to)."""
         async def body(link: DroneLink) -> Outcome:
             self._require_air(link)
             target = (self._coordinate("x", x), self._coordinate("y", y), _number("z", z))
             return await self._goto(link, target, "move_to")
 
-        return await self._run("move_to", drone, body)
+        return await self._run("move_to", drone, body, replace=replace)
 
     async def move_towards(self, drone: str, heading_deg: float, distance_m: float,
                            dz_m: float = 0.0) -> Outcome:
@@ -161,6 +166,26 @@ class FlightPrimitives(GatewayCore):
             return outcome
 
         return await self._run("rotate", drone, body)
+
+    async def hold(self, drone: str) -> Outcome:
+        """Interrupt whatever the drone is doing (a move, a mission, the take-off climb,
+        return home, a landing) and hover where it is (HOLD mode). The interrupted primitive
+        ends with Status.INTERRUPTED. On the ground with nothing running: nothing to do."""
+        async def body(link: DroneLink) -> Outcome:
+            interrupted = self._replaced.get(link.drone_id)
+            data = {"interrupted": interrupted}
+            if interrupted is None:
+                if link.flight_state == "on_ground":
+                    return Outcome(Status.OK, f"{link.drone_id} is on the ground: nothing to "
+                                   "hold", link.state(), data)
+                await self._mavsdk(link, "hold", link.action.hold)
+            await self._show_mode(link, "HOLD")
+            x, y, z = link.position_m or (math.nan,) * 3
+            ended = f"; {interrupted} interrupted" if interrupted else ""
+            return Outcome(Status.OK, f"{link.drone_id} holds at {_fmt((x, y, z))}{ended}",
+                           link.state(), data)
+
+        return await self._run("hold", drone, body, replace=True)
 
     async def return_home(self, drone: str) -> Outcome:
         async def body(link: DroneLink) -> Outcome:

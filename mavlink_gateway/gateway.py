@@ -15,7 +15,8 @@ class Gateway(PayloadPrimitives):
     """All primitives for the drones of one swarm.
 
     Each primitive takes a drone id and returns an Outcome. Primitives for different drones
-    run concurrently; a second primitive for a drone that is still busy is refused.
+    run concurrently; a second primitive for a drone that is still busy is refused, unless
+    it replaces the current goal (`hold`, and `move_to`/`land` with `replace=True`).
     """
 
     def list_drones(self) -> list[DroneState]:

@@ -10,12 +10,14 @@ at its end (see mavlink_gateway.pacing).
 
 from __future__ import annotations
 
+import asyncio
 import inspect
 import math
 import time
 from collections.abc import Awaitable, Callable
 
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.goals import Goal
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_gateway.pacing import current_thinker
@@ -92,15 +94,17 @@ def judge_stop(link: DroneLink, what: str, texts: int, watch_obstacles: bool
 
 async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, what: str,
                         done: Done, hold: Callable[[DroneLink], Awaitable[bool]], *,
-                        watch_obstacles: bool, texts: int) -> Outcome:
-    """Wait for the outcome of the goal `link`'s drone is executing, halt by halt."""
+                        watch_obstacles: bool, texts: int, goal: Goal | None = None
+                        ) -> Outcome:
+    """Wait for the outcome of the goal `link`'s drone is executing, halt by halt; raises
+    Interrupted as soon as `goal` is interrupted."""
     watch = services.watch(link.drone_id, until_s=services.clock_s() + budget_s)
     thinker = current_thinker()
     if thinker is not None:
         thinker.wait()
     try:
         while True:
-            await watch.halted()
+            await _halted_or_stopped(watch.halted(), goal)
             if not await settle_telemetry(link, services):
                 return Outcome(Status.UNKNOWN, f"{what}: {link.drone_id} stopped answering (no "
                                f"telemetry for {SETTLE_WALL_S:g} s); its state is as last seen",
@@ -133,6 +137,25 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
         if thinker is not None:
             thinker.think()  # at the halt's time, before the watch lets the clock go
         watch.close()
+
+
+async def _halted_or_stopped(halted: Awaitable[float], goal: Goal | None) -> None:
+    """Wait for the watch's halt; raise Interrupted once `goal` is stopped first."""
+    if goal is None:
+        await halted
+        return
+    goal.check()
+    halt = asyncio.ensure_future(halted)
+    stop = asyncio.ensure_future(goal.stop.wait())
+    try:
+        await asyncio.wait((halt, stop), return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for task in (halt, stop):
+            task.cancel()  # the watch's halt is shielded: cancelling the wait is safe
+    if halt.done() and not halt.cancelled():
+        halt.result()
+        return
+    goal.check()
 
 
 async def _text_grace(link: DroneLink) -> None:

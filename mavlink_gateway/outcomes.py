@@ -18,6 +18,7 @@ class Status(StrEnum):
     TIMEOUT = "timeout"  # the simulated-time budget ran out
     UNKNOWN = "unknown"  # no answer came (a lossy link, a silent drone): it may have acted
     FAILED = "failed"  # the drone reported a failure (a motor, its GPS): it is out
+    INTERRUPTED = "interrupted"  # ended early by a hold or a new goal that replaced it
 
 
 @dataclass(frozen=True, slots=True)
