@@ -125,6 +125,7 @@ class Commander:
         values, problem = self.check(tool, args)
         if problem is not None:
             return _error(problem)
+        await self._ready()  # the first command opens the gateway: not part of the wait
         entry = {"id": next(self._ids), "name": tool, "drone": drone_id,
                  "args": {k: round(v, 2) if isinstance(v, float) else v
                           for k, v in values.items()}}

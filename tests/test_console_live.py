@@ -96,10 +96,10 @@ def test_live_view_draws_the_truth_and_commands_fly_the_drone(browser: Any,
         assert webgl_colours(page) >= 20
         shot(page, "live-before")
 
-        page.select_option("#drone-select", "d1")
+        page.click(".drone-row[data-drone='d1'] .drone-id")
         page.fill("#cmd-altitude", "12")
         page.click("#cmd-take_off")
-        _wait_text(page, "#cmd-result", "take_off: ok")
+        _wait_text(page, ".drone-row[data-drone='d1'] .drone-outcome", "take_off: ok")
         assert _truth(swarm, "d1")[2] == pytest.approx(12.0, abs=1.0)
         trail_before = page.evaluate("window.consoleView.state.trails.get('d1').length")
 
@@ -111,7 +111,7 @@ def test_live_view_draws_the_truth_and_commands_fly_the_drone(browser: Any,
         scale, cx, cy, width, height = view
         sx, sy = width / 2 + (target[0] - cx) * scale, height / 2 - (target[1] - cy) * scale
         page.mouse.click(box["x"] + sx, box["y"] + sy)
-        _wait_text(page, "#cmd-result", "move_to: ok")
+        _wait_text(page, ".drone-row[data-drone='d1'] .drone-outcome", "move_to: ok")
         x, y, z = _truth(swarm, "d1")
         assert math.hypot(x - target[0], y - target[1]) < 3.0, (x, y)  # within one pixel
         assert z == pytest.approx(12.0, abs=1.0)

@@ -17,7 +17,7 @@ export const DRONE_RADIUS_PX = 6;
 const CLUSTER_PX = 2 * DRONE_RADIUS_PX + 2;  // drones closer than this on screen: one cluster
 const POINT_OBSTACLE_PX = 10;  // an obstacle drawn smaller than this gets the point glyph
 const MAX_LABELLED = 400;  // beyond this many drones only the selected ones are labelled
-const STATUS_COLORS = { ok: "#1e8449", accepted: "#1f5fbf", partial: "#b9770e", blocked: "#b9770e" };
+const STATUS_COLORS = { ok: "#1e8449", accepted: "#1f5fbf", partial: "#b9770e", blocked: "#b9770e", interrupted: "#b9770e" };
 const TRAIL_FADE_S = 120;
 
 export class Map2D {
