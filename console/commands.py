@@ -55,7 +55,7 @@ class Commander:
         self._refusal = refusal
         self._lock = asyncio.Lock()
         self._ids = itertools.count(1)
-        self._running: dict[str, dict[str, Any]] = {}
+        self._running: dict[str, dict[int, dict[str, Any]]] = {}  # drone -> id -> command
         self._last: dict[str, dict[str, Any]] = {}
         self._tasks: set[asyncio.Task[dict[str, Any]]] = set()
 
@@ -109,8 +109,10 @@ class Commander:
         except (TypeError, ValueError) as error:  # a gateway refusing an odd value
             result = _error(f"{entry['name']}: {error}")
         finally:
-            if self._running.get(drone) is entry:
-                del self._running[drone]
+            running = self._running.get(drone, {})
+            running.pop(entry["id"], None)
+            if not running:
+                self._running.pop(drone, None)
         last = {"id": entry["id"], "name": entry["name"], "status": result["status"],
                 "message": result["message"]}
         previous = self._last.get(drone)
@@ -126,10 +128,11 @@ class Commander:
         if problem is not None:
             return _error(problem)
         await self._ready()  # the first command opens the gateway: not part of the wait
-        entry = {"id": next(self._ids), "name": tool, "drone": drone_id,
+        ident = next(self._ids)
+        entry: dict[str, Any] = {"id": ident, "name": tool, "drone": drone_id,
                  "args": {k: round(v, 2) if isinstance(v, float) else v
                           for k, v in values.items()}}
-        self._running[drone_id] = entry
+        self._running.setdefault(drone_id, {})[ident] = entry
         task = asyncio.create_task(self._execute(entry, values),
                                    name=f"console-{tool}-{drone_id}")
         self._tasks.add(task)
@@ -140,14 +143,15 @@ class Commander:
         return {"status": "accepted", "command": entry["id"],
                 "message": f"{tool} accepted by {drone_id}; its outcome shows when it ends"}
 
-    async def run(self, drone_id: str, tool: str, args: Mapping[str, Any]) -> dict[str, Any]:
-        """Run a command to its outcome."""
-        return await self.start(drone_id, tool, args, accept_wait_s=1e9)
-
     def activity(self) -> dict[str, dict[str, Any]]:
-        """Per drone: the command it carries out now (or None) and how its last one ended."""
-        return {drone: {"executing": self._running.get(drone), "last": self._last.get(drone)}
-                for drone in set(self._running) | set(self._last)}
+        """Per drone: the command it carries out now (the latest of those still running, or
+        None) and how its last one ended."""
+        out: dict[str, dict[str, Any]] = {}
+        for drone in set(self._running) | set(self._last):
+            running = self._running.get(drone) or {}
+            out[drone] = {"executing": running[max(running)] if running else None,
+                          "last": self._last.get(drone)}
+        return out
 
     async def aclose(self) -> None:
         for task in list(self._tasks):

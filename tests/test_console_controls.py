@@ -155,6 +155,13 @@ def test_a_pilot_commands_a_selection_replaces_goals_and_holds(
         assert float(going.group(2)) == pytest.approx(250.0, abs=2.0)
         shot(page, "controls-replaced-goal")
 
+        # A command that does not replace goals is refused while one runs, which runs on.
+        page.click("#cmd-hover")
+        _row(page, "d1", "hover: rejected")
+        assert "busy with move_to" in _row(page, "d1", "hover: rejected")
+        executing = page.text_content(".drone-row[data-drone='d1'] .drone-executing") or ""
+        assert "move_to(" in executing
+
         # Stop/Hold halts it mid-flight, far from the goal.
         time.sleep(0.6)
         page.click("#cmd-hold")
