@@ -27,7 +27,7 @@ export async function showLive(root, liveId) {
   const commandBox = el("div", { id: "commands" });
   const rows = new Map();
   const droneList = el("ul", { id: "drone-list" }, world.drones.map((d) => {
-    const pick = el("input", { type: "checkbox", class: "pick", "data-drone": d.id,
+    const pick = el("input", { type: "checkbox", class: "pick", "data-drone": d.id, hidden: scene.commands ? null : "",
       onchange: (e) => { if (e.target.checked) map.chosen.add(d.id); else map.chosen.delete(d.id); changed(); } });
     const row = el("li", { class: "drone-row", "data-drone": d.id },
       el("div", { class: "drone-head" }, pick,
@@ -44,7 +44,7 @@ export async function showLive(root, liveId) {
       el("section", { class: "views" }, el("div", { class: "pane" }, canvas), el("div", { class: "pane" }, box3d)),
       el("aside", { class: "side" }, el("p", { class: "task-text", id: "live-task", hidden: scene.task ? null : "" }, scene.task || ""),
         legend(), commandBox,
-        el("div", { class: "buttons" }, el("button", { id: "pick-all", onclick: () => pickAll(true) }, "select all"),
+        el("div", { class: "buttons", hidden: scene.commands ? null : "" }, el("button", { id: "pick-all", onclick: () => pickAll(true) }, "select all"),
           el("button", { id: "pick-none", onclick: () => pickAll(false) }, "select none")),
         droneList, panelBox)));
   const map = new Map2D(canvas, { onClick: (hit) => clicked(hit) });
@@ -89,14 +89,17 @@ export async function showLive(root, liveId) {
   }
 
   function renderRows() {
+    // Each frame: only the texts that changed are touched (a big swarm has a long list).
+    const put = (node, text, cls = null) => {
+      if (node.textContent !== text) node.textContent = text;
+      if (cls !== null && node.className !== cls) node.className = cls;
+    };
     for (const d of state.drones) {
       const { row } = rows.get(d.id);
       const act = state.activity[d.id] || {};
-      row.querySelector(".drone-state").textContent = ` ${d.mode ?? "–"} · ${fmt(d.z, 1, " m")} · ${fmt(d.bat, 0, " %")}`;
-      row.querySelector(".drone-executing").textContent = act.executing ? `▶ ${act.executing.name}(${argsText(act.executing.args)})` : "";
-      const out = row.querySelector(".drone-outcome");
-      out.textContent = outcomeText(act.last);
-      out.className = `drone-outcome status-${act.last ? act.last.status : "none"}`;
+      put(row.querySelector(".drone-state"), ` ${d.mode ?? "–"} · ${fmt(d.z, 1, " m")} · ${fmt(d.bat, 0, " %")}`);
+      put(row.querySelector(".drone-executing"), act.executing ? `▶ ${act.executing.name}(${argsText(act.executing.args)})` : "");
+      put(row.querySelector(".drone-outcome"), outcomeText(act.last), `drone-outcome status-${act.last ? act.last.status : "none"}`);
     }
   }
 

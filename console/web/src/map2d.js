@@ -33,7 +33,7 @@ export class Map2D {
     this.selected = null;
     this.chosen = new Set();  // drones picked for a command (live view)
     this.labelBoxes = [];  // where drone labels went in the last draw: {text, x, y, w, h}
-    this._occupied = [];
+    this._occupied = new Occupancy();
     this.toggles = { perception: false, task: false, labels: true };
     this.overlays = [];
     this.view = { scale: 1, cx: 0, cy: 0 };
@@ -158,7 +158,7 @@ export class Map2D {
     ctx.setTransform(this.dpr, 0, 0, this.dpr, 0, 0);
     ctx.fillStyle = COLORS.background;
     ctx.fillRect(0, 0, this.width, this.height);
-    this._occupied = [];
+    this._occupied = new Occupancy();
     if (!this.world) return;
     this._grid();
     this._targets();
@@ -251,7 +251,7 @@ export class Map2D {
     ctx.moveTo(sx - half, sy - half); ctx.lineTo(sx + half, sy + half);
     ctx.moveTo(sx + half, sy - half); ctx.lineTo(sx - half, sy + half);
     ctx.strokeStyle = COLORS.wall; ctx.lineWidth = 1.5; ctx.stroke();
-    this._occupied.push({ x: sx - half, y: sy - half, w: 2 * half, h: 2 * half });
+    this._occupied.add({ x: sx - half, y: sy - half, w: 2 * half, h: 2 * half });
   }
 
   _label(text, [x, y], color, dy = 0, center = false) {
@@ -263,7 +263,7 @@ export class Map2D {
     ctx.fillStyle = color;
     ctx.fillText(text, sx, sy - dy);
     const w = ctx.measureText(text).width;
-    this._occupied.push({ x: sx - w / 2, y: center ? sy - 6 : sy - dy - 12, w, h: 12 });
+    this._occupied.add({ x: sx - w / 2, y: center ? sy - 6 : sy - dy - 12, w, h: 12 });
   }
 
   _trails() {
@@ -319,7 +319,7 @@ export class Map2D {
       }
       ctx.beginPath(); ctx.arc(sx, sy, DRONE_RADIUS_PX, 0, 2 * Math.PI);
       ctx.fillStyle = COLORS.drone; ctx.fill();
-      this._occupied.push({ x: sx - DRONE_RADIUS_PX, y: sy - DRONE_RADIUS_PX, w: 2 * DRONE_RADIUS_PX, h: 2 * DRONE_RADIUS_PX });
+      this._occupied.add({ x: sx - DRONE_RADIUS_PX, y: sy - DRONE_RADIUS_PX, w: 2 * DRONE_RADIUS_PX, h: 2 * DRONE_RADIUS_PX });
     }
     const clusters = clusterOf(placed, CLUSTER_PX);
     for (const c of clusters) if (c.members.length > 1) this._badge(c);
@@ -342,7 +342,7 @@ export class Map2D {
     ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 1.5; ctx.stroke();
     ctx.font = "bold 10px sans-serif"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
     ctx.fillStyle = "#1b1b1b"; ctx.fillText(String(c.members.length), bx, by + 0.5);
-    this._occupied.push({ x: bx - 7, y: by - 7, w: 14, h: 14 });
+    this._occupied.add({ x: bx - 7, y: by - 7, w: 14, h: 14 });
   }
 
   _droneLabel(c, force) {
@@ -366,7 +366,7 @@ export class Map2D {
         const y = c.y + uy * ring + (uy < 0 ? -h : uy === 0 ? -h / 2 : 0);
         const spot = { x, y, w, h };
         if (x < 0 || y < 0 || x + w > this.width || y + h > this.height) continue;
-        if (this._occupied.some((o) => overlaps(o, spot))) continue;
+        if (this._occupied.hits(spot)) continue;
         box = spot; leader = far; break;
       }
       if (box) break;
@@ -387,7 +387,7 @@ export class Map2D {
       ctx.font = "10px sans-serif"; ctx.fillStyle = STATUS_COLORS[outcome.status] || "#c0392b";
       ctx.fillText(outcome.text, box.x + 2, box.y + 14);
     }
-    this._occupied.push(box);
+    this._occupied.add(box);
     this.labelBoxes.push({ text: title, ids, ...box });
   }
 
@@ -410,6 +410,29 @@ const LABEL_SPOTS = [[1, 0], [-1, 0], [0, 1], [0, -1], [1, 1], [-1, 1], [1, -1],
 
 function overlaps(a, b) {
   return a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+}
+
+// Screen boxes already drawn on, bucketed in a grid: a label's candidate spot is checked
+// against the boxes of the cells it covers only.
+class Occupancy {
+  constructor(cellPx = 48) { this.cell = cellPx; this.cells = new Map(); }
+
+  _keys(box, visit) {
+    const c = this.cell;
+    for (let i = Math.floor(box.x / c); i <= Math.floor((box.x + box.w) / c); i++) {
+      for (let j = Math.floor(box.y / c); j <= Math.floor((box.y + box.h) / c); j++) visit(`${i},${j}`);
+    }
+  }
+
+  add(box) {
+    this._keys(box, (key) => { if (!this.cells.has(key)) this.cells.set(key, []); this.cells.get(key).push(box); });
+  }
+
+  hits(box) {
+    let hit = false;
+    this._keys(box, (key) => { if (!hit) hit = (this.cells.get(key) || []).some((o) => overlaps(o, box)); });
+    return hit;
+  }
 }
 
 // Drones linked by gaps under `px` on screen (single link: a chain of close drones is one
