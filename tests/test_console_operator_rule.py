@@ -95,6 +95,7 @@ def test_console_flight_commands_are_refused_while_a_task_runs(
         page.wait_for_function("(document.getElementById('cmd-result').textContent || '')"
                                ".includes('benchmark task t01')", timeout=15_000)
         assert "refused" in (page.text_content("#cmd-result") or "")
+        assert page.get_attribute("#cmd-result", "class") == "bad"
         shot(page, "operator-rule-refused")
     assert _altitude(hub, TASKED, "d1") == pytest.approx(0.0, abs=0.1)
 

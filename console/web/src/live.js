@@ -105,12 +105,18 @@ export async function showLive(root, liveId) {
 
   async function send(tool, args, argsByDrone = null) {
     const ids = chosen();
-    if (!ids.length) { state.pending = "select a drone first (click it on the map or tick it in the list)"; renderCommands(); return {}; }
+    if (!ids.length) {
+      state.pending = "select a drone first (click it on the map or tick it in the list)";
+      state.pendingClass = "bad";
+      renderCommands();
+      return {};
+    }
     return sendTo(ids, tool, args, argsByDrone);
   }
 
   async function sendTo(ids, tool, args, argsByDrone = null) {
     state.pending = `${tool} sent to ${ids.join(", ")}…`;
+    state.pendingClass = "muted";
     renderCommands();
     const path = `/api/live/${encodeURIComponent(liveId)}/command`;
     let results = {};
@@ -122,8 +128,10 @@ export async function showLive(root, liveId) {
       if (!answer.results && ids.length > 1) throw new Error(answer.message || answer.detail || "no results");
       const parts = Object.entries(results).map(([id, r]) => (ids.length === 1 ? `${r.status} — ${r.message || ""}` : `${id} ${r.status}${GOOD.has(r.status) ? "" : ` (${r.message})`}`));
       state.pending = `${tool}: ${parts.join("; ")}`;
+      state.pendingClass = Object.values(results).every((r) => GOOD.has(r.status)) ? "ok" : "bad";
     } catch (error) {
       state.pending = `${tool}: refused — ${error.message}`;
+      state.pendingClass = "bad";
     }
     for (const [id, r] of Object.entries(results)) {
       if (GOOD.has(r.status) && tool !== "move_to") state.markers.delete(id);  // a new goal
@@ -180,7 +188,7 @@ export async function showLive(root, liveId) {
         el("button", { id: "cmd-hover", onclick: () => send("hover", { duration_s: Number(dur.value) }) }, "Hover"),
         el("button", { id: "cmd-land", onclick: () => send("land", {}) }, "Land"),
         el("button", { id: "cmd-return_home", onclick: () => send("return_home", {}) }, "Return home")),
-      el("p", { id: "cmd-result", class: "muted" }, state.pending || ""));
+      el("p", { id: "cmd-result", class: state.pendingClass || "muted" }, state.pending || ""));
   }
 
   function clicked(hit) {
