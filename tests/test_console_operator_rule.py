@@ -48,13 +48,20 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Hub]
         return console_for_hub(app, hub, keys)
 
     async def run() -> None:
-        await serve_rest(paths, port=unused_tcp_port(), keys=["operator=op", "admin=adm"],
-                         out=io.StringIO(), extend=extend,
+        keys = [f"agent:{TASKED}=ak", "operator=op", "admin=adm"]
+        await serve_rest(paths, port=unused_tcp_port(), keys=keys, out=io.StringIO(),
+                         extend=extend,
                          on_ready=lambda url: ready.set_result(url))
 
     task = asyncio.run_coroutine_threadsafe(run(), loop.loop)
+    deadline = time.monotonic() + 60
+    while not ready.done():  # a server that failed to start says why
+        if task.done():
+            task.result()
+        assert time.monotonic() < deadline, "serve did not start in 60 s"
+        time.sleep(0.05)
     try:
-        yield loop.run(asyncio.wait_for(asyncio.shield(ready), 60)), hubs[0]
+        yield ready.result(), hubs[0]
     finally:
         task.cancel()
         with contextlib.suppress(BaseException):
@@ -80,6 +87,11 @@ def test_console_flight_commands_are_refused_while_a_task_runs(
             detail = refused.json()["detail"]
             assert "benchmark task t01" in detail and RULE in detail
             assert "flight commands from the console" in detail
+    agent = httpx.post(command, json={"drone_id": "d1", "tool": "hold"},
+                       headers={"X-API-Key": "ak"})
+    assert agent.status_code == 403  # an agent never gets the console, commands included
+    assert httpx.get(f"{url}/console/api/editor/shipped",
+                     headers={"X-API-Key": "ak"}).status_code == 403
     time.sleep(1.0)
     assert _altitude(hub, TASKED, "d1") == pytest.approx(0.0, abs=0.1)  # nothing flew
 
