@@ -100,6 +100,20 @@ def test_crowded_drones_are_clustered_and_labels_never_overprint(
         assert all(len(label["ids"]) == 1 for label in labels)
 
 
+def test_a_click_on_a_cluster_badge_zooms_into_it(browser: Any, console_url: str) -> None:
+    with open_page(browser, f"{console_url}/editor") as page:
+        _open_crowded(page)
+        scale = map_view(page)["scale"]
+        badge = page.evaluate("window.consoleView.map._badges[0]")
+        assert len(badge["ids"]) == 30
+        box = page.locator("#map2d").bounding_box()
+        page.mouse.click(box["x"] + badge["x"], box["y"] + badge["y"])
+        assert map_view(page)["scale"] == pytest.approx(4 * scale)
+        assert page.evaluate("window.consoleView.state.selected") is None  # nothing picked
+        _, clusters, _ = _layout(page)
+        assert len(clusters) > 1
+
+
 def test_a_point_obstacle_is_a_crossed_square_not_a_dot(browser: Any, console_url: str) -> None:
     session = json.loads((ROOT / "benchmark/sessions" / f"{CROWDED}.json").read_text())
     masts = [o for o in session["obstacles"] if o["type"] == "point"]

@@ -1,9 +1,10 @@
 // The 2D top-down map: metres east (x) and north (y), north up, with a scale bar; obstacles,
 // targets, drones with heading and fading trails; pan (drag) and zoom (wheel); clicks report
 // the world point and the drone under the pointer. Drones closer on screen than a dot's width
-// are drawn as a cluster (one count badge, one label naming them); labels are placed where they
-// overprint nothing (around the dot, further out with a leader line, or left out). Point
-// obstacles are crossed squares, never dots a drone could be taken for.
+// are drawn as a cluster (one count badge, which a click zooms into; one label naming them);
+// labels are placed where they overprint nothing (around the dot, further out with a leader
+// line, or left out). Point obstacles are crossed squares, never dots a drone could be taken
+// for.
 
 import { shapeOutline } from "./world.js";
 
@@ -96,6 +97,20 @@ export class Map2D {
     return best;
   }
 
+  badgeAt(px, py) {
+    return (this._badges || []).find((b) => Math.hypot(b.x - px, b.y - py) <= 9) || null;
+  }
+
+  zoomAt(px, py, factor) {
+    // Zoom by `factor` keeping the world point under screen point (px, py) where it is.
+    const [wx, wy] = this.toWorld(px, py);
+    this.view.scale = Math.min(200, Math.max(0.01, this.view.scale * factor));
+    const [nx, ny] = this.toWorld(px, py);
+    this.view.cx += wx - nx;
+    this.view.cy += wy - ny;
+    this.redraw();
+  }
+
   _bindInput() {
     let drag = null;
     this.canvas.addEventListener("mousedown", (e) => {
@@ -118,7 +133,10 @@ export class Map2D {
     });
     window.addEventListener("mouseup", (e) => {
       if (drag && drag.moved && drag.handler) drag.handler.end();
-      if (drag && !drag.moved && this.onClick && e.target === this.canvas) {
+      const badge = drag && !drag.moved && e.target === this.canvas ? this.badgeAt(e.offsetX, e.offsetY) : null;
+      if (badge) {
+        this.zoomAt(badge.x, badge.y, 4);  // a cluster's count badge: zoom in to split it
+      } else if (drag && !drag.moved && this.onClick && e.target === this.canvas) {
         const [x, y] = this.toWorld(e.offsetX, e.offsetY);
         this.onClick({ x, y, drone: this.droneAt(e.offsetX, e.offsetY), event: e });
       }
@@ -126,13 +144,7 @@ export class Map2D {
     });
     this.canvas.addEventListener("wheel", (e) => {
       e.preventDefault();
-      const [wx, wy] = this.toWorld(e.offsetX, e.offsetY);
-      const factor = Math.exp(-e.deltaY * 0.0015);
-      this.view.scale = Math.min(200, Math.max(0.01, this.view.scale * factor));
-      const [nx, ny] = this.toWorld(e.offsetX, e.offsetY);
-      this.view.cx += wx - nx;
-      this.view.cy += wy - ny;
-      this.redraw();
+      this.zoomAt(e.offsetX, e.offsetY, Math.exp(-e.deltaY * 0.0015));
     }, { passive: false });
   }
 
@@ -322,6 +334,7 @@ export class Map2D {
       this._occupied.add({ x: sx - DRONE_RADIUS_PX, y: sy - DRONE_RADIUS_PX, w: 2 * DRONE_RADIUS_PX, h: 2 * DRONE_RADIUS_PX });
     }
     const clusters = clusterOf(placed, CLUSTER_PX);
+    this._badges = [];
     for (const c of clusters) if (c.members.length > 1) this._badge(c);
     this.clusters = clusters.map((c) => ({ ids: c.members.map((m) => m.d.id), x: c.x, y: c.y }));
     this.labelBoxes = [];
@@ -342,6 +355,7 @@ export class Map2D {
     ctx.strokeStyle = "#1b1b1b"; ctx.lineWidth = 1.5; ctx.stroke();
     ctx.font = "bold 10px sans-serif"; ctx.textAlign = "center"; ctx.textBaseline = "middle";
     ctx.fillStyle = "#1b1b1b"; ctx.fillText(String(c.members.length), bx, by + 0.5);
+    this._badges.push({ x: bx, y: by, ids: c.members.map((m) => m.d.id) });
     this._occupied.add({ x: bx - 7, y: by - 7, w: 14, h: 14 });
   }
 
