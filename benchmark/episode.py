@@ -70,7 +70,9 @@ CLOCKS = ("lockstep", "stepped")
 class EpisodeOptions:
     trial: int = 0
     physics_hz: float = 50.0
-    agent_wall_timeout_s: float = 900.0  # a hung agent ends as an agent error
+    # a hung agent (no tool call and no simulated time for this many wall seconds) is stopped
+    # and its task ends as an agent error (`_guarded`)
+    agent_wall_timeout_s: float = 600.0
     clock: str = "lockstep"
     link_faults: Mapping[str, Any] | None = None  # LinkFaults.to_json(); else the session's
 
@@ -201,17 +203,54 @@ def task_error_record(session: Session, task: TaskSpec, agent: str, trial: int,
     return error_record(_base_record(session, task, agent, trial), error)
 
 
+HUNG_POLL_S = 0.25  # how often the hang guard looks for progress
+CANCEL_GRACE_S = 5.0  # how long a stopped agent may take to unwind
+
+
+class AgentHung(Exception):
+    """The agent made no tool call and let no simulated time pass for too long."""
+
+
+async def _guarded(run: asyncio.Task[None], tools: AgentTools, services: SwarmServices,
+                   timeout_s: float) -> None:
+    """Await the agent's run; stop it once `timeout_s` wall seconds pass in which it made no
+    tool call and simulated time did not move. An agent that acts, or waits on the world,
+    never meets this guard, so no other record can depend on wall time; a hung one stops the
+    lockstep clock (and an idle swarm's stepped one), so its budget would never run out."""
+    progress = (tools.tool_calls, services.clock_s())
+    idle_since = time.monotonic()
+    while True:
+        try:
+            await asyncio.wait({run}, timeout=HUNG_POLL_S)
+        except asyncio.CancelledError:  # the run itself is stopping: so does the agent
+            run.cancel()
+            raise
+        if run.done():
+            return run.result()
+        now = (tools.tool_calls, services.clock_s())
+        if now != progress:
+            progress, idle_since = now, time.monotonic()
+        elif time.monotonic() - idle_since >= timeout_s:
+            break
+    run.cancel()
+    await asyncio.wait({run}, timeout=CANCEL_GRACE_S)
+    run.add_done_callback(lambda t: t.cancelled() or t.exception())  # never "not retrieved"
+    ignored = "" if run.done() else "; it ignored being cancelled"
+    raise AgentHung(f"the agent made no tool call and simulated time did not advance for "
+                    f"{timeout_s:g} s of wall time (--agent-timeout-s): stopped as hung{ignored}")
+
+
 async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
                      options: EpisodeOptions, services: SwarmServices
                      ) -> tuple[str, str | None]:
     thinker = Thinker(services)  # the agent thinks first: the clock waits for it
     try:
-        await asyncio.wait_for(run_as(thinker, agent.run(task, tools)),
-                               options.agent_wall_timeout_s)
+        await _guarded(run_as(thinker, agent.run(task, tools)), tools, services,
+                       options.agent_wall_timeout_s)
     except BudgetExhausted as spent:
         return spent.reason, str(spent)
-    except TimeoutError:
-        return "agent_error", f"the agent did not finish within {options.agent_wall_timeout_s:g} s"
+    except AgentHung as hung:
+        return "agent_error", str(hung)
     except Exception as error:  # a crashing agent ends its task, never the run
         where = traceback.extract_tb(error.__traceback__)[-1]
         return "agent_error", (f"{type(error).__name__}: {error} "
