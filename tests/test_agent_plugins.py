@@ -114,6 +114,8 @@ def test_factories_get_the_run_options_and_teams_one_instance_per_drone(
     assert isinstance(member, PluginAgent)
     assert member.agent.options.drone_id == "d2" and member.agent.options.agent == spec
     assert make_agent("noop", session, options).name == "noop"
+    broken = make_agent(f"{plugins}:broken_factory", session, options)
+    assert isinstance(broken, BrokenAgent) and isinstance(broken.error, KeyError)
 
 
 def _run(session_file: Path, out: Path, agent: str, **kw: Any) -> list[dict[str, Any]]:
