@@ -150,6 +150,8 @@ def _run(args: argparse.Namespace) -> int:
     from benchmark.report_html import check_inspector_url
     from benchmark.results import read_records
     check_spec(args.agent)  # a bad --agent is one line, before anything starts
+    if not args.agent_timeout_s > 0:
+        raise ValueError(f"--agent-timeout-s must be > 0, got {args.agent_timeout_s:g}")
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
     else:

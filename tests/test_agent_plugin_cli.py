@@ -116,3 +116,7 @@ def test_bad_specs_are_one_line_and_exit_2_before_anything_starts(tmp_path: Path
         assert run.returncode == 2, (spec, run.stderr)
         assert run.stderr.count("\n") == 1 and reason in run.stderr, (spec, run.stderr)
         assert run.stdout == "" and not out.exists(), spec
+    for bad in ("0", "-5", "nan"):
+        run = _mavswarm("bench", "run", "--agent", "noop", "--agent-timeout-s", bad,
+                        "--sessions", "whatever.json", cwd=tmp_path, timeout=60.0)
+        assert run.returncode == 2 and "--agent-timeout-s must be > 0" in run.stderr, bad
