@@ -177,19 +177,19 @@ def _file_module(path: Path) -> Any:
 
 def _load(spec: AgentSpec, base_dir: str) -> Any:
     """The object a plug-in spec names (AgentSpecError, one line, when it cannot be had)."""
+    where = spec.target
     try:
         if spec.kind == "entry_point":
             ep = _entry_point(spec)
             where = f"entry point {ep.value} of {_dist(ep)}"
             return ep.load()
         if spec.kind == "file":
-            path = Path(base_dir or ".", spec.target).expanduser().resolve()
+            path = (Path(base_dir or ".") / Path(spec.target).expanduser()).resolve()
             where = str(path)
             if not path.is_file():
                 raise AgentSpecError(f"--agent {spec.text}: no file {path}")
             owner = _file_module(path)
         else:
-            where = spec.target
             owner = importlib.import_module(spec.target)
         for part in spec.attr.split("."):
             if not hasattr(owner, part):
