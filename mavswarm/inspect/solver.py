@@ -4,8 +4,9 @@ It runs the same episode `bench run` does (`benchmark.episode.run_one_task`: the
 swarm and gateway, the operator's reset, the task's faults, the clock, the agent under its
 budget, the play-out) with the ReAct agent thinking through inspect's model. The task's record
 (finish, tool calls, simulated time, tokens; as `bench run` writes it, less the replay) goes
-into the sample's store under ``mavswarm/record``; the ground truth of the task's window is
-kept in this process for the scorer, which runs the hidden checks on it.
+into the sample's store under ``mavswarm/record``; a copy of the ground truth as it stood at
+the window's end (the clock held there) is kept in this process for the scorer, which runs the
+hidden checks on it.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from inspect_ai.solver import Generate, Solver, TaskState, solver
 from benchmark.episode import CLOCKS, EpisodeOptions, run_one_task
 from benchmark.session_file import Session, TaskSpec
 from benchmark.validators import CheckContext
+from emulator.truth import TruthRecorder
 from mavswarm.inspect.agent import InspectReactAgent
 from mavswarm.inspect.dataset import load_session
 
@@ -57,6 +59,8 @@ def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float 
     """
     if clock not in CLOCKS:
         raise ValueError(f"unknown clock {clock!r} (known: {', '.join(CLOCKS)})")
+    if max_turns < 1:
+        raise ValueError(f"max_turns must be >= 1, got {max_turns}")
 
     async def solve(state: TaskState, generate: Generate) -> TaskState:
         session = load_session(state.metadata["session_path"])
@@ -67,8 +71,13 @@ def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float 
                                  agent_wall_timeout_s=agent_wall_timeout_s)
         agent = InspectReactAgent(state, max_turns=max_turns)
         kept: list[CheckContext] = []
-        record: dict[str, Any] = await run_one_task(session, task, agent, options,
-                                                    truth=kept.append)
+
+        def keep(context: CheckContext) -> None:  # at the window's end, the clock held
+            history = context.history
+            frozen = history.snapshot() if isinstance(history, TruthRecorder) else history
+            kept.append(CheckContext(frozen, context.scenario, context.t0_s, context.t1_s))
+
+        record: dict[str, Any] = await run_one_task(session, task, agent, options, truth=keep)
         record.pop("replay", None)
         state.store.set(RECORD_KEY, record)
         _held[state.uuid] = HeldTruth(session, task, kept[0] if kept else None)
