@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import subprocess
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import pytest
 
@@ -25,6 +25,7 @@ from inspect_ai.model import (
 )
 from inspect_ai.tool import ToolCall
 
+from agent_contract import AgentTools
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
 from benchmark.suite import SMOKE_TASKS, suite_paths
@@ -76,12 +77,11 @@ def test_smoke_eval_on_mockllm_scores_as_a_do_nothing_agent(tmp_path: Path) -> N
         assert (record["finish"], record["error"], record["tool_calls"]) == ("finished", None, 0)
         score = sample.scores["swarm_checks"] if sample.scores else None
         assert score is not None and score.value == "I"
-        expected = noop[str(sample.id)]
+        expected, meta = noop[str(sample.id)], score.metadata or {}
         assert not expected["passed"]
-        assert _verdicts(score.metadata["checks"]["leaves"]) == _verdicts(expected["checks"])
-        assert score.metadata["checks_total"] == expected["checks_total"]
-        assert score.metadata["check_ratio"] == expected["checks_passed"] / expected[
-            "checks_total"]
+        assert _verdicts(meta["checks"]["leaves"]) == _verdicts(expected["checks"])
+        assert meta["checks_total"] == expected["checks_total"]
+        assert meta["check_ratio"] == expected["checks_passed"] / expected["checks_total"]
         assert record["sim_time_s"] == expected["sim_time_s"]
     metrics = log.results.scores[0].metrics if log.results else {}
     assert metrics["accuracy"].value == 0.0
@@ -136,8 +136,9 @@ def test_scripted_mockllm_and_bench_run_agree_on_a_transcript(tmp_path: Path) ->
                                 "--out", str(tmp_path / "bench")])
     assert status == 0
     (bench,) = read_records(tmp_path / "bench" / "results.jsonl")
-    assert bench["passed"] and score.metadata["checks_passed"] == bench["checks_passed"]
-    assert _verdicts(score.metadata["checks"]["leaves"]) == _verdicts(bench["checks"])
+    meta = score.metadata or {}
+    assert bench["passed"] and meta["checks_passed"] == bench["checks_passed"]
+    assert _verdicts(meta["checks"]["leaves"]) == _verdicts(bench["checks"])
     for key in ("finish", "tool_calls", "sim_time_s", "tokens", "checks", "end_state"):
         assert record[key] == bench[key], key
     # The model read the same results, call for call.
@@ -158,7 +159,7 @@ def test_tools_are_the_registrys() -> None:
     hidden = json.dumps(sample.metadata)
     assert "checks" not in hidden and "oracle" not in hidden
     from mavswarm.inspect.tools import tool_defs
-    defs = tool_defs(default_registry(), tools=None)  # definitions only: nothing is called
+    defs = tool_defs(default_registry(), cast(AgentTools, None))  # definitions: no call runs
     specs = default_registry().specs()
     assert [d.name for d in defs] == [s.name for s in specs]
     for d, s in zip(defs, specs, strict=True):
@@ -170,8 +171,8 @@ def test_tools_are_the_registrys() -> None:
 def test_family_and_suite_tasks_hold_their_tasks() -> None:
     easy = area_search(level="easy")
     assert len(easy.dataset) == 5 * 20
-    assert {s.metadata["family"] for s in easy.dataset} == {"area_search"}
-    assert {s.metadata["level"] for s in easy.dataset} == {"easy"}
+    assert {(s.metadata or {})["family"] for s in easy.dataset} == {"area_search"}
+    assert {(s.metadata or {})["level"] for s in easy.dataset} == {"easy"}
     assert len(smoke().dataset) == 18
     assert len(full(task_limit=1).dataset) == 125
 
