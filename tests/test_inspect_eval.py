@@ -28,13 +28,13 @@ from inspect_ai.tool import ToolCall
 from agent_contract import AgentTools
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
-from benchmark.suite import SMOKE_TASKS, suite_paths
+from benchmark.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
 from llm_tools import default_registry
 from llm_tools.agents.react import SYSTEM_PROMPT, task_message
 from mavswarm.cli import main as mavswarm_main
 from mavswarm.inspect import area_search, full, sessions, smoke
 from mavswarm.inspect.solver import RECORD_KEY
-from tests.bench_fixtures import small_session, write_json
+from tests.bench_fixtures import overcrowded, small_session, write_json
 from tests.cli_fixtures import ROOT
 from tests.inspect_fixtures import INSPECT, inspect_env
 from tests.scripted_llm import call, scripted_llm
@@ -148,6 +148,48 @@ def test_scripted_mockllm_and_bench_run_agree_on_a_transcript(tmp_path: Path) ->
     assert all(json.loads(r)["status"] == "ok" for r in inspect_results)
 
 
+@pytest.mark.mavsdk
+def test_a_sample_limit_ends_the_task_which_is_still_flown_out_and_scored(
+        tmp_path: Path) -> None:
+    data = small_session(["takeoff_hold"])
+    op = data["tasks"][0]["oracle"][0][0]
+    path = write_json(tmp_path / "hold.json", data)
+    take_off = ModelOutput.for_tool_call(
+        "mockllm", "take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]})
+    take_off.usage = USAGE
+    model = get_model("mockllm/model", custom_outputs=[take_off])
+    # system, user, the take-off call: its result would be the fourth message.
+    (log,) = inspect_eval(sessions(sessions=str(path)), model=model, display="none",
+                          message_limit=3, log_dir=str(tmp_path / "logs"))
+    assert log.samples is not None
+    (sample,) = log.samples
+    record = sample.store[RECORD_KEY]
+    assert (record["finish"], record["error"], record["tool_calls"]) == ("finished", None, 1)
+    score = sample.scores["swarm_checks"] if sample.scores else None
+    assert score is not None and score.value == "C", score and score.explanation
+
+
+def test_tasks_that_cannot_run_score_incorrect_with_the_reason(tmp_path: Path) -> None:
+    broken = small_session(["takeoff_hold"])
+    broken["tasks"][0]["checks"] = {"endpoint": "no_such_check", "parameters": {}}
+    crowded = overcrowded(small_session(["fleet_launch"]))  # 251 drones: no swarm can start
+    crowded["id"] = "crowded"
+    paths = [str(write_json(tmp_path / "broken.json", broken)),
+             str(write_json(tmp_path / "crowded.json", crowded))]
+    model = get_model("mockllm/model", custom_outputs=[])  # never asked
+    (log,) = inspect_eval(sessions(sessions=paths), model=model, display="none",
+                          log_dir=str(tmp_path / "logs"))
+    assert log.status == "success" and log.samples is not None
+    explained = {}
+    for sample in log.samples:
+        score = sample.scores["swarm_checks"] if sample.scores else None
+        assert score is not None and score.value == "I"
+        assert sample.store[RECORD_KEY]["finish"] == "task_error"
+        explained[Path(str(sample.metadata["session_path"])).name] = score.explanation
+    assert "unknown endpoint 'no_such_check'" in explained["broken.json"]
+    assert "the session cannot start" in explained["crowded.json"]
+
+
 def test_tools_are_the_registrys() -> None:
     task = sessions(sessions="area_search-easy-1", task_limit=1)
     sample = task.dataset[0]
@@ -184,6 +226,9 @@ def test_family_and_suite_tasks_hold_their_tasks() -> None:
     (lambda: smoke(clock="warp"), "unknown clock 'warp'"),
     (lambda: sessions(sessions="area_search-easy-1", task_limit=0), "task_limit must be >= 1"),
     (lambda: smoke(max_turns=0), "max_turns must be >= 1"),
+    (lambda: sessions(sessions=["area_search-easy-1", str(SESSIONS_DIR /
+                                                          "area_search-easy-1.json")]),
+     "two session files hold session 'area_search-easy-1'"),
 ])
 def test_bad_task_parameters_are_refused(make: Any, message: str) -> None:
     with pytest.raises(ValueError) as raised:

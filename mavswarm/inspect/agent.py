@@ -19,6 +19,7 @@ from inspect_ai.model import (
     get_model,
 )
 from inspect_ai.solver import TaskState
+from inspect_ai.tool import ToolDef
 from inspect_ai.util import LimitExceededError
 
 from agent_contract import AgentTask, AgentTools
@@ -47,16 +48,20 @@ class InspectReactAgent:
         state, model = self.state, self.model or get_model()
         defs = tool_defs(self.registry, tools)
         state.tools = list(defs)
-        state.messages = [ChatMessageSystem(content=SYSTEM_PROMPT),
-                          ChatMessageUser(content=task_message(task.text, tools.drone_ids))]
-        nudges = 0
-        stop = f"stopped: the budget of {self.max_turns} model turns is spent"
+        try:
+            state.messages = [ChatMessageSystem(content=SYSTEM_PROMPT),
+                              ChatMessageUser(content=task_message(task.text, tools.drone_ids))]
+            stop = await self._loop(model, defs, tools)
+        except LimitExceededError as limit:  # one of inspect's sample limits
+            stop = f"stopped: {limit}"
+        if not tools.finished:
+            tools.finish(stop or "")
+
+    async def _loop(self, model: Model, defs: list[ToolDef], tools: AgentTools) -> str | None:
+        """Model turns until `finish` (None) or a reason to stop (returned)."""
+        state, nudges = self.state, 0
         for _ in range(self.max_turns):
-            try:
-                output = await model.generate(state.messages, tools=defs)
-            except LimitExceededError as limit:
-                stop = f"stopped: {limit.message}"
-                break
+            output = await model.generate(state.messages, tools=defs)
             state.output = output
             if output.usage is not None:
                 tools.add_tokens(output.usage.input_tokens, output.usage.output_tokens)
@@ -74,13 +79,11 @@ class InspectReactAgent:
                         content=result_text(result), tool_call_id=call.id,
                         function=call.function))
                 if tools.finished:
-                    return
+                    return None
             elif nudges >= MAX_NUDGES:
-                stop = (f"stopped: the model answered without a tool call {nudges + 1} times "
+                return (f"stopped: the model answered without a tool call {nudges + 1} times "
                         "(text instead of tool calls)")
-                break
             else:
                 nudges += 1
                 state.messages.append(ChatMessageUser(content=NUDGE))
-        if not tools.finished:
-            tools.finish(stop)
+        return f"stopped: the budget of {self.max_turns} model turns is spent"

@@ -76,9 +76,14 @@ def session_dataset(paths: Sequence[Path], task_limit: int | None = None, *,
     """One sample per task of each session (the first `task_limit` of each, if given)."""
     if task_limit is not None and task_limit < 1:
         raise ValueError(f"task_limit must be >= 1, got {task_limit}")
-    samples = []
+    samples: list[Sample] = []
+    seen: dict[str, Path] = {}
     for path in paths:
         session = load_session(path)
+        if session.id in seen:
+            raise ValueError(f"two session files hold session {session.id!r}: {seen[session.id]} "
+                             f"and {path}")
+        seen[session.id] = path
         drones = [v.id for v in session.scenario.vehicles]
         for task in session.tasks[:task_limit]:
             samples.append(Sample(
