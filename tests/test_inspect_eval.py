@@ -23,6 +23,7 @@ from inspect_ai.model import (
     ModelUsage,
     get_model,
 )
+from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
@@ -32,7 +33,7 @@ from benchmark.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
 from llm_tools import default_registry
 from llm_tools.agents.react import SYSTEM_PROMPT, task_message
 from mavswarm.cli import main as mavswarm_main
-from mavswarm.inspect import area_search, full, sessions, smoke
+from mavswarm.inspect import area_search, full, sessions, smoke, swarm_task
 from mavswarm.inspect.solver import RECORD_KEY
 from tests.bench_fixtures import overcrowded, small_session, write_json
 from tests.cli_fixtures import ROOT
@@ -167,6 +168,36 @@ def test_a_sample_limit_ends_the_task_which_is_still_flown_out_and_scored(
     assert (record["finish"], record["error"], record["tool_calls"]) == ("finished", None, 1)
     score = sample.scores["swarm_checks"] if sample.scores else None
     assert score is not None and score.value == "C", score and score.explanation
+
+
+@pytest.mark.mavsdk
+@pytest.mark.parametrize(("calls", "finish", "value"), [
+    (2, "finished", "C"),  # take off, finish
+    (1, "tool_call_budget", "C"),  # take off, then a hover past the budget ends the task
+])
+def test_an_inspect_solver_plays_a_task_with_the_registry_tools(
+        tmp_path: Path, calls: int, finish: str, value: str) -> None:
+    data = small_session(["takeoff_hold"])
+    data["tasks"][0]["budget"]["tool_calls"] = calls
+    op = data["tasks"][0]["oracle"][0][0]
+    outputs = [ModelOutput.for_tool_call("mockllm", "take_off", {
+                   "drone_id": op["drone"], "altitude_m": op["altitude_m"]}),
+               ModelOutput.for_tool_call("mockllm", "finish" if calls == 2 else "hover", {
+                   "drone_id": op["drone"], "duration_s": 5.0} if calls == 1 else {}),
+               ModelOutput.from_content("mockllm", "done")]
+    for output in outputs:
+        output.usage = USAGE
+    task = swarm_task([write_json(tmp_path / "hold.json", data)], agent=generate())
+    (log,) = inspect_eval(task, model=get_model("mockllm/model", custom_outputs=outputs),
+                          display="none", log_dir=str(tmp_path / "logs"))
+    assert log.status == "success" and log.samples is not None
+    (sample,) = log.samples
+    record = sample.store[RECORD_KEY]
+    assert (record["agent"], record["finish"], record["tool_calls"]) == ("inspect", finish, 1)
+    score = sample.scores["swarm_checks"] if sample.scores else None
+    assert score is not None and score.value == value, score and score.explanation
+    tool_results = [json.loads(m.text) for m in sample.messages if m.role == "tool"]
+    assert tool_results[0]["status"] == "ok"
 
 
 def test_tasks_that_cannot_run_score_incorrect_with_the_reason(tmp_path: Path) -> None:

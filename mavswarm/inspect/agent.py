@@ -7,6 +7,10 @@ with the lockstep clock a turn's flights share simulated time, as they do in `be
 and the loop ends when the model calls `finish`, answers without a tool call three times,
 spends its turns or hits one of inspect's sample limits. The conversation is the sample's
 `state.messages`, so inspect's log shows it as it happened.
+
+`InspectSolverAgent` instead lets any inspect solver play the task (``generate()``,
+``basic_agent()``, a solver of one's own) with the tools in ``state.tools``; inspect's tool
+loop runs the calls of one turn one after another.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from inspect_ai.model import (
     Model,
     get_model,
 )
-from inspect_ai.solver import TaskState
+from inspect_ai.solver import Generate, Solver, TaskState
 from inspect_ai.tool import ToolDef
 from inspect_ai.util import LimitExceededError
 
@@ -27,7 +31,7 @@ from llm_tools.agents.react import MAX_NUDGES, NUDGE, SYSTEM_PROMPT, task_messag
 from llm_tools.registry import ToolRegistry, default_registry
 from mavswarm.inspect.tools import call_tool, result_text, tool_defs
 
-__all__ = ["InspectReactAgent"]
+__all__ = ["InspectReactAgent", "InspectSolverAgent"]
 
 
 class InspectReactAgent:
@@ -87,3 +91,30 @@ class InspectReactAgent:
                 nudges += 1
                 state.messages.append(ChatMessageUser(content=NUDGE))
         return f"stopped: the budget of {self.max_turns} model turns is spent"
+
+
+class InspectSolverAgent:
+    """A mavswarm `Agent` that lets an inspect solver play one sample's task with the agent
+    tools as ``state.tools`` (generated from the registry, one call at a time)."""
+
+    name = "inspect"
+
+    def __init__(self, state: TaskState, solver: Solver, generate: Generate, *,
+                 registry: ToolRegistry | None = None) -> None:
+        self.state = state
+        self.solver = solver
+        self.generate = generate
+        self.registry = registry or default_registry()
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        state = self.state
+        state.tools = list(tool_defs(self.registry, tools))
+        stop = "stopped: the solver ended without calling finish"
+        try:
+            state.messages = [ChatMessageSystem(content=SYSTEM_PROMPT),
+                              ChatMessageUser(content=task_message(task.text, tools.drone_ids))]
+            await self.solver(state, self.generate)
+        except LimitExceededError as limit:  # one of inspect's sample limits
+            stop = f"stopped: {limit}"
+        if not tools.finished:
+            tools.finish(stop)

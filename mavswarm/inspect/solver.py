@@ -20,7 +20,7 @@ from benchmark.episode import CLOCKS, EpisodeOptions, run_one_task
 from benchmark.session_file import Session, TaskSpec
 from benchmark.validators import CheckContext
 from emulator.truth import TruthRecorder
-from mavswarm.inspect.agent import InspectReactAgent
+from mavswarm.inspect.agent import InspectReactAgent, InspectSolverAgent
 from mavswarm.inspect.dataset import load_session
 
 __all__ = ["RECORD_KEY", "HeldTruth", "swarm_agent", "take_truth"]
@@ -47,8 +47,9 @@ def take_truth(state: TaskState) -> HeldTruth | None:
 
 @solver
 def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float = 50.0,
-                agent_wall_timeout_s: float = 900.0) -> Solver:
-    """Fly the sample's benchmark task with the ReAct agent on inspect's model.
+                agent_wall_timeout_s: float = 900.0, agent: Solver | None = None) -> Solver:
+    """Fly the sample's benchmark task with the ReAct agent on inspect's model (or with
+    `agent`, an inspect solver given the agent tools in ``state.tools``).
 
     Args:
         clock: "lockstep" (simulated time passes only while the agent waits on the world,
@@ -56,6 +57,8 @@ def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float 
         max_turns: Most model turns per task.
         physics_hz: The swarm's physics rate.
         agent_wall_timeout_s: Wall time after which a hung agent ends as an agent error.
+        agent: An inspect solver to play the task instead of the ReAct loop (``max_turns``
+            does not apply; inspect's sample limits do).
     """
     if clock not in CLOCKS:
         raise ValueError(f"unknown clock {clock!r} (known: {', '.join(CLOCKS)})")
@@ -69,7 +72,8 @@ def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float 
             raise ValueError(f"{session.source} has no task {state.metadata['task']!r}")
         options = EpisodeOptions(trial=state.epoch - 1, physics_hz=physics_hz, clock=clock,
                                  agent_wall_timeout_s=agent_wall_timeout_s)
-        agent = InspectReactAgent(state, max_turns=max_turns)
+        player = (InspectReactAgent(state, max_turns=max_turns) if agent is None
+                  else InspectSolverAgent(state, agent, generate))
         kept: list[CheckContext] = []
 
         def keep(context: CheckContext) -> None:  # at the window's end, the clock held
@@ -77,7 +81,7 @@ def swarm_agent(clock: str = "lockstep", max_turns: int = 40, physics_hz: float 
             frozen = history.snapshot() if isinstance(history, TruthRecorder) else history
             kept.append(CheckContext(frozen, context.scenario, context.t0_s, context.t1_s))
 
-        record: dict[str, Any] = await run_one_task(session, task, agent, options, truth=keep)
+        record: dict[str, Any] = await run_one_task(session, task, player, options, truth=keep)
         record.pop("replay", None)
         state.store.set(RECORD_KEY, record)
         _held[state.uuid] = HeldTruth(session, task, kept[0] if kept else None)

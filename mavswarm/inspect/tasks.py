@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from inspect_ai import Task, task
+from inspect_ai.solver import Solver
 
 from benchmark.suite import suite_paths
 from mavswarm.inspect.dataset import family_paths, session_dataset, session_paths
@@ -26,11 +27,13 @@ __all__ = ["area_assignment_and_patrol", "area_search", "full", "resilience", "s
            "smoke", "target_assignment", "target_tracking"]
 
 
-def swarm_task(paths: Sequence[Path], task_limit: int | None, *, name: str, clock: str,
-               max_turns: int) -> Task:
-    """A task of one sample per benchmark task of the sessions at `paths`."""
+def swarm_task(paths: Sequence[Path], task_limit: int | None = None, *,
+               name: str = "mavswarm", clock: str = "lockstep", max_turns: int = 40,
+               agent: Solver | None = None) -> Task:
+    """A task of one sample per benchmark task of the sessions at `paths`, played by the
+    ReAct loop or by `agent` (an inspect solver; see `swarm_agent`)."""
     return Task(dataset=session_dataset(paths, task_limit, name=name),
-                solver=swarm_agent(clock=clock, max_turns=max_turns),
+                solver=swarm_agent(clock=clock, max_turns=max_turns, agent=agent),
                 scorer=swarm_checks(), metadata={"clock": clock, "task_limit": task_limit})
 
 
