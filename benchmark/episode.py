@@ -303,7 +303,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     """Reset, run the agent on one task, evaluate its checks; the task's record. Its
     `replay` (the window's ground truth and the tool calls, `benchmark.replay_data`) is stored
     apart from results.jsonl by the orchestrator. `truth`, if given, is handed the ground
-    truth of the task's window the checks were evaluated on."""
+    truth the checks were evaluated on, while the clock is still held at the window's end."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
     await reset_for_task(swarm, services, gateway)

@@ -211,12 +211,12 @@ def test_tasks_that_cannot_run_score_incorrect_with_the_reason(tmp_path: Path) -
     (log,) = inspect_eval(sessions(sessions=paths), model=model, display="none",
                           log_dir=str(tmp_path / "logs"))
     assert log.status == "success" and log.samples is not None
-    explained = {}
+    explained: dict[str, str] = {}
     for sample in log.samples:
         score = sample.scores["swarm_checks"] if sample.scores else None
         assert score is not None and score.value == "I"
         assert sample.store[RECORD_KEY]["finish"] == "task_error"
-        explained[Path(str(sample.metadata["session_path"])).name] = score.explanation
+        explained[Path(str(sample.metadata["session_path"])).name] = str(score.explanation)
     assert "unknown endpoint 'no_such_check'" in explained["broken.json"]
     assert "the session cannot start" in explained["crowded.json"]
 
