@@ -37,8 +37,8 @@ from mavlink_gateway.pacing import Thinker, run_as
 
 __all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
            "record_key",
-           "reset_for_task", "run_session", "run_task", "session_link_faults",
-           "swarm_gateway"]
+           "reset_for_task", "run_one_task", "run_session", "run_task", "session_link_faults",
+           "session_swarm", "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
 # goal reached, and a reset when telemetry shows it, so wall time per task follows these rates.
@@ -124,6 +124,15 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
             landed_state_hz=None if lockstep else LANDED_STATE_HZ,
         ) as fleet:
             yield swarm, services, Gateway(fleet.drones, services)
+
+
+def session_swarm(session: Session, options: EpisodeOptions
+                  ) -> contextlib.AbstractAsyncContextManager[tuple[Swarm, SwarmServices, Gateway]]:
+    """The swarm and gateway a run of `session` flies with `options` (clock, physics rate,
+    link faults); raises ValueError when the session's world cannot fly."""
+    faults = session_link_faults(session, options.link_faults)
+    return swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep",
+                         link_faults=faults)
 
 
 async def reset_for_task(swarm: Swarm, services: SwarmServices, gateway: Gateway) -> None:
@@ -274,10 +283,8 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
         return
     stack = contextlib.AsyncExitStack()
     try:
-        faults = session_link_faults(session, options.link_faults)
         swarm, services, gateway = await stack.enter_async_context(
-            swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep",
-                          link_faults=faults))
+            session_swarm(session, options))
     except ValueError as error:  # the world cannot fly (a vehicle parameter out of range...)
         await stack.aclose()
         for task, key in zip(session.tasks, keys, strict=True):
@@ -306,13 +313,36 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                                 watch=watch))
 
 
+async def run_one_task(session: Session, task: TaskSpec, agent: Agent,
+                       options: EpisodeOptions = EpisodeOptions(), *,
+                       truth: Callable[[CheckContext], None] | None = None) -> dict[str, Any]:
+    """One task alone on a swarm of its own, from the session's starting layout (as the first
+    task of a run starts): its record, as `run_task` makes it, or a task_error record."""
+    if task.error is not None or task.checks is None or task.budget is None:
+        return task_error_record(session, task, agent.name, options.trial,
+                                 f"{session.source}: {task.error}")
+    stack = contextlib.AsyncExitStack()
+    try:
+        swarm, services, gateway = await stack.enter_async_context(
+            session_swarm(session, options))
+    except ValueError as error:
+        await stack.aclose()
+        return task_error_record(session, task, agent.name, options.trial,
+                                 f"{session.source}: the session cannot start: {error}")
+    async with stack:
+        return await run_task(session, task, agent, swarm, services, gateway, options,
+                              truth=truth)
+
+
 async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                    services: SwarmServices, gateway: Gateway,
-                   options: EpisodeOptions, *, watch: TaskWatch | None = None
+                   options: EpisodeOptions, *, watch: TaskWatch | None = None,
+                   truth: Callable[[CheckContext], None] | None = None
                    ) -> dict[str, Any]:
     """Reset, run the agent on one task, evaluate its checks; the task's record. Its
     `replay` (the window's ground truth and the tool calls, `benchmark.replay_data`) is stored
-    apart from results.jsonl by the orchestrator."""
+    apart from results.jsonl by the orchestrator. `truth`, if given, is handed the ground
+    truth the checks were evaluated on, while the clock is still held at the window's end."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
     await reset_for_task(swarm, services, gateway)
@@ -333,9 +363,11 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     hold = swarm.hold_clock_at(t1_s)  # nothing moves between the end and the reset
     try:
         wall_eval = time.perf_counter()
-        result = evaluate(task.checks, CheckContext(swarm.recorder, session.scenario, t0_s,
-                                                    t1_s))
+        context = CheckContext(swarm.recorder, session.scenario, t0_s, t1_s)
+        result = evaluate(task.checks, context)
         eval_s = time.perf_counter() - wall_eval
+        if truth is not None:
+            truth(context)
         end_state = services.operator_snapshot()
         replay = encode_window(swarm.recorder, t0_s, t1_s, tools.call_log())
         replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),
