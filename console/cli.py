@@ -102,8 +102,8 @@ def _add_session_dir_argument(parser: argparse.ArgumentParser) -> None:
                              "editor's save folder and the files served (repeatable)")
 
 
-def _folders(dirs: Sequence[Path]) -> SessionFolders:
-    folders = SessionFolders()
+def _folders(dirs: Sequence[Path], files: Sequence[Path] = ()) -> SessionFolders:
+    folders = SessionFolders(files=files)
     for folder in dirs:
         folders.allow_folder(folder)
     return folders
@@ -117,10 +117,11 @@ def _print(text: str) -> None:
 async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
                         key: str | None = None, rate_hz: float = DEFAULT_RATE_HZ,
                         on_ready: Callable[[str, str], None] | None = None,
-                        session_dirs: Sequence[Path] = ()) -> AsyncIterator[ConsoleState]:
+                        session_folders: SessionFolders | None = None
+                        ) -> AsyncIterator[ConsoleState]:
     """The console's live view of `swarm` served while inside; `on_ready(url, key)`;
-    `session_dirs`: folders the editor opens session files from (besides the shipped
-    suite and its save folder)."""
+    `session_folders`: where the editor opens session files (default: the shipped suite;
+    its save folder is added)."""
     auth, key = ConsoleAuth.single_key(key)
     scenario = swarm.fleet.scenario
     gateway_stack = contextlib.AsyncExitStack()
@@ -138,7 +139,7 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
     live = LiveSwarm("swarm", scenario.name, scenario_to_dict(scenario), swarm,
                      commander=commander, links=lambda _role: link_target)
     state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz,
-                         session_folders=_folders(session_dirs))
+                         session_folders=session_folders or SessionFolders())
     app = create_console_app(state)
 
     def ready(url: str) -> None:
@@ -170,7 +171,8 @@ def _run_up(args: argparse.Namespace) -> int:
                    ) -> contextlib.AbstractAsyncContextManager[object]:
             return swarm_console(
                 swarm, host=args.web_host, port=args.web_port, key=args.web_key,
-                rate_hz=args.web_hz, session_dirs=args.session_dirs,
+                rate_hz=args.web_hz, session_folders=_folders(
+                    args.session_dirs, [args.session] if args.session else []),
                 on_ready=lambda url, key: _print(f"web console: {url}/live/swarm?key={key}"))
         args.attachments = [*getattr(args, "attachments", ()), attach]
     return args.run_up_next(args)
