@@ -93,27 +93,39 @@ class SessionFolders:
             raise SessionPathError(str(error), 422) from None
         given = Path(text)
         candidates = [given] if given.is_absolute() else [f / given for f in self.folders]
-        inside: list[Path] = []
+        inside = False
         for candidate in candidates:
             try:
                 resolved = candidate.resolve()
             except (OSError, RuntimeError):  # a symbolic link loop
                 continue
-            if resolved in self.files or any(resolved.is_relative_to(f) for f in self.folders):
-                inside.append(resolved)
+            allowed = self._allows(resolved)
+            if os.path.lexists(candidate):
+                if not allowed:
+                    raise self._outside(text)
+                self._check_suffix(text, given)
+                return resolved
+            inside = inside or allowed
         if not inside:
-            raise SessionPathError(
-                f"path {preview(text)} is outside the session folders ({self.describe()}); "
-                "a server reads session files from these only (add one with --session-dir "
-                "DIR, or send the session in the body)", 403)
+            raise self._outside(text)
+        self._check_suffix(text, given)
+        raise SessionPathError(f"path {preview(text)}: no such session file in the session "
+                               f"folders ({self.describe()})", 404)
+
+    def _allows(self, resolved: Path) -> bool:
+        return resolved in self.files or any(resolved.is_relative_to(f) for f in self.folders)
+
+    def _outside(self, text: str) -> SessionPathError:
+        return SessionPathError(
+            f"path {preview(text)} is outside the session folders ({self.describe()}); a "
+            "server reads session files from these only (add one with --session-dir DIR, or "
+            "send the session in the body)", 403)
+
+    @staticmethod
+    def _check_suffix(text: str, given: Path) -> None:
         if given.suffix.lower() != ".json":
             raise SessionPathError(f"path {preview(text)}: a session file's name ends in "
                                    ".json", 422)
-        found = next((p for p in inside if os.path.lexists(p)), None)
-        if found is None:
-            raise SessionPathError(f"path {preview(text)}: no such session file in the "
-                                   f"session folders ({self.describe()})", 404)
-        return found
 
     def read(self, text: Any) -> tuple[Path, Any]:
         """The allowed file `text` names and its JSON (a session's bounds): blocking, so

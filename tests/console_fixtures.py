@@ -49,7 +49,7 @@ async def console_served(*, data: dict[str, Any] | None = None,
         for name, key in KEYS.items():
             hub.add_key(key, Role(name), session.id if name == "agent" else None)
         app = create_app(hub)
-        console_for_hub(app, hub, [])
+        console_for_hub(app, hub, [], session_dirs=session_dirs)
         transport = httpx.ASGITransport(app=app)
         async with httpx.AsyncClient(transport=transport, base_url="http://serve") as client:
             yield ConsoleServed(client, hub, live, app)
