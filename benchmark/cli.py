@@ -2,11 +2,13 @@
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
                           [--backend local|ray [--ray-address ADDR]] [--verbose]
-  mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
+  mavswarm bench run --agent oracle|noop|react|workflow|NAME|module:Name|file.py:Name
+                     [--model M --base-url URL] [--agent-timeout-s S]
                      [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--clock lockstep|stepped] [--out DIR]
                      [--backend local|ray [--ray-address ADDR]] [--inspector-url URL]
                      [--verbose]
+  mavswarm bench agents
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
@@ -19,9 +21,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from benchmark.agent_plugins import ENTRY_POINT_GROUP
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
-from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
 from emulator.link_faults import add_link_arguments, link_faults_from_args
@@ -49,7 +51,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_verbose_argument(gen)
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
-    run.add_argument("--agent", choices=AGENTS, default="oracle")
+    run.add_argument("--agent", default="oracle", metavar="SPEC",
+                     help="oracle (default), noop, react, workflow, an installed plug-in's "
+                          "name, package.module:Name or path/to/file.py:Name (an agent, its "
+                          "class or a factory: README 'Bring your own agent'); NAME:per-drone "
+                          "gives each drone its own instance. `mavswarm bench agents` lists them")
+    run.add_argument("--agent-timeout-s", type=float, default=600.0, metavar="S",
+                     help="stop an agent that makes no tool call and lets no simulated time "
+                          "pass for S wall seconds (hung); its task ends as agent_error "
+                          "(default 600)")
     run.add_argument("--model", default="", help="LLM agents: model name (or OPENAI_MODEL)")
     run.add_argument("--base-url", default="",
                      help="LLM agents: OpenAI-compatible base URL (or OPENAI_BASE_URL; the "
@@ -77,6 +87,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_verbose_argument(run)
     add_mqtt_arguments(run, session=False)
     add_link_arguments(run)
+
+    bsub.add_parser("agents", help="list the agents --agent can name: built-in and installed "
+                    f"plug-ins (entry points in the group {ENTRY_POINT_GROUP})")
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -129,18 +142,23 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from benchmark.agent_plugins import check_spec
     from benchmark.metrics import summarize
     from benchmark.orchestrator import RunPlan, run_benchmark
     from benchmark.progress import ProgressBar
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
     from benchmark.results import read_records
+    check_spec(args.agent)  # a bad --agent is one line, before anything starts
+    if not args.agent_timeout_s > 0:
+        raise ValueError(f"--agent-timeout-s must be > 0, got {args.agent_timeout_s:g}")
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
     else:
         paths, limit = suite_paths(args.suite)
         label = args.suite
-    out = args.out or Path(f"runs/bench-{args.agent}-{label}")
+    agent_label = re.sub(r"[^A-Za-z0-9_.:-]+", "-", args.agent).strip("-.")
+    out = args.out or Path(f"runs/bench-{agent_label}-{label}")
     check_inspector_url(args.inspector_url)
     url = mqtt_options(args)
     plan = RunPlan(sessions=paths, agent=args.agent, trials=args.trials, workers=args.workers,
@@ -148,7 +166,7 @@ def _run(args: argparse.Namespace) -> int:
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
                    clock=args.clock, backend=args.backend, ray_address=args.ray_address,
                    mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0),
-                   link_faults=_link_faults_json(args))
+                   link_faults=_link_faults_json(args), agent_timeout_s=args.agent_timeout_s)
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
@@ -212,6 +230,18 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _agents(args: argparse.Namespace) -> int:
+    from benchmark.agent_plugins import listing
+    rows = listing()
+    width = max(len(r.name) for r in rows) + 2
+    for row in rows:
+        print(f"{row.name:<{width}}{row.source}: {row.about}")
+    print(f"\nAlso: package.module:Name or path/to/file.py:Name; NAME:per-drone (react, "
+          f"workflow, plug-ins) for one instance per drone. Packages add agents with entry "
+          f"points in the group {ENTRY_POINT_GROUP}.")
+    return 0
+
+
 def _import(args: argparse.Namespace) -> int:
     from benchmark.importer import import_session_file
     taken: set[str] = set()
@@ -227,7 +257,8 @@ def run_bench(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm bench` command; bad input is printed, exit 2."""
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
-    handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import}
+    handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import,
+                "agents": _agents}
     try:
         return handlers[args.bench_command](args)
     except (SessionFileError, ResultsError, ValueError, OSError) as error:

@@ -37,8 +37,8 @@ from mavlink_gateway.pacing import Thinker, run_as
 
 __all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
            "record_key",
-           "reset_for_task", "run_session", "run_task", "session_link_faults",
-           "swarm_gateway"]
+           "reset_for_task", "run_one_task", "run_session", "run_task", "session_link_faults",
+           "session_swarm", "swarm_gateway"]
 
 # Faster streams than a field autopilot's defaults: a primitive ends when telemetry shows its
 # goal reached, and a reset when telemetry shows it, so wall time per task follows these rates.
@@ -70,7 +70,9 @@ CLOCKS = ("lockstep", "stepped")
 class EpisodeOptions:
     trial: int = 0
     physics_hz: float = 50.0
-    agent_wall_timeout_s: float = 900.0  # a hung agent ends as an agent error
+    # a hung agent (no tool call and no simulated time for this many wall seconds) is stopped
+    # and its task ends as an agent error (`_guarded`)
+    agent_wall_timeout_s: float = 600.0
     clock: str = "lockstep"
     link_faults: Mapping[str, Any] | None = None  # LinkFaults.to_json(); else the session's
 
@@ -122,6 +124,15 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
             landed_state_hz=None if lockstep else LANDED_STATE_HZ,
         ) as fleet:
             yield swarm, services, Gateway(fleet.drones, services)
+
+
+def session_swarm(session: Session, options: EpisodeOptions
+                  ) -> contextlib.AbstractAsyncContextManager[tuple[Swarm, SwarmServices, Gateway]]:
+    """The swarm and gateway a run of `session` flies with `options` (clock, physics rate,
+    link faults); raises ValueError when the session's world cannot fly."""
+    faults = session_link_faults(session, options.link_faults)
+    return swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep",
+                         link_faults=faults)
 
 
 async def reset_for_task(swarm: Swarm, services: SwarmServices, gateway: Gateway) -> None:
@@ -201,17 +212,54 @@ def task_error_record(session: Session, task: TaskSpec, agent: str, trial: int,
     return error_record(_base_record(session, task, agent, trial), error)
 
 
+HUNG_POLL_S = 0.25  # how often the hang guard looks for progress
+CANCEL_GRACE_S = 5.0  # how long a stopped agent may take to unwind
+
+
+class AgentHung(Exception):
+    """The agent made no tool call and let no simulated time pass for too long."""
+
+
+async def _guarded(run: asyncio.Task[None], tools: AgentTools, services: SwarmServices,
+                   timeout_s: float) -> None:
+    """Await the agent's run; stop it once `timeout_s` wall seconds pass in which it made no
+    tool call and simulated time did not move. An agent that acts, or waits on the world,
+    never meets this guard, so no other record can depend on wall time; a hung one stops the
+    lockstep clock (and an idle swarm's stepped one), so its budget would never run out."""
+    progress = (tools.tool_calls, services.clock_s())
+    idle_since = time.monotonic()
+    while True:
+        try:
+            await asyncio.wait({run}, timeout=HUNG_POLL_S)
+        except asyncio.CancelledError:  # the run itself is stopping: so does the agent
+            run.cancel()
+            raise
+        if run.done():
+            return run.result()
+        now = (tools.tool_calls, services.clock_s())
+        if now != progress:
+            progress, idle_since = now, time.monotonic()
+        elif time.monotonic() - idle_since >= timeout_s:
+            break
+    run.cancel()
+    await asyncio.wait({run}, timeout=CANCEL_GRACE_S)
+    run.add_done_callback(lambda t: t.cancelled() or t.exception())  # never "not retrieved"
+    ignored = "" if run.done() else "; it ignored being cancelled"
+    raise AgentHung(f"the agent made no tool call and simulated time did not advance for "
+                    f"{timeout_s:g} s of wall time (--agent-timeout-s): stopped as hung{ignored}")
+
+
 async def _run_agent(agent: Agent, task: AgentTask, tools: AgentTools,
                      options: EpisodeOptions, services: SwarmServices
                      ) -> tuple[str, str | None]:
     thinker = Thinker(services)  # the agent thinks first: the clock waits for it
     try:
-        await asyncio.wait_for(run_as(thinker, agent.run(task, tools)),
-                               options.agent_wall_timeout_s)
+        await _guarded(run_as(thinker, agent.run(task, tools)), tools, services,
+                       options.agent_wall_timeout_s)
     except BudgetExhausted as spent:
         return spent.reason, str(spent)
-    except TimeoutError:
-        return "agent_error", f"the agent did not finish within {options.agent_wall_timeout_s:g} s"
+    except AgentHung as hung:
+        return "agent_error", str(hung)
     except Exception as error:  # a crashing agent ends its task, never the run
         where = traceback.extract_tb(error.__traceback__)[-1]
         return "agent_error", (f"{type(error).__name__}: {error} "
@@ -235,10 +283,8 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
         return
     stack = contextlib.AsyncExitStack()
     try:
-        faults = session_link_faults(session, options.link_faults)
         swarm, services, gateway = await stack.enter_async_context(
-            swarm_gateway(session, options.physics_hz, lockstep=options.clock == "lockstep",
-                          link_faults=faults))
+            session_swarm(session, options))
     except ValueError as error:  # the world cannot fly (a vehicle parameter out of range...)
         await stack.aclose()
         for task, key in zip(session.tasks, keys, strict=True):
@@ -267,13 +313,36 @@ async def run_session(session: Session, agent: Agent, *, emit: Callable[[dict[st
                                 watch=watch))
 
 
+async def run_one_task(session: Session, task: TaskSpec, agent: Agent,
+                       options: EpisodeOptions = EpisodeOptions(), *,
+                       truth: Callable[[CheckContext], None] | None = None) -> dict[str, Any]:
+    """One task alone on a swarm of its own, from the session's starting layout (as the first
+    task of a run starts): its record, as `run_task` makes it, or a task_error record."""
+    if task.error is not None or task.checks is None or task.budget is None:
+        return task_error_record(session, task, agent.name, options.trial,
+                                 f"{session.source}: {task.error}")
+    stack = contextlib.AsyncExitStack()
+    try:
+        swarm, services, gateway = await stack.enter_async_context(
+            session_swarm(session, options))
+    except ValueError as error:
+        await stack.aclose()
+        return task_error_record(session, task, agent.name, options.trial,
+                                 f"{session.source}: the session cannot start: {error}")
+    async with stack:
+        return await run_task(session, task, agent, swarm, services, gateway, options,
+                              truth=truth)
+
+
 async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
                    services: SwarmServices, gateway: Gateway,
-                   options: EpisodeOptions, *, watch: TaskWatch | None = None
+                   options: EpisodeOptions, *, watch: TaskWatch | None = None,
+                   truth: Callable[[CheckContext], None] | None = None
                    ) -> dict[str, Any]:
     """Reset, run the agent on one task, evaluate its checks; the task's record. Its
     `replay` (the window's ground truth and the tool calls, `benchmark.replay_data`) is stored
-    apart from results.jsonl by the orchestrator."""
+    apart from results.jsonl by the orchestrator. `truth`, if given, is handed the ground
+    truth the checks were evaluated on, while the clock is still held at the window's end."""
     assert task.checks is not None and task.budget is not None
     wall0 = time.perf_counter()
     await reset_for_task(swarm, services, gateway)
@@ -294,9 +363,11 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
     hold = swarm.hold_clock_at(t1_s)  # nothing moves between the end and the reset
     try:
         wall_eval = time.perf_counter()
-        result = evaluate(task.checks, CheckContext(swarm.recorder, session.scenario, t0_s,
-                                                    t1_s))
+        context = CheckContext(swarm.recorder, session.scenario, t0_s, t1_s)
+        result = evaluate(task.checks, context)
         eval_s = time.perf_counter() - wall_eval
+        if truth is not None:
+            truth(context)
         end_state = services.operator_snapshot()
         replay = encode_window(swarm.recorder, t0_s, t1_s, tools.call_log())
         replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),

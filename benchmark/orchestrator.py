@@ -13,14 +13,15 @@ from __future__ import annotations
 import asyncio
 import functools
 import json
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from agent_contract import Agent
-from benchmark.agents import NoopAgent
+from agent_contract import Agent, AgentOptions
+from benchmark import agent_plugins
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
 from benchmark.importer import load_any_session
@@ -34,10 +35,12 @@ from mavlink_gateway import set_mavsdk_log
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark", "run_unit"]
 
-# NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone)
-AGENTS = ("oracle", "noop", "react", "workflow", "react:per-drone", "workflow:per-drone")
-LLM_AGENTS = ("react", "workflow", "react:per-drone", "workflow:per-drone")
-PER_DRONE = ":per-drone"
+# The built-in agents; NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone).
+# --agent also takes plug-ins (benchmark.agent_plugins: package.module:Name, path/to/file.py:Name,
+# installed entry points), which these lists do not hold.
+PER_DRONE = agent_plugins.PER_DRONE
+AGENTS = (*agent_plugins.BUILTIN_AGENTS, *(n + PER_DRONE for n in agent_plugins.LLM_AGENTS))
+LLM_AGENTS = tuple(n for n in AGENTS if n.removesuffix(PER_DRONE) in agent_plugins.LLM_AGENTS)
 
 
 @dataclass(frozen=True)
@@ -61,6 +64,10 @@ class RunPlan:
     # link faults for every session (emulator.link_faults.LinkFaults.to_json()), else each
     # session file's own ``link_faults``, if any
     link_faults: dict[str, Any] | None = None
+    # a hung agent (no tool call, no simulated time) is stopped after this many wall seconds
+    agent_timeout_s: float = 600.0
+    # where a plug-in's relative file path is found (default: this process's directory)
+    agent_base_dir: str = ""
 
     @property
     def results_path(self) -> Path:
@@ -75,26 +82,16 @@ class RunOutcome:
     wall_s: float = 0.0
 
 
-def make_agent(name: str, session: Session, plan: RunPlan | None = None) -> Agent:
-    """The named agent for one session."""
-    if name.endswith(PER_DRONE):
-        from agent_contract.per_drone import PerDroneTeam
-        single = name.removesuffix(PER_DRONE)
-        return PerDroneTeam(name, lambda drone_id: make_agent(single, session, plan))
-    if name == "noop":
-        return NoopAgent()
-    if name in LLM_AGENTS:
-        from llm_tools.agents import ModelConfig, ReactAgent, WorkflowAgent
-        plan = plan or RunPlan(sessions=())
-        config = ModelConfig(base_url=plan.base_url, model=plan.model,
-                             price_in_usd_per_mtok=plan.price_in_usd_per_mtok,
-                             price_out_usd_per_mtok=plan.price_out_usd_per_mtok)
-        return ReactAgent(config) if name == "react" else WorkflowAgent(config)
-    if name == "oracle":
-        from benchmark.oracle import OracleAgent
-        plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
-        return OracleAgent(session.scenario, plans)
-    raise ValueError(f"unknown agent {name!r}; choose one of {', '.join(AGENTS)}")
+def make_agent(name: str, session: Session, plan: RunPlan | None = None, trial: int = 0
+               ) -> Agent:
+    """The named agent (a built-in or a plug-in, `benchmark.agent_plugins`) for one session
+    and trial."""
+    plan = plan or RunPlan(sessions=())
+    options = AgentOptions(agent=name, session_id=session.id, trial=trial, model=plan.model,
+                           base_url=plan.base_url,
+                           price_in_usd_per_mtok=plan.price_in_usd_per_mtok,
+                           price_out_usd_per_mtok=plan.price_out_usd_per_mtok)
+    return agent_plugins.make_agent(name, session, options, plan.agent_base_dir)
 
 
 def _limited(session: Session, limit: int | None) -> Session:
@@ -121,9 +118,10 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
             send(("note", f"{path}: {note}"))
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
-    agent = make_agent(plan.agent, session, plan)
+    agent = make_agent(plan.agent, session, plan, trial)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock,
-                             link_faults=plan.link_faults)
+                             link_faults=plan.link_faults,
+                             agent_wall_timeout_s=plan.agent_timeout_s)
     world = _world_of(path)
 
     def emit(record: dict[str, Any]) -> None:
@@ -217,8 +215,11 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
     line and every note or error go to `sink` (default: lines handed to `progress`);
     `on_record` hears each record right after it was appended (e.g. the MQTT bus). With
     `plan.live_hz`, each live frame a session publishes is handed to `on_live`."""
-    if plan.agent not in AGENTS:
-        raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
+    if not plan.agent_base_dir:
+        plan = replace(plan, agent_base_dir=os.getcwd())
+    agent_plugins.check_spec(plan.agent, plan.agent_base_dir)  # one line, before anything runs
+    if not plan.agent_timeout_s > 0:
+        raise ValueError(f"the agent timeout must be > 0 s, got {plan.agent_timeout_s:g}")
     if plan.agent in LLM_AGENTS:
         from llm_tools.agents import ModelConfig
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast

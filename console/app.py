@@ -7,7 +7,10 @@ Pages (one HTML page; the script picks the view from the path): `/` (home), `/li
 `/api/live/{id}/ws?key=KEY`; a live swarm's link faults at `/api/live/{id}/link-faults` and
 `/api/live/{id}/vehicles/{drone}/link` (benchmark.server.link_routes). Every API route needs
 an operator or admin key (`X-API-Key` header or `key` query parameter) unless the console was
-opened for local files only.
+opened for local files only (console.auth: 401, 403; the WebSocket closes with 4401, 4403,
+4404). Bodies are bounded and parsed as on the agent surfaces (llm_tools.body_limit: 413 over
+1 MiB, 422 naming the field); session files are read from the session folders only
+(benchmark.session_folders).
 """
 
 
@@ -20,15 +23,17 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query, Request, WebSocket
 from fastapi.responses import HTMLResponse, JSONResponse, Response
+from starlette.concurrency import run_in_threadpool
 from starlette.websockets import WebSocketDisconnect
 
 from benchmark.server.link_routes import LinkTarget, add_link_api
-from console.auth import ConsoleAuth
+from benchmark.session_folders import SessionFolders, SessionPathError
+from console.auth import ConsoleAuth, close_code
 from console.editor import (
     EditorError,
     blank_session,
+    editable_session,
     generated_session,
-    load_for_editing,
     save_session,
     start_choices,
     validate_session,
@@ -36,13 +41,18 @@ from console.editor import (
 from console.editor_routes import add_editor_routes
 from console.live import LiveFeed, LiveSwarm
 from console.live_routes import add_live_routes
+from console.request_bodies import EditorSaveBody
 from console.results_index import ReplayIndex
+from llm_tools.body_limit import bound_inputs, json_body
+from llm_tools.input_limits import MAX_SESSION_NUMBER_ABS
 
 __all__ = ["ConsoleState", "create_console_app"]
 
 PAGES = ("/", "/live/{rest:path}", "/runs", "/runs/{rest:path}", "/inspect/{rest:path}",
          "/compare", "/replay", "/editor")
 ASSETS = {"app.js": "text/javascript", "style.css": "text/css"}
+_CLOSE_REASON_BYTES = 123
+session_body = json_body(max_number_abs=MAX_SESSION_NUMBER_ABS)
 
 
 @dataclass
@@ -53,10 +63,15 @@ class ConsoleState:
     lives: dict[str, LiveSwarm] = field(default_factory=dict)
     index: ReplayIndex = field(default_factory=ReplayIndex)
     editor_root: Path = field(default_factory=Path.cwd)
+    session_folders: SessionFolders = field(default_factory=SessionFolders)
+    """Where the editor opens session files (the editor's save folder is added to them)."""
     feeds: dict[str, LiveFeed] = field(default_factory=dict)
     rate_hz: float = 10.0
     refresh: Callable[[], None] | None = None
     """Called before live swarms are looked up (sessions a server starts later)."""
+
+    def __post_init__(self) -> None:
+        self.session_folders.allow_folder(self.editor_root)
 
     def live_swarms(self) -> dict[str, LiveSwarm]:
         if self.refresh is not None:
@@ -83,13 +98,18 @@ def _asset(name: str) -> bytes:
                             ) from None
 
 
+def _close_reason(text: str) -> str:
+    """`text` cut to what a WebSocket close frame carries (123 bytes of UTF-8)."""
+    return text.encode("utf-8", "replace")[:_CLOSE_REASON_BYTES].decode("utf-8", "ignore")
+
+
 def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
     """The console app; `base` is the path it is mounted at ("" for the root)."""
     app = FastAPI(title="mavswarm console", openapi_url=None, docs_url=None, redoc_url=None)
+    bound_inputs(app)
 
     def staff(request: Request) -> str:
-        key = request.headers.get("x-api-key") or request.query_params.get("key")
-        verdict = state.auth.check(key)
+        verdict = state.auth.check_connection(request)
         if verdict.role is None:
             raise HTTPException(verdict.status, verdict.reason)
         return verdict.role
@@ -138,13 +158,14 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
 
     @app.websocket("/api/live/{live_id}/ws")
     async def live_ws(websocket: WebSocket, live_id: str) -> None:
-        verdict = state.auth.check(websocket.query_params.get("key"))
-        if verdict.role is None or live_id not in state.live_swarms():
-            await websocket.close(code=4403 if verdict.status == 403 else 4401
-                                  if verdict.role is None else 4404,
-                                  reason=verdict.reason or f"no live swarm {live_id!r}")
-            return
+        verdict = state.auth.check_connection(websocket)
+        status, reason = verdict.status, verdict.reason
+        if verdict.role is not None and live_id not in state.live_swarms():
+            status, reason = 404, f"no live swarm {live_id[:40]!r}"
         await websocket.accept()
+        if status != 200:  # accepted, then closed: a browser reads the code and reason
+            await websocket.close(code=close_code(status), reason=_close_reason(reason))
+            return
         feed = state.feed(live_id)
         queue = feed.subscribe()
         try:
@@ -206,34 +227,44 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
         try:
             if source == "blank":
                 return blank_session()
-            if source == "file":
-                return load_for_editing(Path(path))
+            if source == "file":  # a worker thread: FastAPI runs a plain def route in one
+                found, data = state.session_folders.read(path)
+                return editable_session(data, str(found))
             if source == "level":
                 return generated_session(family, level, index)
-        except (ValueError, OSError) as error:
+        except SessionPathError as error:
+            raise HTTPException(error.http_status, str(error)) from None
+        except ValueError as error:
             raise HTTPException(422, str(error)) from None
         raise HTTPException(422, f"source must be blank, file or level, got {source[:20]!r}")
 
-    @app.post("/api/editor/validate")
-    async def editor_validate(request: Request, role: Staff) -> JSONResponse:
+    @app.post("/api/editor/open")
+    def editor_open(role: Staff, body: Annotated[Any, Depends(session_body)]
+                    ) -> dict[str, Any]:
+        """An uploaded session file (the body: mavswarm or MultiUAV-Plat JSON) to edit."""
         try:
-            return JSONResponse(validate_session(json.loads(await request.body())))
+            return editable_session(body, "the uploaded session")
+        except ValueError as error:
+            raise HTTPException(422, str(error)) from None
+
+    @app.post("/api/editor/validate")
+    async def editor_validate(role: Staff, body: Annotated[Any, Depends(session_body)]
+                              ) -> JSONResponse:
+        try:
+            return JSONResponse(validate_session(body))
         except ValueError as error:
             failure = error if isinstance(error, EditorError) else EditorError(str(error))
             return JSONResponse(failure.to_json(), status_code=422)
 
     @app.post("/api/editor/save")
-    async def editor_save(request: Request, role: Staff) -> JSONResponse:
+    async def editor_save(role: Staff, body: Annotated[EditorSaveBody, Depends(json_body(
+            EditorSaveBody, max_number_abs=MAX_SESSION_NUMBER_ABS))]) -> JSONResponse:
         try:
-            body = json.loads(await request.body())
-            if not isinstance(body, dict) or not isinstance(body.get("path"), str):
-                raise EditorError("send {path: str, session: {...}}")
-            saved = save_session(body.get("session"), Path(body["path"]), state.editor_root)
+            saved = await run_in_threadpool(save_session, body.session, Path(body.path),
+                                            state.editor_root)
             return JSONResponse(saved)
         except ValueError as error:
             failure = error if isinstance(error, EditorError) else EditorError(str(error))
             return JSONResponse(failure.to_json(), status_code=422)
-        except OSError as error:
-            return JSONResponse({"ok": False, "error": str(error), "entity": None}, 500)
 
     return app

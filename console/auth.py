@@ -1,5 +1,11 @@
 """Who may open the console: operator and admin keys see live swarms and command them; an
-agent key is refused (the console shows the global map, which agents never get)."""
+agent key is refused (the console shows the global map, which agents never get).
+
+One check for every route and the live WebSocket (`check_connection`): the key comes from
+the `X-API-Key` header or the `key` query parameter; no key or an unknown one (any text,
+non-ASCII included) is 401, a key of another role 403. A refused WebSocket is accepted and
+closed at once with close code 4000 + that status (4401, 4403; 4404 for an unknown live
+swarm) and the same reason, so a browser's page can read why."""
 
 from __future__ import annotations
 
@@ -7,7 +13,9 @@ import secrets
 from collections.abc import Callable
 from dataclasses import dataclass
 
-__all__ = ["ConsoleAuth", "Verdict"]
+from starlette.requests import HTTPConnection
+
+__all__ = ["ConsoleAuth", "Verdict", "close_code"]
 
 STAFF = ("operator", "admin")
 
@@ -34,7 +42,19 @@ class ConsoleAuth:
     def single_key(cls, key: str | None = None) -> tuple[ConsoleAuth, str]:
         """An auth with one operator key (generated when not given), and that key."""
         key = key or secrets.token_urlsafe(16)
-        return cls(lambda given: "operator" if secrets.compare_digest(given, key) else None), key
+        expected = key.encode("utf-8")
+
+        def lookup(given: str) -> str | None:  # bytes: compare_digest refuses non-ASCII text
+            same = secrets.compare_digest(given.encode("utf-8", "surrogatepass"), expected)
+            return "operator" if same else None
+
+        return cls(lookup), key
+
+    def check_connection(self, connection: HTTPConnection) -> Verdict:
+        """`check` of a request's or WebSocket's key (`X-API-Key` header, else `key` query
+        parameter)."""
+        return self.check(connection.headers.get("x-api-key")
+                          or connection.query_params.get("key"))
 
     def check(self, key: str | None) -> Verdict:
         if self.open_access:
@@ -49,3 +69,8 @@ class ConsoleAuth:
             return Verdict(None, 403, f"role {role!r} may not open the console; it needs an "
                                       "operator or admin key")
         return Verdict(role)
+
+
+def close_code(status: int) -> int:
+    """The WebSocket close code of a refusal that HTTP answers with `status` (4401, ...)."""
+    return 4000 + status

@@ -23,6 +23,7 @@ from benchmark.server import Hub
 from benchmark.server.link_routes import LinkTarget, session_link_target
 from benchmark.server.operator_rule import served_refusal
 from benchmark.server.serve import ApiKey, serve_asgi
+from benchmark.session_folders import SessionFolders
 from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
 from console.bench_watch import LiveBoard, serve_in_thread
@@ -58,6 +59,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     replay.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port")
     replay.add_argument("--key", help="require this key (default: none; the console "
                         "serves this machine's files on 127.0.0.1)")
+    _add_session_dir_argument(replay)
     replay.set_defaults(run=run_replay)
 
 
@@ -65,9 +67,12 @@ def extend_parsers(sub: argparse._SubParsersAction) -> None:
     """`up --web` and the console of `serve`."""
     up = sub.choices["up"]
     _add_web_arguments(up, "serve the web console's live view of the swarm (prints the URL)")
+    _add_session_dir_argument(up)
     up.set_defaults(run=_run_up, run_up_next=up.get_default("run"))
     serve = sub.choices["serve"]
-    serve.set_defaults(extend=console_for_hub)
+    _add_session_dir_argument(serve)
+    serve.set_defaults(extend=console_for_hub, run=_run_serve,
+                       run_serve_next=serve.get_default("run"))
     bench = sub.choices["bench"]
     bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
     run = bench_sub.choices["run"]
@@ -82,6 +87,28 @@ def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument("--web-key", help="--web: the operator key (default: generated)")
     parser.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
                         help="--web: live updates per second")
+
+
+def _session_dir(text: str) -> Path:
+    path = Path(text)
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a folder")
+    return path
+
+
+def _add_session_dir_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--session-dir", dest="session_dirs", type=_session_dir,
+                        action="append", default=[], metavar="DIR",
+                        help="a folder whose session files may be opened by path (the "
+                             "editor, POST /sessions/load), besides benchmark/sessions, the "
+                             "editor's save folder and the files served (repeatable)")
+
+
+def _folders(dirs: Sequence[Path], files: Sequence[Path] = ()) -> SessionFolders:
+    folders = SessionFolders(files=files)
+    for folder in dirs:
+        folders.allow_folder(folder)
+    return folders
 
 
 def _print(text: str) -> None:
@@ -99,9 +126,12 @@ _warned: list[str] = []
 @contextlib.asynccontextmanager
 async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT,
                         key: str | None = None, rate_hz: float = DEFAULT_RATE_HZ,
-                        on_ready: Callable[[str, str], None] | None = None
+                        on_ready: Callable[[str, str], None] | None = None,
+                        session_folders: SessionFolders | None = None
                         ) -> AsyncIterator[ConsoleState]:
-    """The console's live view of `swarm` served while inside; `on_ready(url, key)`."""
+    """The console's live view of `swarm` served while inside; `on_ready(url, key)`;
+    `session_folders`: where the editor opens session files (default: the shipped suite;
+    its save folder is added)."""
     auth, key = ConsoleAuth.single_key(key)
     scenario = swarm.fleet.scenario
     gateway_stack = contextlib.AsyncExitStack()
@@ -118,7 +148,8 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
     link_target = LinkTarget(SwarmServices(swarm))
     live = LiveSwarm("swarm", scenario.name, scenario_to_dict(scenario), swarm,
                      commander=commander, links=lambda _role: link_target)
-    state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz)
+    state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz,
+                         session_folders=session_folders or SessionFolders())
     app = create_console_app(state)
 
     def ready(url: str) -> None:
@@ -150,7 +181,8 @@ def _run_up(args: argparse.Namespace) -> int:
                    ) -> contextlib.AbstractAsyncContextManager[object]:
             return swarm_console(
                 swarm, host=args.web_host, port=args.web_port, key=args.web_key,
-                rate_hz=args.web_hz,
+                rate_hz=args.web_hz, session_folders=_folders(
+                    args.session_dirs, [args.session] if args.session else []),
                 on_ready=lambda url, key: _print(f"web console: {url}/live/swarm?key={key}"))
         args.attachments = [*getattr(args, "attachments", ()), attach]
     return args.run_up_next(args)
@@ -171,15 +203,24 @@ def _run_bench(args: argparse.Namespace) -> int:
         return 2
 
 
-def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str], None]:
+def _run_serve(args: argparse.Namespace) -> int:
+    args.extend = functools.partial(console_for_hub, session_dirs=args.session_dirs)
+    return int(args.run_serve_next(args))
+
+
+def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey],
+                    session_dirs: Sequence[Path] = ()) -> Callable[[str], None]:
     """Mount the console on `serve`'s app at /console: operator and admin keys of the hub open
-    it, agent keys are refused. Sessions loaded later appear as they start."""
+    it, agent keys are refused. Sessions loaded later appear as they start. The editor and
+    `POST /sessions/load` share the hub's session folders, `session_dirs` added."""
+    for folder in session_dirs:
+        hub.session_folders.allow_folder(folder)
 
     def lookup(key: str) -> str | None:
         caller = hub.caller(key)
         return None if caller is None else caller.role.value
 
-    state = ConsoleState(ConsoleAuth(lookup))
+    state = ConsoleState(ConsoleAuth(lookup), session_folders=hub.session_folders)
     commanders: dict[str, Commander] = {}
 
     def sync() -> None:
@@ -225,7 +266,7 @@ def run_replay(args: argparse.Namespace) -> int:
         auth, _ = ConsoleAuth.single_key(args.key)
     else:
         auth = ConsoleAuth(lambda _key: None, open_access=True)
-    state = ConsoleState(auth, index=index)
+    state = ConsoleState(auth, index=index, session_folders=_folders(args.session_dirs))
     app = create_console_app(state)
     suffix = f"?key={args.key}" if args.key else ""
 

@@ -3,29 +3,35 @@ level to start from, and validation and saving of what the page edited. A sessio
 only when it loads exactly as `mavswarm up` and `bench run` will load it; otherwise the problem
 is answered, naming the entity (`drones[2]`, ...) so the page can mark it, and nothing is
 written.
+
+Session files are opened from the server's session folders only
+(benchmark.session_folders; the route reads them), or uploaded in a request's body; either
+way `editable_session` turns the parsed JSON into what the page edits.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from benchmark.importer import load_any_session
+from benchmark.importer import import_session
 from benchmark.scenarios import FAMILIES, LEVELS, SESSION_INDICES
 from benchmark.scenarios.generator import generate_world
 from benchmark.session_file import (
     SCHEMA,
     SessionFileError,
     dump_session,
-    read_session_json,
     session_from_dict,
 )
 from console.shipped import edited_id, shipped_ids
 
-__all__ = ["EditorError", "blank_session", "generated_session", "load_for_editing",
+__all__ = ["EditorError", "blank_session", "editable_session", "generated_session",
            "save_session", "start_choices", "validate_session"]
 
 MIN_DRONE_SPACING_M = 1.0
@@ -72,14 +78,16 @@ def generated_session(family: str, level: str, index: int) -> dict[str, Any]:
     return world
 
 
-def load_for_editing(path: Path) -> dict[str, Any]:
-    """A session file as the editor edits it (a MultiUAV-Plat file converted as `bench
-    import` does)."""
-    data = read_session_json(path)
+def editable_session(data: Any, source: str) -> dict[str, Any]:
+    """A session file's parsed JSON as the editor edits it: a mavswarm session as it is (to
+    fix what is wrong in it), a MultiUAV-Plat one converted as `bench import` does. Raises
+    ValueError (SessionFileError, SessionImportError) naming `source` and the field."""
     if isinstance(data, Mapping) and data.get("schema") == SCHEMA:
         return dict(data)
-    session, _ = load_any_session(path)
-    return dict(session.data)
+    if isinstance(data, Mapping) and data.get("schema") is None and "drones" in data:
+        converted, _ = import_session(data, source=source)
+        return converted
+    return dict(session_from_dict(data, source=source).data)
 
 
 def _check_spacing(data: Mapping[str, Any]) -> None:
@@ -129,6 +137,25 @@ def save_session(data: Any, path: Path, root: Path) -> dict[str, Any]:
         raise EditorError(f"{path}: sessions are saved under {root}")
     if target.suffix != ".json":
         raise EditorError(f"{path}: a session file name ends in .json")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_text(dump_session(data), encoding="utf-8")
+    try:
+        if os.path.lexists(target) and not stat.S_ISREG(os.lstat(target).st_mode):
+            raise EditorError(f"{path}: exists and is not a regular file; pick another name")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        _write_replacing(target, dump_session(data))
+    except OSError as error:
+        raise EditorError(f"{path}: cannot save there: {error.strerror}") from None
     return {**summary, "path": str(target)}
+
+
+def _write_replacing(target: Path, text: str) -> None:
+    """Write `text` to a new file beside `target`, then move it over `target`: a reader never
+    sees half a file, and nothing is opened at `target` itself."""
+    fd, temporary = tempfile.mkstemp(dir=target.parent, prefix=".editor-", suffix=".json")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as file:
+            file.write(text)
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, target)
+    except BaseException:
+        os.unlink(temporary)
+        raise

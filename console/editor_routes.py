@@ -3,8 +3,9 @@
     GET /api/editor/shipped          {"sessions": [{id, family, level, index}, ...]}
     GET /api/editor/shipped/{id}     that session as the editor edits it (404: not shipped)
 
-A shipped session is named by its id, never by a path, and opened from the shipped suite's
-folder only. Saving under a shipped session's id is refused (console.editor.save_session).
+A shipped session is named by its id, never by a path, and read from the shipped suite's
+folder only, as every session file is read (benchmark.session_folders). Saving under a
+shipped session's id is refused (console.editor.save_session).
 """
 
 
@@ -13,7 +14,9 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
-from console.editor import load_for_editing
+from benchmark.session_folders import SessionFolders, SessionPathError
+from benchmark.suite import SESSIONS_DIR
+from console.editor import editable_session
 from console.shipped import edited_id, shipped_listing, shipped_path
 from llm_tools.input_limits import preview
 
@@ -34,8 +37,11 @@ def add_editor_routes(app: FastAPI, staff: Callable[..., str]) -> None:
         if path is None:
             raise HTTPException(404, f"no shipped session {preview(ident)}; "
                                      "GET /api/editor/shipped lists them")
-        try:
-            session = load_for_editing(path)
-        except (ValueError, OSError) as error:
+        try:  # a plain def route: FastAPI runs it in a worker thread
+            found, data = SessionFolders((SESSIONS_DIR,)).read(path.name)
+            session = editable_session(data, str(found))
+        except SessionPathError as error:
+            raise HTTPException(error.http_status, str(error)) from None
+        except ValueError as error:
             raise HTTPException(422, str(error)) from None
         return {"session": session, "proposed_id": edited_id(ident)}

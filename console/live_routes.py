@@ -7,20 +7,23 @@ selection or every drone of a live swarm (console.commands).
 
 One drone: the command's result (`status` ok, accepted, rejected, ..., `message`, `command`);
 422 for arguments that do not validate. Several: `{"results": {drone: result}}`. The whole
-request is checked before anything is sent: an unknown drone is a 404, a bad argument of any
-drone a 422, and while a benchmark task runs in the session (benchmark.server.operator_rule)
+request is checked before anything is sent: the body within every surface's input bounds
+(console.request_bodies.CommandBody), an unknown drone is a 404, a bad argument of any drone
+a 422, and while a benchmark task runs in the session (benchmark.server.operator_rule)
 every command is refused with 409.
 """
 
 
 import asyncio
-from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Annotated, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Annotated
 
-from fastapi import Depends, FastAPI, HTTPException, Request
+from fastapi import Depends, FastAPI, HTTPException
 from fastapi.responses import JSONResponse
 
-from llm_tools.input_limits import InputError, parse_json, preview
+from console.request_bodies import CommandBody
+from llm_tools.body_limit import json_body
+from llm_tools.input_limits import preview
 
 if TYPE_CHECKING:
     from console.app import ConsoleState
@@ -28,37 +31,17 @@ if TYPE_CHECKING:
 __all__ = ["add_live_routes"]
 
 
-async def _body(request: Request) -> dict[str, Any]:
-    raw = await request.body()
-    try:
-        body = parse_json(raw or b"{}", "the body")
-    except InputError as error:
-        raise HTTPException(error.http_status, str(error)) from None
-    if not isinstance(body, dict) or not isinstance(body.get("tool"), str):
-        raise HTTPException(422, "send {drone_id: str, tool: str, args: {...}} or "
-                                 "{drone_ids: [str] | \"all\", tool: str, args: {...}}")
-    return body
-
-
-def _drones(body: Mapping[str, Any], known: list[str]) -> tuple[list[str], bool]:
-    """The drones a command is for, and whether one was named alone (`drone_id`)."""
-    if "drone_id" in body:
-        if "drone_ids" in body:
-            raise HTTPException(422, "send drone_id or drone_ids, not both")
-        chosen: Any = [body["drone_id"]]
+def _drones(body: CommandBody, known: list[str]) -> list[str]:
+    """The drones a command is for (each once, in the order named)."""
+    if body.drone_id is not None:
+        chosen = [body.drone_id]
     else:
-        chosen = body.get("drone_ids")
-        if chosen == "all":
-            chosen = list(known)
-    if not isinstance(chosen, list) or not chosen \
-            or not all(isinstance(d, str) for d in chosen):
-        raise HTTPException(422, "drone_id must be a drone's id, drone_ids a non-empty list "
-                                 "of ids or \"all\"")
+        chosen = list(known) if body.drone_ids == "all" else list(body.drone_ids or ())
     unknown = [d for d in chosen if d not in known]
     if unknown:
         raise HTTPException(404, f"unknown drone {preview(unknown[0])}; drones: "
                                  f"{', '.join(known[:3])}{' ...' if len(known) > 3 else ''}")
-    return list(dict.fromkeys(chosen)), "drone_id" in body
+    return list(dict.fromkeys(chosen))
 
 
 def add_live_routes(app: FastAPI, state: "ConsoleState", staff: Callable[..., str]) -> None:
@@ -66,7 +49,9 @@ def add_live_routes(app: FastAPI, state: "ConsoleState", staff: Callable[..., st
     Staff = Annotated[str, Depends(staff)]
 
     @app.post("/api/live/{live_id}/command")
-    async def command(live_id: str, request: Request, role: Staff) -> JSONResponse:
+    async def command(live_id: str, role: Staff,
+                      body: Annotated[CommandBody, Depends(json_body(CommandBody))]
+                      ) -> JSONResponse:
         lives = state.live_swarms()
         if live_id not in lives:
             raise HTTPException(404, f"no live swarm {preview(live_id)}; live: "
@@ -75,25 +60,23 @@ def add_live_routes(app: FastAPI, state: "ConsoleState", staff: Callable[..., st
         commander = live.commander
         if commander is None:
             raise HTTPException(409, "this live view takes no commands")
-        body = await _body(request)
-        drones, alone = _drones(body, [d["id"] for d in live.scene["drones"]])
-        per_drone = body.get("args_by_drone") or {}
-        if not isinstance(per_drone, dict):
-            raise HTTPException(422, "args_by_drone must map drone ids to args objects")
+        drones = _drones(body, [d["id"] for d in live.scene["drones"]])
+        alone = body.drone_id is not None
+        per_drone = body.args_by_drone or {}
         stray = [d for d in per_drone if d not in drones]
         if stray:
             raise HTTPException(422, f"args_by_drone names {preview(stray[0])}, which the "
                                      "command is not for")
-        args = {d: per_drone.get(d, body.get("args")) for d in drones}
+        args = {d: per_drone.get(d, body.args) for d in drones}
         for drone in drones:  # every drone's arguments, before anything is sent
-            _, problem = commander.check(body["tool"], args[drone])
+            _, problem = commander.check(body.tool, args[drone])
             if problem is not None:
                 where = "" if alone else f"{drone}: "
                 return JSONResponse({"status": "error", "message": where + problem}, 422)
         refusal = commander.refusal()
         if refusal is not None:
             raise HTTPException(409, refusal)
-        results = await asyncio.gather(*(commander.start(d, body["tool"], args[d] or {})
+        results = await asyncio.gather(*(commander.start(d, body.tool, args[d] or {})
                                          for d in drones))
         if alone:
             return JSONResponse(results[0])

@@ -13,6 +13,10 @@ The bounds:
 - a string is at most `MAX_STRING_CHARS` characters of encodable Unicode (no lone surrogate,
   no control character other than tab and newline); an object key at most `MAX_NAME_CHARS`;
 - a list has at most `MAX_ITEMS` items.
+
+A session (a file or a body that carries one) is parsed with the same bounds but two:
+`parse_json(..., max_bytes=..., max_number_abs=MAX_SESSION_NUMBER_ABS)`, since a session's
+seed is a 64-bit integer and a file may be larger than a request body.
 """
 
 from __future__ import annotations
@@ -26,19 +30,21 @@ from typing import Any
 
 __all__ = [
     "MAX_BODY_BYTES", "MAX_DEPTH", "MAX_INTEGER_DIGITS", "MAX_ITEMS", "MAX_NAME_CHARS",
-    "MAX_NUMBER_ABS", "MAX_STRING_CHARS", "InputError", "check_bounds", "check_text",
+    "MAX_NUMBER_ABS", "MAX_SESSION_NUMBER_ABS", "MAX_STRING_CHARS", "InputError",
+    "check_bounds", "check_text",
     "parse_json", "parse_number", "preview",
 ]
 
 MAX_BODY_BYTES = 1 << 20
 MAX_DEPTH = 32
 MAX_NUMBER_ABS = 1e9
+MAX_SESSION_NUMBER_ABS = float(2**63)
+"""The number bound of a session's JSON: its seed is a 64-bit integer."""
 MAX_INTEGER_DIGITS = 30
 MAX_STRING_CHARS = 10_000
 MAX_NAME_CHARS = 64
 MAX_ITEMS = 10_000
 PREVIEW_CHARS = 40
-_NUMBER_LIMIT = f"numbers are limited to +/-{MAX_NUMBER_ABS:g}"
 
 _NUMBER_TEXT = re.compile(r"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?\Z")
 _STRING_LITERAL = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
@@ -99,34 +105,40 @@ def check_text(text: str, where: str, *, limit: int = MAX_STRING_CHARS) -> None:
                          f"{bad.start()}; send valid Unicode text")
 
 
-def _check_number(value: int | float, where: str) -> None:
+def _number_limit(max_abs: float) -> str:
+    return f"numbers are limited to +/-{max_abs:g}"
+
+
+def _check_number(value: int | float, where: str, max_abs: float) -> None:
     if isinstance(value, int):
-        if value.bit_length() > 64 or abs(value) > MAX_NUMBER_ABS:
-            raise InputError(where, f"is {preview(value)}; {_NUMBER_LIMIT}")
+        if value.bit_length() > 64 or abs(value) > max_abs:
+            raise InputError(where, f"is {preview(value)}; {_number_limit(max_abs)}")
         return
     if not math.isfinite(value):
         raise InputError(where, f"must be a finite number, got {value}")
-    if abs(value) > MAX_NUMBER_ABS:
-        raise InputError(where, f"is {value:g}; {_NUMBER_LIMIT}")
+    if abs(value) > max_abs:
+        raise InputError(where, f"is {value:g}; {_number_limit(max_abs)}")
 
 
 def _join(where: str, key: str) -> str:
     return f"{where}.{key}" if where else key
 
 
-def check_bounds(value: Any, where: str = "") -> None:
+def check_bounds(value: Any, where: str = "", *, max_number_abs: float = MAX_NUMBER_ABS
+                 ) -> None:
     """Raise InputError for the first part of a JSON-like value that breaks a bound: depth,
-    list length, key and string length and text, number magnitude, or a non-JSON type.
-    Iterative, so any Python value is safe to pass."""
+    list length, key and string length and text, number magnitude (`max_number_abs`), or a
+    non-JSON type. Iterative, so any Python value is safe to pass."""
     stack: list[tuple[Any, str, int]] = [(value, where, 0)]
     while stack:
         item, at, depth = stack.pop()
         if isinstance(item, bool) or item is None:
             continue
         if isinstance(item, _LongInteger):
-            raise InputError(at or "a number", f"is {preview(item)}; {_NUMBER_LIMIT}")
+            raise InputError(at or "a number",
+                             f"is {preview(item)}; {_number_limit(max_number_abs)}")
         if isinstance(item, int | float):
-            _check_number(item, at or "a number")
+            _check_number(item, at or "a number", max_number_abs)
         elif isinstance(item, str):
             check_text(item, at or "a string")
         elif isinstance(item, list | tuple | Mapping):
@@ -164,13 +176,15 @@ def _parse_int(literal: str) -> int | _LongInteger:
     return int(literal) if digits <= MAX_INTEGER_DIGITS else _LongInteger(digits)
 
 
-def parse_json(raw: bytes | str, what: str = "the body", *, field_prefix: str = "") -> Any:
-    """Parse JSON text within the bounds above; raises InputError naming `what` for the text
-    as a whole, or the field inside it (after `field_prefix`), on anything else."""
+def parse_json(raw: bytes | str, what: str = "the body", *, field_prefix: str = "",
+               max_bytes: int = MAX_BODY_BYTES, max_number_abs: float = MAX_NUMBER_ABS
+               ) -> Any:
+    """Parse JSON text within the bounds above (`max_bytes` of text, numbers within
+    +/-`max_number_abs`); raises InputError naming `what` for the text as a whole, or the
+    field inside it (after `field_prefix`), on anything else."""
     size = len(raw) if isinstance(raw, bytes) else len(raw.encode("utf-8", "surrogatepass"))
-    if size > MAX_BODY_BYTES:
-        raise InputError(what, f"is {size} bytes; the limit is {MAX_BODY_BYTES}",
-                         http_status=413)
+    if size > max_bytes:
+        raise InputError(what, f"is {size} bytes; the limit is {max_bytes}", http_status=413)
     if isinstance(raw, bytes):
         try:
             text = raw.decode("utf-8")
@@ -186,7 +200,7 @@ def parse_json(raw: bytes | str, what: str = "the body", *, field_prefix: str = 
                          ) from None
     except RecursionError:  # only reachable when the interpreter's own stack is near full
         raise InputError(what, f"nests deeper than {MAX_DEPTH} levels") from None
-    check_bounds(value, field_prefix)
+    check_bounds(value, field_prefix, max_number_abs=max_number_abs)
     return value
 
 
@@ -201,7 +215,7 @@ def parse_number(value: Any, where: str) -> float:
             raise InputError(where, f"must be a number, got {preview(value)}")
         number = float(text)
         if not math.isfinite(number) or abs(number) > MAX_NUMBER_ABS:
-            raise InputError(where, f"is {preview(value)}; {_NUMBER_LIMIT}")
+            raise InputError(where, f"is {preview(value)}; {_number_limit(MAX_NUMBER_ABS)}")
         return number
     check_bounds(value, where)  # a _LongInteger raises here
     assert isinstance(value, int | float)

@@ -28,6 +28,7 @@ async def test_operator_loads_sessions_and_switches_between_them(tmp_path: Path)
         before = {d["name"] for d in await keyless.get("/drones")}
         second = reference_session()
         path = write_json(tmp_path / "second.json", second)
+        s.hub.session_folders.allow_folder(tmp_path)  # as `serve --session-dir tmp_path`
         denied = await s.client.post("/sessions/load", json={"path": str(path)})
         assert denied.status_code == 403 and list(s.hub.sessions) == [first]
 
@@ -67,9 +68,10 @@ async def test_bad_loads_are_refused_and_change_nothing(tmp_path: Path) -> None:
     broken.write_text('{"drones": [', encoding="utf-8")
     async with plat_server(tmp_path) as s:
         (first,) = s.hub.sessions
+        s.hub.session_folders.allow_folder(tmp_path)
         operator = PlatClient(s.client, KEYS["operator"])
         cases = [
-            ({"path": str(tmp_path / "missing.json")}, 422, "cannot read"),
+            ({"path": str(tmp_path / "missing.json")}, 404, "no such session file"),
             ({"path": str(broken)}, 422, "not valid JSON"),
             ({"path": ""}, 422, "path"),
             ({"path": str(broken), "session": {}}, 422, "either 'path' or 'session'"),

@@ -22,7 +22,7 @@ from benchmark.server.openapi_roles import add_role_docs
 from benchmark.server.session_control import add_session_control_routes
 from benchmark.server.session_loading import add_session_loading_routes
 from benchmark.server.views import session_view, task_view
-from llm_tools.body_limit import BodyLimit
+from llm_tools.body_limit import bound_inputs
 from llm_tools.input_limits import InputError, preview
 from llm_tools.registry import ToolRegistry, default_registry
 
@@ -126,15 +126,11 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
                   description="Live benchmark sessions; roles agent, operator and admin by "
                               "API key (X-API-Key header).",
                   openapi_url=None, docs_url=None, redoc_url=None)
-    app.add_middleware(BodyLimit)
+    bound_inputs(app)
 
     @app.exception_handler(BudgetExhausted)
     async def budget_spent(_: Request, error: BudgetExhausted) -> JSONResponse:
         return JSONResponse({"detail": str(error), "reason": error.reason}, status_code=409)
-
-    @app.exception_handler(InputError)
-    async def bad_input(_: Request, error: InputError) -> JSONResponse:
-        return JSONResponse({"detail": str(error)}, status_code=error.http_status)
 
     add_health_routes(app)
     add_compat_world_routes(app, hub, registry)  # first: /sessions/current is not a session id

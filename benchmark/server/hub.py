@@ -9,6 +9,7 @@ from enum import StrEnum
 
 from agent_contract import AgentTools
 from benchmark.session_file import Session, TaskSpec
+from benchmark.session_folders import SessionFolders
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
 from mavlink_gateway import Gateway
@@ -67,6 +68,8 @@ class Hub:
         self.starter: Callable[[Session], Awaitable[LiveSession]] | None = None
         """Starts a live session (swarm and gateway) for a loaded session file; None where
         the server cannot load sessions while it runs."""
+        self.session_folders = SessionFolders()
+        """Where `POST /sessions/load {"path": ...}` reads files (benchmark.session_folders)."""
 
     def add_session(self, live: LiveSession) -> None:
         if live.id in self.sessions:

@@ -156,6 +156,7 @@ async def live_hub(session_paths: Sequence[str | Path],
         seen[session.id] = session.source
         first_task(session)
     hub = Hub()
+    hub.session_folders.files.extend(Path(p).resolve() for p in session_paths)
     async with SessionRunner(physics_hz) as runner:
         for session in sessions:
             hub.add_session(await runner.start(session))

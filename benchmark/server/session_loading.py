@@ -1,56 +1,38 @@
 """Operators switch what a running server serves, as the reference's session controller does:
-`POST /sessions/load` loads another session (a file on the server, or the session JSON in the
-body; MultiUAV-Plat files are converted as `bench import` converts them), starts its swarm and
-makes it current; `POST /sessions/{id}/set-current` makes a live session current again. The
-current session is the one the MultiUAV-Plat routes act on when no session is named, and the
-session of a request without a key under `--open`. Agents cannot switch sessions (403), and a
-refused load changes nothing."""
+`POST /sessions/load` loads another session (a file in the server's session folders,
+`benchmark.session_folders`, or the session JSON in the body; MultiUAV-Plat files are
+converted as `bench import` converts them), starts its swarm and makes it current;
+`POST /sessions/{id}/set-current` makes a live session current again. The current session is
+the one the MultiUAV-Plat routes act on when no session is named, and the session of a
+request without a key under `--open`. Agents cannot switch sessions (403), and a refused load
+changes nothing."""
 
-import json
-from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import Annotated, Any
 
-from fastapi import Depends, FastAPI, HTTPException, Request
+from fastapi import Depends, FastAPI, HTTPException
 
-from benchmark.importer import load_any_session
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.session_runner import first_task, session_from_json
 from benchmark.session_file import Session
-from llm_tools.input_limits import check_text, preview
+from benchmark.session_folders import SessionFolders, SessionPathError
+from llm_tools.body_limit import json_body
+from llm_tools.input_limits import MAX_SESSION_NUMBER_ABS, preview
 
 __all__ = ["MAX_LIVE_SESSIONS", "add_session_loading_routes", "load_session"]
 
 MAX_LIVE_SESSIONS = 16
 """Sessions a server runs at once: each is a swarm with its own UDP ports."""
-_PATH_CHARS = 4096
-_BODY_FORMS = ('{"path": "<session file on the server>"}, {"session": {...}} or a session '
-               "object (mavswarm or MultiUAV-Plat)")
+_BODY_FORMS = ('{"path": "<session file in a session folder>"}, {"session": {...}} or a '
+               "session object (mavswarm or MultiUAV-Plat)")
+session_body = json_body(max_number_abs=MAX_SESSION_NUMBER_ABS)
+"""A body that carries a session: the input bounds, with a session's number bound (its seed
+is a 64-bit integer); its size is the body limit's (`BodyLimit`, 1 MiB)."""
 
 
-def _not_finite(token: str) -> NoReturn:
-    raise ValueError(f"{token} is not a JSON number")
-
-
-def _parse(raw: bytes) -> Any:
-    """The request body as JSON. A session file is not bounded like tool arguments (a seed
-    exceeds their number limit); the body's size is (`BodyLimit`, 1 MiB)."""
-    try:
-        return json.loads(raw.decode("utf-8"), parse_constant=_not_finite)
-    except UnicodeDecodeError as error:
-        raise HTTPException(422, f"the body is not UTF-8 text (byte {error.start})") from None
-    except json.JSONDecodeError as error:
-        raise HTTPException(422, f"the body is not valid JSON ({error.msg} at character "
-                            f"{error.pos})") from None
-    except ValueError as error:
-        raise HTTPException(422, f"the body: {error}") from None
-    except RecursionError:
-        raise HTTPException(422, "the body nests too deeply") from None
-
-
-def _read(body: Any) -> tuple[Session, list[str]]:
-    """The session a load request names, with the notes on what was mapped; HTTP 422 for
-    anything that is not a usable session."""
+async def _read(body: Any, folders: SessionFolders) -> tuple[Session, list[str]]:
+    """The session a load request names, with the notes on what was mapped; HTTP 4xx for
+    anything that is not a usable session (a path outside the session folders: 403)."""
     if not isinstance(body, dict):
         raise HTTPException(422, f"the body must be {_BODY_FORMS}; got {preview(body)}")
     try:
@@ -60,17 +42,14 @@ def _read(body: Any) -> tuple[Session, list[str]]:
                                     f"(got keys {preview(sorted(body))})")
             if "session" in body:
                 return session_from_json(body["session"], "the body's session")
-            path = body["path"]
-            if not isinstance(path, str) or not path.strip():
-                raise HTTPException(422, "path: expected the session file's path on the "
-                                    f"server, got {preview(path)}")
-            check_text(path, "path", limit=_PATH_CHARS)
-            session, notes = load_any_session(Path(path))
-            return session, notes
+            path, data = await folders.read_async(body["path"])
+            return session_from_json(data, str(path))
         if "drones" not in body and "schema" not in body:
             raise HTTPException(422, f"the body must be {_BODY_FORMS}; got an object with "
                                 f"keys {preview(sorted(body))}")
         return session_from_json(body, "the body")
+    except SessionPathError as error:
+        raise HTTPException(error.http_status, str(error)) from None
     except ValueError as error:  # SessionFileError, SessionImportError, InputError
         raise HTTPException(422, str(error)) from None
 
@@ -112,11 +91,14 @@ def add_session_loading_routes(app: FastAPI, hub: Hub) -> None:
                       "(operator, admin)",
               description=f"The body is {_BODY_FORMS}. A MultiUAV-Plat file is converted as "
                           "`mavswarm bench import` converts it; `notes` says what was read "
-                          "differently. 422: not a usable session (nothing changes); 409: "
-                          "its id is already live.")
-    async def load(request: Request, caller: Annotated[Caller, Depends(staff)]
-                   ) -> dict[str, Any]:
-        session, notes = _read(_parse(await request.body()))
+                          "differently. A path is read from the session folders only "
+                          "(benchmark/sessions, `--session-dir` folders, the files served): "
+                          "403 outside them, 404 not there, 413 over 16 MiB, 422 not a "
+                          "regular .json file or not a usable session (nothing changes); "
+                          "409: its id is already live.")
+    async def load(caller: Annotated[Caller, Depends(staff)],
+                   body: Annotated[Any, Depends(session_body)]) -> dict[str, Any]:
+        session, notes = await _read(body, hub.session_folders)
         live = await load_session(hub, session)
         return _answer(hub, live, notes)
 

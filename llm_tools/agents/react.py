@@ -11,7 +11,8 @@ from llm_tools.agents.chat import ChatClient, ModelConfig
 from llm_tools.openai_adapter import ToolCall, openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
-__all__ = ["SYSTEM_PROMPT", "ReactAgent", "assistant_message"]
+__all__ = ["MAX_NUDGES", "NUDGE", "SYSTEM_PROMPT", "ReactAgent", "assistant_message",
+           "task_message"]
 
 SYSTEM_PROMPT = """You command a swarm of real quadrotor drones through tools.
 Coordinates are local metres: x east, y north; z is altitude above home. Headings are compass
@@ -21,6 +22,12 @@ the tools return: use nearby() to see what a drone senses. Think briefly, then c
 several drones can act in the same turn. When every part of the task is done, call finish."""
 
 MAX_NUDGES = 2
+NUDGE = "Act with the tools; call finish when the whole task is done."
+
+
+def task_message(text: str, drone_ids: list[str]) -> str:
+    """The user message that opens a task's conversation."""
+    return f"Task: {text}\nYour drones: {', '.join(drone_ids)}."
 
 
 class ReactAgent:
@@ -46,8 +53,7 @@ class ReactAgent:
         schema = openai_tools(self.registry)
         messages: list[dict[str, Any]] = [
             {"role": "system", "content": SYSTEM_PROMPT},
-            {"role": "user", "content": f"Task: {task.text}\nYour drones: "
-                                        f"{', '.join(tools.drone_ids)}."},
+            {"role": "user", "content": task_message(task.text, tools.drone_ids)},
         ]
         nudges = 0
         stop = f"stopped: the budget of {self.max_steps} model turns is spent"
@@ -76,8 +82,7 @@ class ReactAgent:
                 break
             else:
                 nudges += 1
-                messages.append({"role": "user", "content": "Act with the tools; call finish "
-                                 "when the whole task is done."})
+                messages.append({"role": "user", "content": NUDGE})
             if tools.prompt_tokens + tools.completion_tokens >= self.max_tokens:
                 stop = f"stopped: the budget of {self.max_tokens} tokens is spent"
                 break
