@@ -1,6 +1,7 @@
 """The live view's command route (operators and admins): hands-on commands for one drone, a
 selection or every drone of a live swarm (console.commands).
 
+    GET  /api/live/{id}/commands  {"commands": [...], "refusal": why none runs now, or null}
     POST /api/live/{id}/command   {"drone_id": "d1", "tool": "move_to", "args": {...}}
                                   {"drone_ids": ["d1", "d2"] | "all", "tool": "hold",
                                    "args": {...}, "args_by_drone": {"d2": {...}}}
@@ -16,11 +17,13 @@ every command is refused with 409.
 
 import asyncio
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 from fastapi.responses import JSONResponse
 
+from console.commands import COMMANDS
+from console.live import LiveSwarm
 from console.request_bodies import CommandBody
 from llm_tools.body_limit import json_body
 from llm_tools.input_limits import preview
@@ -48,15 +51,27 @@ def add_live_routes(app: FastAPI, state: "ConsoleState", staff: Callable[..., st
     """Add the command route to the console's `app` (`staff`: its key dependency)."""
     Staff = Annotated[str, Depends(staff)]
 
-    @app.post("/api/live/{live_id}/command")
-    async def command(live_id: str, role: Staff,
-                      body: Annotated[CommandBody, Depends(json_body(CommandBody))]
-                      ) -> JSONResponse:
+    def live_or_404(live_id: str) -> LiveSwarm:
         lives = state.live_swarms()
         if live_id not in lives:
             raise HTTPException(404, f"no live swarm {preview(live_id)}; live: "
                                      f"{', '.join(lives) or 'none'}")
-        live = lives[live_id]
+        return lives[live_id]
+
+    @app.get("/api/live/{live_id}/commands")
+    def commands(live_id: str, role: Staff) -> dict[str, Any]:
+        """The commands this live view takes, and why none may run now (the page shows it
+        and greys its buttons)."""
+        commander = live_or_404(live_id).commander
+        if commander is None:
+            return {"commands": [], "refusal": "this live view takes no commands"}
+        return {"commands": list(COMMANDS), "refusal": commander.refusal()}
+
+    @app.post("/api/live/{live_id}/command")
+    async def command(live_id: str, role: Staff,
+                      body: Annotated[CommandBody, Depends(json_body(CommandBody))]
+                      ) -> JSONResponse:
+        live = live_or_404(live_id)
         commander = live.commander
         if commander is None:
             raise HTTPException(409, "this live view takes no commands")

@@ -101,13 +101,18 @@ def test_console_flight_commands_are_refused_while_a_task_runs(
                      headers={"X-API-Key": "op"})
     assert link.status_code == 409 and RULE in link.json()["detail"]
 
+    listed = httpx.get(f"{url}/console/api/live/{TASKED}/commands",
+                       headers={"X-API-Key": "op"}).json()
+    assert "hold" in listed["commands"] and RULE in listed["refusal"]
+
+    # The page says so up front and greys every command button.
     with open_page(browser, f"{url}/console/live/{TASKED}?key=op") as page:
         page.wait_for_function("window.consoleView.state.frames >= 2", timeout=20_000)
-        page.click("#cmd-take_off")
-        page.wait_for_function("(document.getElementById('cmd-result').textContent || '')"
-                               ".includes('benchmark task t01')", timeout=15_000)
-        assert "refused" in (page.text_content("#cmd-result") or "")
-        assert page.get_attribute("#cmd-result", "class") == "bad"
+        page.wait_for_selector("#cmd-refusal", timeout=15_000)
+        note = page.text_content("#cmd-refusal") or ""
+        assert "benchmark task t01" in note and "refused" in note
+        for button in ("hold", "hold-all", "take_off", "fly", "hover", "land", "return_home"):
+            assert page.is_disabled(f"#cmd-{button}"), button
         shot(page, "operator-rule-refused")
     assert _altitude(hub, TASKED, "d1") == pytest.approx(0.0, abs=0.1)
 
@@ -115,6 +120,8 @@ def test_console_flight_commands_are_refused_while_a_task_runs(
 def test_a_world_without_tasks_takes_console_commands(served: tuple[str, Hub]) -> None:
     url, hub = served
     assert mqtt_refusal(hub, FREE) is None
+    listed = httpx.get(f"{url}/console/api/live/{FREE}/commands", headers={"X-API-Key": "op"})
+    assert listed.json()["refusal"] is None
     answer = httpx.post(f"{url}/console/api/live/{FREE}/command",
                         json={"drone_id": "d2", "tool": "take_off", "args": {"altitude_m": 6}},
                         headers={"X-API-Key": "op"}, timeout=30)

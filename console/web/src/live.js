@@ -11,6 +11,7 @@ import { buildWorld } from "./world.js";
 
 const TRAIL_POINTS = 3000;
 const GOOD = new Set(["ok", "accepted"]);
+const REFUSAL_POLL_MS = 3000;  // how often the page asks whether commands are refused now
 
 export async function showLive(root, liveId) {
   const scene = await getJson(`/api/live/${encodeURIComponent(liveId)}/scene`);
@@ -18,6 +19,7 @@ export async function showLive(root, liveId) {
   const state = {
     frame: null, drones: [], activity: {}, trails: new Map(), frames: 0, flyMode: false, pending: null,
     markers: new Map(),  // drone -> {x, y, command}: fly-to targets the drones accepted
+    refusal: null,  // why no command may run now (a benchmark task runs), from the server
   };
   const status = el("span", { id: "live-status" }, "connecting…");
   const clock = el("span", { id: "sim-time" }, "t = –");
@@ -132,6 +134,7 @@ export async function showLive(root, liveId) {
     } catch (error) {
       state.pending = `${tool}: refused — ${error.message}`;
       state.pendingClass = "bad";
+      if (error.status === 409) checkRefusal();
     }
     for (const [id, r] of Object.entries(results)) {
       if (GOOD.has(r.status) && tool !== "move_to") state.markers.delete(id);  // a new goal
@@ -173,21 +176,23 @@ export async function showLive(root, liveId) {
     const dur = el("input", { id: "cmd-duration", type: "number", value: state.duration ?? 5, min: 1, step: 1,
       oninput: (e) => { state.duration = Number(e.target.value); } });
     const altitude = () => Number(alt.value);
+    const off = state.refusal ? "" : null;  // every command button, while commands are refused
     const who = ids.length === 0 ? "no drone selected" : ids.length === world.drones.length && ids.length > 1
       ? `all ${ids.length} drones` : ids.length > 4 ? `${ids.length} drones` : ids.join(", ");
     commandBox.replaceChildren(
       el("h3", { id: "cmd-target" }, `Command: ${who}`),
+      state.refusal ? el("p", { id: "cmd-refusal", class: "note" }, `Commands are refused now: ${state.refusal}`) : null,
       el("div", { class: "buttons" },
-        el("button", { id: "cmd-hold", class: "stop", disabled: ids.length ? null : "", onclick: () => send("hold", {}) }, "Stop / Hold"),
-        el("button", { id: "cmd-hold-all", class: "stop", onclick: () => sendTo(world.drones.map((d) => d.id), "hold", {}) }, "Hold all")),
+        el("button", { id: "cmd-hold", class: "stop", disabled: ids.length && !state.refusal ? null : "", onclick: () => send("hold", {}) }, "Stop / Hold"),
+        el("button", { id: "cmd-hold-all", class: "stop", disabled: off, onclick: () => sendTo(world.drones.map((d) => d.id), "hold", {}) }, "Hold all")),
       el("label", {}, "altitude (m) ", alt), el("label", {}, " hover (s) ", dur),
       el("div", { class: "buttons" },
-        el("button", { id: "cmd-take_off", onclick: () => send("take_off", { altitude_m: altitude() }) }, "Take off"),
-        el("button", { id: "cmd-fly", class: state.flyMode ? "active" : "",
+        el("button", { id: "cmd-take_off", disabled: off, onclick: () => send("take_off", { altitude_m: altitude() }) }, "Take off"),
+        el("button", { id: "cmd-fly", disabled: off, class: state.flyMode ? "active" : "",
           onclick: () => { state.flyMode = !state.flyMode; renderCommands(); } }, state.flyMode ? "Click the map…" : "Fly to (click)"),
-        el("button", { id: "cmd-hover", onclick: () => send("hover", { duration_s: Number(dur.value) }) }, "Hover"),
-        el("button", { id: "cmd-land", onclick: () => send("land", {}) }, "Land"),
-        el("button", { id: "cmd-return_home", onclick: () => send("return_home", {}) }, "Return home")),
+        el("button", { id: "cmd-hover", disabled: off, onclick: () => send("hover", { duration_s: Number(dur.value) }) }, "Hover"),
+        el("button", { id: "cmd-land", disabled: off, onclick: () => send("land", {}) }, "Land"),
+        el("button", { id: "cmd-return_home", disabled: off, onclick: () => send("return_home", {}) }, "Return home")),
       el("p", { id: "cmd-result", class: state.pendingClass || "muted" }, state.pending || ""));
   }
 
@@ -277,7 +282,16 @@ export async function showLive(root, liveId) {
       if (event.code < 4400) setTimeout(connect, 1000);
     };
   }
+  async function checkRefusal() {
+    // Whether commands are refused now (a benchmark task runs): said up front, buttons greyed.
+    try {
+      const { refusal } = await getJson(`/api/live/${encodeURIComponent(liveId)}/commands`);
+      if (refusal !== state.refusal) { state.refusal = refusal; renderCommands(); }
+    } catch { /* the next poll tries again */ }
+  }
+
   connect();
+  if (scene.commands) { checkRefusal(); setInterval(checkRefusal, REFUSAL_POLL_MS); }
   if (world.drones.length) focus(world.drones[0].id);
   else changed();
 }
