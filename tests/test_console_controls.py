@@ -165,13 +165,13 @@ def test_a_pilot_commands_a_selection_replaces_goals_and_holds(
         # Stop/Hold halts it mid-flight, far from the goal.
         time.sleep(0.6)
         page.click("#cmd-hold")
-        _row(page, "d1", "hold: ok")
+        assert "move_to interrupted" in _row(page, "d1", "hold: ok")
         page.wait_for_timeout(800)  # 4 s simulated: any drift would show
         held = _truth(swarm, "d1")
         page.wait_for_timeout(1000)
         still = _truth(swarm, "d1")
         assert math.dist(held, still) < 0.5, (held, still)
-        assert math.dist(still[:2], (0.0, 250.0)) > 50.0
+        assert math.dist(still[:2], (0.0, 250.0)) > 20.0
         assert "d1" not in _markers(page)  # its goal is gone
 
         # A landing replaces a fly-to in progress.
