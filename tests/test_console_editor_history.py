@@ -19,6 +19,7 @@ from benchmark.session_file import load_session
 from console.app import ConsoleState
 from console.auth import ConsoleAuth
 from tests.browser_fixtures import map_view, open_page, screen_of, shot
+from tests.cli_fixtures import ROOT
 from tests.console_server import serve_console
 
 pytestmark = [pytest.mark.browser]
@@ -72,6 +73,28 @@ def test_a_failed_load_leaves_the_session_on_the_page(browser: Any,
         drones = page.evaluate("window.consoleView.map.drones.length")
         assert drones == 2  # the map still shows the edited session
         shot(page, "editor-failed-load")
+
+
+def test_a_session_file_is_uploaded_and_a_broken_one_changes_nothing(
+        browser: Any, editor: tuple[str, Path], tmp_path: Path) -> None:
+    url, _ = editor
+    source = json.loads((ROOT / "benchmark/sessions/area_search-easy-1.json").read_text())
+    good, broken = tmp_path / "mine.json", tmp_path / "broken.json"
+    good.write_text(json.dumps({**source, "id": "uploaded-1"}))
+    broken.write_text('{"schema": "mavswarm.session/1", "drones": [')
+    with open_page(browser, f"{url}/editor") as page:
+        _status(page, "valid: 1 drones")
+        page.select_option("#start-source", "upload")
+        page.set_input_files("#start-upload", str(good))
+        page.click("#start-load")
+        page.wait_for_function("window.consoleView.state.session.id === 'uploaded-1'")
+        _status(page, "valid: 3 drones")
+        before = _session(page)
+        page.set_input_files("#start-upload", str(broken))
+        page.click("#start-load")
+        failed = _status(page, "cannot load broken.json")
+        assert "JSON" in failed and "unchanged" in failed
+        assert _session(page) == before
 
 
 def test_edits_and_loads_are_undone_and_redone(browser: Any, editor: tuple[str, Path]) -> None:

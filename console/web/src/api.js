@@ -57,6 +57,16 @@ export async function postJson(path, data) {
   return answer(response);
 }
 
+// {status, body} of a POST of raw text (an uploaded file's content, sent as it is).
+export async function postText(path, text) {
+  const response = await fetch(url(path), {
+    method: "POST",
+    headers: { "X-API-Key": apiKey(), "Content-Type": "application/json" },
+    body: text,
+  });
+  return answer(response);
+}
+
 export function liveSocket(liveId) {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
   const key = encodeURIComponent(apiKey());

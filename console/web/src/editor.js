@@ -6,7 +6,7 @@
 // started from a shipped one or a generated level is proposed a new id (saving under a shipped
 // session's id is refused: the copy's results would mix with the shipped session's).
 
-import { getAnswer, getJson, postJson } from "./api.js";
+import { getAnswer, getJson, postJson, postText } from "./api.js";
 import { Map2D } from "./map2d.js";
 import { el } from "./panel.js";
 import { buildWorld, shapeOutline } from "./world.js";
@@ -43,7 +43,8 @@ export async function showEditor(root) {
   const pathInput = el("input", { id: "save-path", value: "sessions/custom.json", size: 28 });
   const idInput = el("input", { id: "save-id", size: 28, onchange: (e) => renameSession(e.target.value) });
   const source = el("select", { id: "start-source", onchange: () => showSourceFields() },
-    ["shipped", "blank", "file", "level"].map((s) => el("option", { value: s, ...(s === "blank" ? { selected: "" } : {}) }, s)));
+    ["shipped", "blank", "file", "upload", "level"].map((s) => el("option", { value: s, ...(s === "blank" ? { selected: "" } : {}) }, s)));
+  const upload = el("input", { id: "start-upload", type: "file", accept: ".json,application/json" });
   const fileInput = el("input", { id: "start-path", placeholder: "session file path", size: 28 });
   const shipped = el("select", { id: "start-shipped" });
   const undoButton = el("button", { id: "undo", title: "undo (Ctrl+Z)", onclick: () => undo() }, "undo");
@@ -58,7 +59,7 @@ export async function showEditor(root) {
     ["select", "add drone", ...TARGET_KINDS.map((k) => `add target ${k}`), ...OBSTACLE_KINDS.map((k) => `add obstacle ${k}`)].map((t) => el("option", { value: t }, t)));
   root.replaceChildren(
     el("header", {}, el("h1", {}, "Scenario editor")),
-    el("div", { class: "filters" }, "start from ", source, shipped, fileInput, family, level, index,
+    el("div", { class: "filters" }, "start from ", source, shipped, fileInput, upload, family, level, index,
       el("button", { id: "start-load", onclick: () => start() }, "load"), undoButton, redoButton),
     el("main", { class: "live" },
       el("section", { class: "views" }, el("div", { class: "pane wide" }, canvas)),
@@ -81,8 +82,8 @@ export async function showEditor(root) {
   showSourceFields();
 
   function showSourceFields() {
-    const shown = { shipped: [shipped], file: [fileInput], level: [family, level, index], blank: [] }[source.value] || [];
-    for (const node of [shipped, fileInput, family, level, index]) node.hidden = !shown.includes(node);
+    const shown = { shipped: [shipped], file: [fileInput], upload: [upload], level: [family, level, index], blank: [] }[source.value] || [];
+    for (const node of [shipped, fileInput, upload, family, level, index]) node.hidden = !shown.includes(node);
   }
 
   // ----------------------------------------------------------------- history
@@ -143,13 +144,21 @@ export async function showEditor(root) {
 
   async function start() {
     // The new session replaces the one on the page only once it loaded.
-    const what = source.value === "shipped" ? shipped.value : source.value === "file" ? fileInput.value : source.value;
+    const picked = upload.files && upload.files[0];
+    const what = source.value === "shipped" ? shipped.value : source.value === "file" ? fileInput.value
+      : source.value === "upload" ? (picked ? picked.name : "an upload") : source.value;
     let loaded = null;
     try {
       if (source.value === "shipped") {
         const { status: code, body } = await getAnswer(`/api/editor/shipped/${encodeURIComponent(shipped.value)}`);
         if (code !== 200) throw new Error(body.detail || body.error);
         loaded = { ...body.session, id: body.proposed_id };
+      } else if (source.value === "upload") {
+        if (!picked) throw new Error("pick a session file first");
+        const { status: code, body } = await postText("/api/editor/open", await picked.text());
+        if (code !== 200) throw new Error(body.detail || body.error);
+        loaded = body;
+        if (shippedIds.has(loaded.id)) loaded.id = `${loaded.id}-edit`;
       } else {
         const params = new URLSearchParams({ source: source.value, path: fileInput.value, family: family.value, level: level.value, index: index.value });
         const { status: code, body } = await getAnswer(`/api/editor/start?${params}`);
