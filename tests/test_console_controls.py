@@ -120,7 +120,8 @@ def test_a_pilot_commands_a_selection_replaces_goals_and_holds(
     with open_page(browser, f"{url}/live/swarm?key={KEY}") as page:
         page.wait_for_function("window.consoleView.state.frames >= 3", timeout=20_000)
         assert "point obstacle" in (page.text_content(".legend") or "")
-
+        assert "null" not in (page.text_content("#commands") or "")
+        assert page.query_selector("#cmd-refusal") is None  # `up --web` takes commands
         # A fly-to for a drone on the ground is refused at once: no marker.
         _pick(page, "d4")
         _fly_to(page, 200.0, 40.0)

@@ -179,7 +179,7 @@ export async function showLive(root, liveId) {
     const off = state.refusal ? "" : null;  // every command button, while commands are refused
     const who = ids.length === 0 ? "no drone selected" : ids.length === world.drones.length && ids.length > 1
       ? `all ${ids.length} drones` : ids.length > 4 ? `${ids.length} drones` : ids.join(", ");
-    commandBox.replaceChildren(
+    commandBox.replaceChildren(...[
       el("h3", { id: "cmd-target" }, `Command: ${who}`),
       state.refusal ? el("p", { id: "cmd-refusal", class: "note" }, `Commands are refused now: ${state.refusal}`) : null,
       el("div", { class: "buttons" },
@@ -193,7 +193,7 @@ export async function showLive(root, liveId) {
         el("button", { id: "cmd-hover", disabled: off, onclick: () => send("hover", { duration_s: Number(dur.value) }) }, "Hover"),
         el("button", { id: "cmd-land", disabled: off, onclick: () => send("land", {}) }, "Land"),
         el("button", { id: "cmd-return_home", disabled: off, onclick: () => send("return_home", {}) }, "Return home")),
-      el("p", { id: "cmd-result", class: state.pendingClass || "muted" }, state.pending || ""));
+      el("p", { id: "cmd-result", class: state.pendingClass || "muted" }, state.pending || "")].filter(Boolean));
   }
 
   function clicked(hit) {
