@@ -200,8 +200,8 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 def _report(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
     from benchmark.report import metrics_table, write_report
-    from benchmark.results import read_all_records
-    records = read_all_records(args.results)
+    from benchmark.results import read_all_task_records
+    records = read_all_task_records(args.results)
     out = args.out or args.results[0].parent
     md, js, html = write_report(records, out, inspector_url=args.inspector_url,
                                 results_dir=args.results[0].parent)
