@@ -130,13 +130,14 @@ def _generate(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
-    from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.orchestrator import RunPlan, check_session_files, run_benchmark
     from benchmark.progress import ProgressBar
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
     from benchmark.results import read_records
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
+        check_session_files(paths)  # unreadable or without tasks: refused, nothing runs
     else:
         paths, limit = suite_paths(args.suite)
         label = args.suite

@@ -32,7 +32,8 @@ from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 
-__all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark", "run_unit"]
+__all__ = ["AGENTS", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
+           "run_benchmark", "run_unit"]
 
 # NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone)
 AGENTS = ("oracle", "noop", "react", "workflow", "react:per-drone", "workflow:per-drone")
@@ -193,6 +194,19 @@ def _done_by_unit(records: Sequence[Mapping[str, Any]]
             unit = (str(r.get("session")), int(r.get("trial", 0)))
             done.setdefault(unit, {})[r["key"]] = r.get("end_state")
     return done
+
+
+def check_session_files(paths: Sequence[Path]) -> None:
+    """Refuse, before anything runs, a session file that cannot be read as a JSON object or
+    that lists no tasks (nothing to run); SessionFileError naming the file."""
+    for path in paths:
+        data = read_session_json(path)
+        if not isinstance(data, dict):
+            raise SessionFileError(f"{path}: the top level must be a JSON object")
+        if not data.get("tasks"):
+            raise SessionFileError(f"{path}: the session has no tasks, so there is nothing to "
+                                   "run (add tasks in the console's editor, or fly it with "
+                                   "`mavswarm up --session`)")
 
 
 def _known_tasks(paths: Sequence[Path]) -> dict[str, frozenset[str]] | None:

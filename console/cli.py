@@ -25,7 +25,7 @@ from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
 from console.bench_watch import LiveBoard, serve_in_thread
 from console.commands import Commander
-from console.live import DEFAULT_RATE_HZ, LiveSwarm
+from console.live import DEFAULT_RATE_HZ, LiveSwarm, check_rate_hz
 from console.results_index import open_paths
 from emulator import cli as emulator_cli
 from emulator.scenario_export import scenario_to_dict
@@ -77,8 +77,15 @@ def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
     parser.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
     parser.add_argument("--web-key", help="--web: the operator key (default: generated)")
-    parser.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
-                        help="--web: live updates per second")
+    parser.add_argument("--web-hz", type=_rate_hz, default=DEFAULT_RATE_HZ,
+                        help="--web: live updates per second (0.5 to 60)")
+
+
+def _rate_hz(text: str) -> float:
+    try:
+        return check_rate_hz(float(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a rate from 0.5 to 60 Hz") from None
 
 
 def _print(text: str) -> None:
@@ -110,12 +117,21 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
     state = ConsoleState(auth, {"swarm": live}, rate_hz=rate_hz)
     app = create_console_app(state)
 
+    listening = asyncio.Event()
+
     def ready(url: str) -> None:
+        listening.set()
         if on_ready is not None:
             on_ready(url, key)
 
     server = asyncio.create_task(serve_asgi(app, host=host, port=port, on_ready=ready))
     try:
+        # A port that cannot be listened on ends the command (the error), not just the page.
+        started = asyncio.create_task(listening.wait())
+        await asyncio.wait({server, started}, return_when=asyncio.FIRST_COMPLETED)
+        started.cancel()
+        if server.done():
+            server.result()
         yield state
     finally:
         server.cancel()
