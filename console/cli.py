@@ -11,7 +11,9 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import signal
 import sys
+import threading
 from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -68,7 +70,10 @@ def extend_parsers(sub: argparse._SubParsersAction) -> None:
     bench = sub.choices["bench"]
     bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
     run = bench_sub.choices["run"]
-    _add_web_arguments(run, "follow the sessions being run in the web console (prints the URL)")
+    _add_web_arguments(run, "follow the sessions being run in the web console (prints the URL); "
+                            "it stays open after the run until Ctrl-C")
+    run.add_argument("--web-exit", action="store_true",
+                     help="--web: close the console and exit when the run ends")
     bench.set_defaults(run=_run_bench)
 
 
@@ -170,10 +175,29 @@ def _run_bench(args: argparse.Namespace) -> int:
                              rate_hz=args.web_hz) as (url, key):
             _print(f"web console: {url}/?key={key} (pick the session to follow)")
             args.live_hz, args.on_live = args.web_hz, board.update
-            return bench_cli.run_bench(args)
+            status = bench_cli.run_bench(args)
+            if args.web_exit or status in (2, 130):  # asked to, bad input, or interrupted
+                return status
+            _print(f"the run is over; the web console stays open at {url}/?key={key} until "
+                   "Ctrl-C (--web-exit: exit when the run ends)")
+            _wait_for_interrupt()
+            return status
     except OSError as error:
         print(f"mavswarm: {error}", file=sys.stderr)
         return 2
+
+
+def _wait_for_interrupt() -> None:
+    """Block until Ctrl-C (SIGINT) or SIGTERM."""
+    stop = threading.Event()
+    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey]) -> Callable[[str], None]:
