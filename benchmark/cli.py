@@ -164,10 +164,11 @@ def _run(args: argparse.Namespace) -> int:
     else:
         from mqtt_bus import BenchBus
         run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
-        from benchmark.results import ResultsError
+        from benchmark.results import ResultsError, read_task_records
         try:  # a resumed run first publishes what the file already holds
-            earlier = read_records(plan.results_path) if plan.results_path.exists() else []
-        except ResultsError:  # a torn last line: run_benchmark repairs it; nothing replayed
+            earlier = (read_task_records(plan.results_path) if plan.results_path.exists()
+                       else [])
+        except ResultsError:  # a damaged line: run_benchmark repairs or refuses it
             earlier = []
         with BenchBus(url, run_name) as bus:
             print(f"MQTT: {url.redacted()} topics {bus.topics.base}/tasks, .../progress")
