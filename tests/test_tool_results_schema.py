@@ -119,6 +119,10 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
         hub.add_key(AGENT_KEY, Role.AGENT, session.id)
         async with _listening(create_app(hub)) as url, httpx.AsyncClient(
                 base_url=url, headers={"X-API-Key": AGENT_KEY}, timeout=60.0) as http:
+            listed = (await http.get(f"/sessions/{session.id}/tools")).json()
+            assert {t["name"]: t["output_schema"] for t in listed} == {
+                name: OUTPUT_SCHEMA for name in tool_names()}
+
             async def rest(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
                 r = await http.post(f"/sessions/{session.id}/tools/{name}", json=arguments)
                 assert r.status_code == 200, (name, r.status_code, r.text)
