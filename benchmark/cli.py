@@ -44,7 +44,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="session ids to generate (e.g. area_search-easy-1)")
     gen.add_argument("--no-verify", action="store_true",
                      help="skip proving each task with the oracle (faster; not for release)")
-    gen.add_argument("--workers", type=int, default=1, help="sessions generated at once")
+    gen.add_argument("--workers", type=_at_least_one, default=1, help="sessions generated at once")
     _add_backend_arguments(gen)
     add_verbose_argument(gen)
 
@@ -63,8 +63,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        help="smoke: 3 easy sessions, 6 tasks each; full: 125 sessions, 2500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
-    run.add_argument("--workers", type=int, default=1, help="sessions run at once")
-    run.add_argument("--trials", type=int, default=1, help="repeats of every task (pass^k)")
+    run.add_argument("--workers", type=_at_least_one, default=1, help="sessions run at once")
+    run.add_argument("--trials", type=_at_least_one, default=1,
+                     help="repeats of every task (pass^k)")
     run.add_argument("--clock", choices=CLOCKS, default="lockstep",
                      help="lockstep (default): simulated time runs only while the agent waits "
                           "on the world, so results do not depend on think time; stepped: it "
@@ -88,6 +89,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+
+
+def _at_least_one(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return value
 
 
 def add_verbose_argument(parser: argparse.ArgumentParser) -> None:
@@ -204,6 +215,9 @@ def _report(args: argparse.Namespace) -> int:
     from benchmark.report import metrics_table, write_report
     from benchmark.results import read_all_task_records
     records = read_all_task_records(args.results)
+    if not records:
+        from benchmark.results import ResultsError
+        raise ResultsError(f"{', '.join(map(str, args.results))}: no task records to report")
     out = args.out or args.results[0].parent
     md, js, html = write_report(records, out, inspector_url=args.inspector_url,
                                 results_dir=args.results[0].parent)

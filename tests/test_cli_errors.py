@@ -120,12 +120,22 @@ def test_a_busy_port_is_one_line_for_every_server(tmp_path: Path) -> None:
     (["up", "--drones", "1", "--truth-out", "/proc/none/run.truth.npz"],
      ["--truth-out", "cannot make its folder"]),
     (["bench", "frob"], ["invalid choice: 'frob'"]),
+    (["bench", "generate", "--workers", "0", "--out", "gen"], ["--workers", "at least 1"]),
+    (["bench", "run", "--suite", "smoke", "--trials", "-1"], ["--trials", "at least 1"]),
     (["mqtt-bridge", "--mavlink", "bogus", "--mqtt", "mqtt://127.0.0.1:1"],
      ["cannot open the MAVLink connection 'bogus'"]),
 ])
 def test_missing_files_and_bad_values_are_one_line(tmp_path: Path, args: list[str],
                                                    needles: list[str]) -> None:
     _one_line_error(_mavswarm(*args, cwd=tmp_path), *needles)
+
+
+def test_a_report_of_no_records_is_an_error(tmp_path: Path) -> None:
+    torn = tmp_path / "results.jsonl"
+    torn.write_text('{"key": "s/t01/noop/0", "pass')  # a killed run's only, torn line
+    proc = _mavswarm("bench", "report", str(torn), "--out", str(tmp_path / "rep"), cwd=tmp_path)
+    _one_line_error(proc, str(torn), "no task records to report")
+    assert not (tmp_path / "rep").exists()
 
 
 @pytest.mark.parametrize(("text", "needle"), [
