@@ -164,3 +164,21 @@ def test_resume_stops_at_a_mangled_key_and_runs_nothing(tmp_path: Path) -> None:
                        cwd=tmp_path)
     assert report.returncode == 2 and report.stderr.startswith(f"mavswarm: {results}:2: ")
     assert len(report.stderr.splitlines()) == 1
+
+
+def test_resume_refuses_a_record_of_a_task_the_sessions_do_not_have(tmp_path: Path) -> None:
+    from benchmark.orchestrator import RunPlan, run_benchmark
+    data = small_session(["takeoff_hold"])
+    session = write_json(tmp_path / "s.json", data)
+    records = _records()
+    for record in records[:2]:
+        record.update(session=data["id"], key=record_key(data["id"], record["task"],
+                                                         "noop", 0), agent="noop")
+    results = tmp_path / "out" / "results.jsonl"
+    results.parent.mkdir()
+    results.write_bytes(b"".join(_lines(records[:2])))  # t01 is the session's, t02 is not
+    with pytest.raises(ResultsError, match=rf"^{results}:2: record '{data['id']}/t02/noop/0' "
+                                           rf"names task 't02', which session"):
+        run_benchmark(RunPlan(sessions=(session,), agent="noop", out_dir=tmp_path / "out"),
+                      progress=lambda _: None)
+    assert results.read_bytes() == b"".join(_lines(records[:2]))
