@@ -15,7 +15,7 @@ from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, read_until
 from tests.ports import unused_tcp_port
 
-pytestmark = pytest.mark.mavsdk
+pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
 
 def _bench_web(tmp_path: Path, port: int, *extra: str) -> subprocess.Popen[str]:

@@ -86,6 +86,8 @@ def test_capacity_per_process_and_per_machine() -> None:
         check_capacity(5, starved)
 
 
+@pytest.mark.mavsdk
+@pytest.mark.slow
 def test_a_busy_port_is_one_line_for_every_server(tmp_path: Path) -> None:
     session = write_json(tmp_path / "s.json", small_session(["takeoff_hold"]))
     with _busy_tcp_port() as port:

@@ -139,6 +139,8 @@ def test_fuzzed_lines_never_crash_never_add_a_task_and_name_their_line(
     assert all(record_problem(r, KNOWN) is None for r in records)
 
 
+@pytest.mark.mavsdk
+@pytest.mark.slow
 def test_resume_stops_at_a_mangled_key_and_runs_nothing(tmp_path: Path) -> None:
     session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "climb_and_face"]))
     out = tmp_path / "out"
