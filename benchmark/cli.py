@@ -46,7 +46,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="session ids to generate (e.g. area_search-easy-1)")
     gen.add_argument("--no-verify", action="store_true",
                      help="skip proving each task with the oracle (faster; not for release)")
-    gen.add_argument("--workers", type=int, default=1, help="sessions generated at once")
+    gen.add_argument("--workers", type=_at_least_one, default=1, help="sessions generated at once")
     _add_backend_arguments(gen)
     add_verbose_argument(gen)
 
@@ -73,8 +73,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        help="smoke: 3 easy sessions, 6 tasks each; full: 125 sessions, 2500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
-    run.add_argument("--workers", type=int, default=1, help="sessions run at once")
-    run.add_argument("--trials", type=int, default=1, help="repeats of every task (pass^k)")
+    run.add_argument("--workers", type=_at_least_one, default=1, help="sessions run at once")
+    run.add_argument("--trials", type=_at_least_one, default=1,
+                     help="repeats of every task (pass^k)")
     run.add_argument("--clock", choices=CLOCKS, default="lockstep",
                      help="lockstep (default): simulated time runs only while the agent waits "
                           "on the world, so results do not depend on think time; stepped: it "
@@ -101,6 +102,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+
+
+def _at_least_one(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return value
 
 
 def add_verbose_argument(parser: argparse.ArgumentParser) -> None:
@@ -144,7 +155,7 @@ def _generate(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from benchmark.agent_plugins import check_spec
     from benchmark.metrics import summarize
-    from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.orchestrator import RunPlan, check_session_files, run_benchmark
     from benchmark.progress import ProgressBar
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
@@ -154,6 +165,7 @@ def _run(args: argparse.Namespace) -> int:
         raise ValueError(f"--agent-timeout-s must be > 0, got {args.agent_timeout_s:g}")
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
+        check_session_files(paths)  # unreadable or without tasks: refused, nothing runs
     else:
         paths, limit = suite_paths(args.suite)
         label = args.suite
@@ -181,10 +193,11 @@ def _run(args: argparse.Namespace) -> int:
     else:
         from mqtt_bus import BenchBus
         run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
-        from benchmark.results import ResultsError
+        from benchmark.results import ResultsError, read_task_records
         try:  # a resumed run first publishes what the file already holds
-            earlier = read_records(plan.results_path) if plan.results_path.exists() else []
-        except ResultsError:  # a torn last line: run_benchmark repairs it; nothing replayed
+            earlier = (read_task_records(plan.results_path) if plan.results_path.exists()
+                       else [])
+        except ResultsError:  # a damaged line: run_benchmark repairs or refuses it
             earlier = []
         with BenchBus(url, run_name) as bus:
             print(f"MQTT: {url.redacted()} topics {bus.topics.base}/tasks, .../progress")
@@ -218,8 +231,11 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 def _report(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
     from benchmark.report import metrics_table, write_report
-    from benchmark.results import read_all_records
-    records = read_all_records(args.results)
+    from benchmark.results import read_all_task_records
+    records = read_all_task_records(args.results)
+    if not records:
+        from benchmark.results import ResultsError
+        raise ResultsError(f"{', '.join(map(str, args.results))}: no task records to report")
     out = args.out or args.results[0].parent
     md, js, html = write_report(records, out, inspector_url=args.inspector_url,
                                 results_dir=args.results[0].parent)
