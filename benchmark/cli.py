@@ -10,6 +10,8 @@
                      [--verbose]
   mavswarm bench agents
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
+  mavswarm bench compare RUN [RUN ...] [--baseline RUN] [--intersect] [--out DIR]
+                         [--seed N] [--resamples N] [--inspector-url URL]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
 
@@ -97,6 +99,25 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                         help="folder for report.md, report.json and report.html (default: "
                              "beside the first)")
     _add_inspector_argument(report)
+
+    compare = bsub.add_parser("compare", help="compare runs: paired transitions with McNemar "
+                              "tests, rates with bootstrap intervals (compare.md/.json/.html)")
+    compare.add_argument("runs", type=Path, nargs="+", metavar="RUN",
+                         help="results folders or results.jsonl files (a file with several "
+                              "agents counts as one run per agent)")
+    compare.add_argument("--baseline", default=None, metavar="RUN",
+                         help="the run the others are paired against: a run id or path "
+                              "(default: the first)")
+    compare.add_argument("--intersect", action="store_true",
+                         help="compare runs of different suites or task sets on the tasks all "
+                              "of them ran (default: refuse)")
+    compare.add_argument("--out", type=Path, default=Path("runs/compare"),
+                         help="folder for compare.md, compare.json and compare.html (default "
+                              "runs/compare)")
+    compare.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
+    compare.add_argument("--resamples", type=int, default=2000,
+                         help="bootstrap resamples (default 2000)")
+    _add_inspector_argument(compare)
 
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
@@ -230,6 +251,29 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare(args: argparse.Namespace) -> int:
+    from benchmark.compare import compare_paths, write_compare
+    from benchmark.compare.markdown import p_value, pct_interval
+    from benchmark.report_html import check_inspector_url
+    check_inspector_url(args.inspector_url)
+    report = compare_paths(args.runs, baseline=args.baseline, intersect=args.intersect,
+                           resamples=args.resamples, seed=args.seed)
+    folders = " ".join(sorted({str(Path(r.source).parent) for r in report.runs}))
+    paths = write_compare(report, args.out, inspector_url=args.inspector_url,
+                          serve_hint=folders)
+    for warning in report.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    for run in report.runs:
+        print(f"{run.id:<24} Task Pass {pct_interval(run.task_pass_rate)}  ({run.tasks} tasks)")
+    for pair in report.pairs:
+        t = pair.overall
+        print(f"{pair.run} vs {pair.baseline}: {t.fail_to_pass} fail->pass, {t.pass_to_fail} "
+              f"pass->fail, {t.both_pass} both pass, {t.both_fail} both fail; McNemar p = "
+              f"{p_value(t.mcnemar_p)}")
+    print(f"\ncompare: {', '.join(map(str, paths))}")
+    return 0
+
+
 def _agents(args: argparse.Namespace) -> int:
     from benchmark.agent_plugins import listing
     rows = listing()
@@ -258,7 +302,7 @@ def run_bench(args: argparse.Namespace) -> int:
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
     handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import,
-                "agents": _agents}
+                "agents": _agents, "compare": _compare}
     try:
         return handlers[args.bench_command](args)
     except (SessionFileError, ResultsError, ValueError, OSError) as error:

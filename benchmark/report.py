@@ -18,7 +18,7 @@ from typing import Any
 from benchmark.metrics import finish_sort_key, level_sort_key, summarize
 from benchmark.report_html import DEFAULT_INSPECTOR_URL, render_html
 
-__all__ = ["metrics_table", "render_markdown", "write_report"]
+__all__ = ["metrics_table", "render_markdown", "write_report", "write_text_atomic"]
 
 MISSING = "n/a"
 _GROUP_SECTIONS: tuple[tuple[str, str, str], ...] = (
@@ -179,7 +179,7 @@ def render_markdown(summary: Mapping[str, Any], *, title: str = "mavswarm benchm
     return "\n".join(parts) + "\n"
 
 
-def _write_text(path: Path, text: str) -> None:
+def write_text_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file, so readers never see half of it."""
     fd, temp_name = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
@@ -216,7 +216,7 @@ def write_report(
     md_path = directory / "report.md"
     json_path = directory / "report.json"
     html_path = directory / "report.html"
-    _write_text(json_path, json.dumps(summary, sort_keys=True, indent=2) + "\n")
-    _write_text(md_path, render_markdown(summary, title=title))
-    _write_text(html_path, page)
+    write_text_atomic(json_path, json.dumps(summary, sort_keys=True, indent=2) + "\n")
+    write_text_atomic(md_path, render_markdown(summary, title=title))
+    write_text_atomic(html_path, page)
     return md_path, json_path, html_path

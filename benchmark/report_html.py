@@ -31,13 +31,19 @@ from benchmark.failed_checks import failed_leaves
 from benchmark.metrics import compute_metrics, finish_sort_key, level_sort_key, summarize
 from benchmark.metrics import unique_records as unique
 
-__all__ = ["DEFAULT_INSPECTOR_URL", "check_inspector_url", "inspector_link", "render_html"]
+__all__ = [
+    "DEFAULT_INSPECTOR_URL",
+    "PAGE_CSS",
+    "check_inspector_url",
+    "inspector_link",
+    "render_html",
+]
 
 DEFAULT_INSPECTOR_URL = "http://127.0.0.1:8765"
 ALL = "all"
 Record = Mapping[str, Any]
 
-_CSS = """
+PAGE_CSS = """
 :root { color-scheme: light; }
 * { box-sizing: border-box; }
 body { margin: 0; background: #f4f6f9; color: #1f2933;
@@ -92,10 +98,17 @@ def check_inspector_url(url: str) -> str:
     return url.strip().rstrip("/")
 
 
-def inspector_link(base: str, session: str, task: str, trial: int) -> str:
-    """The inspector's page of one task: ``{base}/inspect/{session}/{task}?trial={trial}``."""
+def inspector_link(base: str, session: str, task: str, trial: int, *, run: str | None = None,
+                   agent: str | None = None) -> str:
+    """The inspector's page of one task:
+    ``{base}/inspect/{session}/{task}?run={run}&agent={agent}&trial={trial}``, `run` (the id
+    ``mavswarm replay`` gives the results folder) and `agent` only when given: with several
+    runs served, the run picks whose page opens."""
+    query = [("run", run), ("agent", agent), ("trial", str(int(trial)))]
+    text = "&".join(f"{name}={quote(str(value), safe='')}" for name, value in query
+                    if value is not None)
     return (f"{base.rstrip('/')}/inspect/{quote(str(session), safe='')}/"
-            f"{quote(str(task), safe='')}?trial={int(trial)}")
+            f"{quote(str(task), safe='')}?{text}")
 
 
 def _pct(rate: float | None) -> str:
@@ -373,5 +386,5 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
         parts.append(_all_table(rows, base))
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             '<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<title>{escape(title)}</title><style>{_CSS}</style></head>"
+            f"<title>{escape(title)}</title><style>{PAGE_CSS}</style></head>"
             f"<body><main>{''.join(parts)}</main></body></html>\n")
