@@ -94,7 +94,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                     f"plug-ins (entry points in the group {ENTRY_POINT_GROUP})")
 
     report = bsub.add_parser("report", help="metrics report of results files")
-    report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
+    report.add_argument("results", type=Path, nargs="+",
+                        help="results.jsonl files or their folders; several are reported "
+                             "each on its own")
     report.add_argument("--out", type=Path, default=None,
                         help="folder for report.md, report.json and report.html (default: "
                              "beside the first)")
@@ -218,7 +220,8 @@ def _run(args: argparse.Namespace) -> int:
             bus.finish(len(records))
         stats = bus.stats
         print(f"MQTT: {stats.published} messages published, {stats.dropped} dropped")
-    md, js, html = write_report(records, out, inspector_url=args.inspector_url)
+    md, js, html = write_report(records, out, inspector_url=args.inspector_url,
+                                run_id=out.resolve().name)
     print()
     print(metrics_table(summarize(records)))
     print(f"\n{outcome.records_written} new task records in {outcome.wall_s:.1f} s; "
@@ -239,15 +242,23 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 def _report(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
     from benchmark.report import metrics_table, write_report
-    from benchmark.results import read_all_records
-    records = read_all_records(args.results)
-    out = args.out or args.results[0].parent
-    md, js, html = write_report(records, out, inspector_url=args.inspector_url,
-                                results_dir=args.results[0].parent)
-    print(metrics_table(summarize(records)))
+    from benchmark.report_html import check_inspector_url
+    from benchmark.report_runs import load_report_runs, write_runs_report
+    check_inspector_url(args.inspector_url)
+    runs = load_report_runs(args.results)
+    out = args.out or runs[0].source.parent
+    if len(runs) == 1:
+        md, js, html = write_report(runs[0].records, out, inspector_url=args.inspector_url,
+                                    results_dir=runs[0].source.parent, run_id=runs[0].id)
+        print(metrics_table(summarize(runs[0].records)))
+    else:  # each run on its own: never one pooled headline
+        md, js, html, *_ = write_runs_report(runs, out, inspector_url=args.inspector_url)
+        for run in runs:
+            print(f"{run.id} ({run.source}):\n{metrics_table(summarize(run.records))}\n")
+    folders = " ".join(str(run.source.parent) for run in runs)
     print(f"\nreport: {md}, {js}, {html}")
-    print(f"charts: open {html} in a browser; `mavswarm replay {args.results[0].parent}` "
-          "serves the task pages it links to")
+    print(f"charts: open {html} in a browser; `mavswarm replay {folders}` serves the task pages "
+          "it links to")
     return 0
 
 

@@ -199,11 +199,12 @@ def write_report(
     title: str = "mavswarm benchmark",
     inspector_url: str = DEFAULT_INSPECTOR_URL,
     results_dir: str | Path | None = None,
+    run_id: str | None = None,
 ) -> tuple[Path, Path, Path]:
     """Write ``report.md``, ``report.json`` (sorted keys, 2-space indent) and ``report.html``
     (:mod:`benchmark.report_html`, its task links into the inspector at `inspector_url`, which
-    ``mavswarm replay RESULTS_DIR`` serves for `results_dir`, default `out_dir`) into
-    ``out_dir``.
+    ``mavswarm replay RESULTS_DIR`` serves for `results_dir`, default `out_dir`; with `run_id`
+    each link names the run) into ``out_dir``.
 
     Returns the paths of the Markdown, JSON and HTML files.
     """
@@ -211,7 +212,8 @@ def write_report(
     directory = Path(out_dir)
     summary = summarize(rows)
     page = render_html(rows, title=title, inspector_url=inspector_url,
-                       results_dir=str(results_dir if results_dir is not None else directory))
+                       results_dir=str(results_dir if results_dir is not None else directory),
+                       run_id=run_id)
     directory.mkdir(parents=True, exist_ok=True)
     md_path = directory / "report.md"
     json_path = directory / "report.json"

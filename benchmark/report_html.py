@@ -5,13 +5,17 @@ and no other file. Charts: pass rate by family x level (a heatmap), by category,
 and by check endpoint, pass^k against k, tokens and cost per task, simulated against wall
 time per task. Tables: every failed task with its failing check leaves (measured value
 against threshold), and every task. Each task links into the inspector that
-``mavswarm replay RESULTS_DIR`` serves: ``{base}/inspect/{session}/{task}?trial={k}``.
+``mavswarm replay RESULTS_DIR`` serves:
+``{base}/inspect/{session}/{task}?run={run}&agent={agent}&trial={k}``, the run being the id
+the replay server gives the results folder (its name), so it opens that run's page even when
+several runs are served.
 """
 
 from __future__ import annotations
 
 import statistics
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from html import escape
 from typing import Any
 from urllib.parse import quote, urlsplit
@@ -37,6 +41,7 @@ __all__ = [
     "check_inspector_url",
     "inspector_link",
     "render_html",
+    "run_facts",
 ]
 
 DEFAULT_INSPECTOR_URL = "http://127.0.0.1:8765"
@@ -127,8 +132,17 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600.0:.1f} h"
 
 
-def _link(base: str, record: Record) -> str:
-    return inspector_link(base, record["session"], record["task"], record.get("trial", 0))
+@dataclass(frozen=True)
+class _Links:
+    """Where task links point: the inspector's URL and the run id it knows the results by."""
+
+    url: str
+    run: str | None
+
+
+def _link(base: _Links, record: Record) -> str:
+    return inspector_link(base.url, record["session"], record["task"], record.get("trial", 0),
+                          run=base.run, agent=None if base.run is None else record["agent"])
 
 
 def _cards(overall: Mapping[str, Any], records: Sequence[Record]) -> str:
@@ -205,7 +219,7 @@ def _task_title(r: Record) -> str:
             f"{verdict}, {r['checks_passed']}/{r['checks_total']} checks")
 
 
-def _tokens(records: Sequence[Record], base: str) -> str:
+def _tokens(records: Sequence[Record], base: _Links) -> str:
     rows = [r for r in records if isinstance(r.get("tokens"), Mapping)]
     if not rows:
         return _panel("Tokens and cost per task", "", "No record reports tokens: this agent "
@@ -237,7 +251,7 @@ def _tokens(records: Sequence[Record], base: str) -> str:
                   f"<div>{right}</div></div>", escape(note), ident="tokens")
 
 
-def _times(records: Sequence[Record], base: str) -> str:
+def _times(records: Sequence[Record], base: _Links) -> str:
     points = [Point(float(r["sim_time_s"]), float(r["wall_time_s"]),
                     PASS_COLOR if r["passed"] else FAIL_COLOR,
                     f"{_task_title(r)}; {r['sim_time_s']:g} s simulated, "
@@ -259,7 +273,7 @@ def _times(records: Sequence[Record], base: str) -> str:
     return _panel("Simulated vs wall time", chart, escape(note), ident="times")
 
 
-def _failed_table(records: Sequence[Record], base: str) -> str:
+def _failed_table(records: Sequence[Record], base: _Links) -> str:
     failed = [r for r in records if not r["passed"]]
     if not failed:
         return _panel("Failed tasks", '<p class="note">None: every task passed.</p>',
@@ -293,7 +307,7 @@ def _failed_table(records: Sequence[Record], base: str) -> str:
     return _panel(f"Failed tasks ({len(failed)})", table, ident="failed")
 
 
-def _all_table(records: Sequence[Record], base: str) -> str:
+def _all_table(records: Sequence[Record], base: _Links) -> str:
     rows = []
     for r in records:
         tokens = r.get("tokens")
@@ -322,6 +336,19 @@ def _all_table(records: Sequence[Record], base: str) -> str:
             + "".join(rows) + "</tbody></table></details></section>")
 
 
+def run_facts(records: Iterable[Record]) -> str:
+    """What the records say a run ran with: its clock, model and link faults."""
+    rows = list(records)
+
+    def listed(name: str, missing: str) -> str:
+        values = sorted({str(r[name]) for r in rows if r.get(name) not in (None, "", {})})
+        return ", ".join(values) if values else missing
+
+    return (f"clock: {listed('clock', 'not recorded')}; model: "
+            f"{listed('model', 'not recorded')}; link faults: "
+            f"{listed('link_faults', 'none recorded')}")
+
+
 def _finish_note(summary: Mapping[str, Any]) -> str:
     finish = summary.get("finish") or {}
     parts = [f"{reason} {finish[reason]}" for reason in sorted(finish, key=finish_sort_key)]
@@ -329,10 +356,13 @@ def _finish_note(summary: Mapping[str, Any]) -> str:
 
 
 def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
-                inspector_url: str = DEFAULT_INSPECTOR_URL, results_dir: str = "RESULTS_DIR"
-                ) -> str:
-    """The whole page for `records` (unique by key, the first wins)."""
+                inspector_url: str = DEFAULT_INSPECTOR_URL, results_dir: str = "RESULTS_DIR",
+                run_id: str | None = None) -> str:
+    """The whole page for `records` (unique by key, the first wins). With `run_id` (the id
+    ``mavswarm replay`` gives the results folder: its name) every task link names the run
+    and the agent, so it opens this run's page when several runs are served."""
     base = check_inspector_url(inspector_url)
+    links = _Links(base, run_id)
     rows = unique(records)
     summary = summarize(rows)
     agents = ", ".join(summary.get("agents", [])) or "none"
@@ -342,8 +372,9 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
             f"<code>mavswarm replay {escape(results_dir)}</code>.")
     parts = [
         f"<h1>{escape(title)}</h1>",
-        f'<p class="sub">{len(rows)} tasks; agents: {escape(agents)}; up to {trials} '
-        f"trial(s) per task. {escape(_finish_note(summary))}</p>",
+        f'<p class="sub">{len(rows)} tasks; agents: {escape(agents)}; '
+        f"{escape(run_facts(rows))}; up to {trials} trial(s) per task. "
+        f"{escape(_finish_note(summary))}</p>",
         f'<p class="hint">{hint}</p>',
     ]
     if not rows:
@@ -380,10 +411,10 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
                             '<p class="note">No check was evaluated.</p>',
                             "Leaf checks of each endpoint that passed, weakest first.",
                             ident="endpoints"))
-        parts.append(_tokens(rows, base))
-        parts.append(_times(rows, base))
-        parts.append(_failed_table(rows, base))
-        parts.append(_all_table(rows, base))
+        parts.append(_tokens(rows, links))
+        parts.append(_times(rows, links))
+        parts.append(_failed_table(rows, links))
+        parts.append(_all_table(rows, links))
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             '<meta name="viewport" content="width=device-width, initial-scale=1">'
             f"<title>{escape(title)}</title><style>{PAGE_CSS}</style></head>"
