@@ -64,9 +64,15 @@ def _grouped(records: Iterable[Record], name: str) -> dict[str, list[Record]]:
     return {label: groups[label] for label in sorted(groups, key=_sort_key(name))}
 
 
-def _group_rate(records: Sequence[Record]) -> GroupRate:
-    passed = sum(1 for r in records if r["passed"])
-    return GroupRate(tasks=len(records), passed=passed, pass_rate=_r(passed / len(records)))
+def _group_rate(records: Sequence[Record], sessions: Mapping[str, int],
+                boot: ClusterBootstrap) -> GroupRate:
+    passed, tasks = np.zeros(len(sessions)), np.zeros(len(sessions))
+    for r in records:
+        tasks[sessions[r["session"]]] += 1
+        passed[sessions[r["session"]]] += r["passed"]
+    estimate, _ = boot.ratio(passed, tasks)
+    return GroupRate(tasks=len(records), passed=int(passed.sum()), pass_rate=_r(estimate.value),
+                     low=_r(estimate.low), high=_r(estimate.high))
 
 
 def _number(record: Record, name: str) -> float | None:
@@ -122,8 +128,8 @@ class _Columns:
                 "global_check": boot.ratio(self.checks_passed, self.checks)}
 
 
-def _summary(run: Run, records: Sequence[Record], rates: Mapping[str, tuple[Estimate, Any]]
-             ) -> RunSummary:
+def _summary(run: Run, records: Sequence[Record], rates: Mapping[str, tuple[Estimate, Any]],
+             sessions: Mapping[str, int], boot: ClusterBootstrap) -> RunSummary:
     trials: Counter[TaskKey] = Counter((r["session"], r["task"]) for r in records)
     max_trials = max(trials.values())
     endpoints = endpoint_breakdown(records)
@@ -141,7 +147,7 @@ def _summary(run: Run, records: Sequence[Record], rates: Mapping[str, tuple[Esti
                                   / len(records)),
         pass_hat_k={str(k): (None if (v := pass_hat_k(records, k)) is None else _r(v))
                     for k in range(1, max_trials + 1)},
-        **{f"by_{name}": {label: _group_rate(group)
+        **{f"by_{name}": {label: _group_rate(group, sessions, boot)
                           for label, group in _grouped(records, name).items()}
            for name in GROUPS},
         by_endpoint={name: EndpointRate(checks=e["checks"], passed=e["passed"],
@@ -228,7 +234,7 @@ def build_compare(runs: Sequence[Run], *, intersect: bool = False,
     boot = ClusterBootstrap(len(session_ids), resamples=resamples, seed=seed,
                             confidence=confidence)
     rates = [_Columns(records, sessions).rates(boot) for records in kept]
-    summaries = [_summary(run, records, rate)
+    summaries = [_summary(run, records, rate, sessions, boot)
                  for run, records, rate in zip(runs, kept, rates, strict=True)]
     pairs = [_pair(runs[0], kept[0], run, kept[k], rates[0], rates[k], boot)
              for k, run in enumerate(runs) if k > 0]

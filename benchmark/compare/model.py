@@ -67,9 +67,13 @@ class ChangedTask(_Model):
 
 
 class GroupRate(_Model):
+    """A group's task pass rate, with its session-clustered bootstrap interval."""
+
     tasks: int
     passed: int
     pass_rate: float
+    low: float
+    high: float
 
 
 class EndpointRate(_Model):

@@ -119,9 +119,12 @@ def _difficulty(report: CompareReport) -> str:
     seen = {level for r in report.runs for level in r.by_level}
     levels = [lv for lv in LEVEL_ORDER if lv in seen] + sorted(
         (lv for lv in seen if lv not in LEVEL_ORDER), key=level_sort_key)
-    series = [Series(r.id, series_color(k),
-                     [r.by_level[lv].pass_rate if lv in r.by_level else None for lv in levels])
-              for k, r in enumerate(report.runs)]
+    def column(run: RunSummary, name: str) -> list[float | None]:
+        return [getattr(run.by_level[lv], name) if lv in run.by_level else None
+                for lv in levels]
+
+    series = [Series(r.id, series_color(k), column(r, "pass_rate"), column(r, "low"),
+                     column(r, "high")) for k, r in enumerate(report.runs)]
     return category_lines(levels, series, label="Task pass rate against difficulty per run",
                           x_label="difficulty level", y_label="task pass rate")
 
@@ -148,7 +151,10 @@ def _group_table(report: CompareReport, group: str, ident: str) -> str:
         for run in report.runs:
             item = getattr(run, f"by_{group}").get(label)
             row.append("n/a" if item is None else
-                       escape(f"{pct(item.pass_rate)} ({item.passed}/{item.tasks})"))
+                       f'<td class="num" title="interval {item.low * 100:.1f} to '
+                       f'{item.high * 100:.1f} %">'
+                       + escape(f"{pct(item.pass_rate)} ({item.passed}/{item.tasks})")
+                       + "</td>")
         for pair in report.pairs:
             t = getattr(pair, f"by_{group}").get(label)
             cells = _transition_cells(t) if t is not None else []
