@@ -40,7 +40,7 @@ class ReportRun:
 
     @property
     def page_name(self) -> str:
-        return "report-" + re.sub(r"[^A-Za-z0-9_.-]+", "-", self.id).strip("-.") + ".html"
+        return "report-" + re.sub(r"[^A-Za-z0-9_.+-]+", "-", self.id).strip("-.") + ".html"
 
 
 def load_report_runs(paths: Sequence[Path]) -> list[ReportRun]:
