@@ -8,6 +8,9 @@ Pages (one HTML page; the script picks the view from the path): `/` (home), `/li
 `/api/live/{id}/vehicles/{drone}/link` (benchmark.server.link_routes). Every API route needs
 an operator or admin key (`X-API-Key` header or `key` query parameter) unless the console was
 opened for local files only.
+
+`/leaderboard` ranks every (run, agent) served (`/api/leaderboard`, with intervals);
+`/api/compare?a=RUN&b=RUN` pairs two of them (benchmark.compare) for the compare view.
 """
 
 
@@ -39,7 +42,7 @@ from console.results_index import ReplayIndex
 __all__ = ["ConsoleState", "create_console_app"]
 
 PAGES = ("/", "/live/{rest:path}", "/runs", "/runs/{rest:path}", "/inspect/{rest:path}",
-         "/compare", "/replay", "/editor")
+         "/compare", "/leaderboard", "/replay", "/editor")
 ASSETS = {"app.js": "text/javascript", "style.css": "text/css"}
 
 
@@ -202,6 +205,22 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
                 return candidate.task_view(record)
         raise HTTPException(404, f"no record of task {task_id!r} of session {session_id!r} "
                                  f"(trial {trial}) in runs {', '.join(r.id for r in runs)}")
+
+    @app.get("/api/leaderboard")
+    def leaderboard(role: Staff) -> dict[str, Any]:
+        try:
+            return {"rows": state.index.leaderboard()}
+        except ValueError as error:
+            raise HTTPException(400, str(error)) from None
+
+    @app.get("/api/compare")
+    def compare(a: str, b: str, role: Staff) -> dict[str, Any]:
+        try:
+            return state.index.compare(a, b)
+        except KeyError as error:
+            raise HTTPException(404, str(error.args[0])) from None
+        except ValueError as error:
+            raise HTTPException(400, str(error)) from None
 
     @app.get("/api/truth")
     def truth(role: Staff) -> dict[str, Any]:

@@ -35,7 +35,7 @@ from benchmark.compare.stats import (
 )
 from benchmark.metrics import endpoint_breakdown, finish_sort_key, level_sort_key, pass_hat_k
 
-__all__ = ["GROUPS", "build_compare", "compare_paths", "pick_baseline"]
+__all__ = ["GROUPS", "build_compare", "compare_paths", "pick_baseline", "summarize_run"]
 
 GROUPS: tuple[str, ...] = ("family", "level", "category", "template")
 WHY_CLUSTERED = ("tasks of one session share its world (drones, targets, obstacles, map), so "
@@ -244,6 +244,16 @@ def build_compare(runs: Sequence[Run], *, intersect: bool = False,
         bootstrap=BootstrapInfo(unit="session", why=WHY_CLUSTERED, resamples=resamples,
                                 seed=seed, confidence=confidence),
         runs=summaries, pairs=pairs)
+
+
+def summarize_run(run: Run, *, resamples: int = DEFAULT_RESAMPLES,
+                  seed: int = DEFAULT_SEED) -> RunSummary:
+    """One run alone (a leaderboard row): its metrics with intervals over its own sessions."""
+    session_ids = sorted({r["session"] for r in run.records})
+    sessions = {sid: k for k, sid in enumerate(session_ids)}
+    boot = ClusterBootstrap(len(session_ids), resamples=resamples, seed=seed)
+    return _summary(run, run.records, _Columns(run.records, sessions).rates(boot), sessions,
+                    boot)
 
 
 def compare_paths(paths: Sequence[Path], *, baseline: str | None = None,

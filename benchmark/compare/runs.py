@@ -16,7 +16,16 @@ from typing import Any
 
 from benchmark.results import read_records
 
-__all__ = ["CompareError", "Run", "TaskKey", "align_runs", "load_runs", "task_fingerprint"]
+__all__ = [
+    "CompareError",
+    "Run",
+    "TaskKey",
+    "align_runs",
+    "fingerprint_of",
+    "load_runs",
+    "runs_of_records",
+    "task_fingerprint",
+]
 
 TaskKey = tuple[str, str]  # (session, task)
 _TEXT_FIELDS = ("session", "task", "family", "level", "category", "template", "agent")
@@ -72,7 +81,7 @@ def _check_record(path: Path, record: Mapping[str, Any]) -> None:
         raise CompareError(f"{where}: 'checks_passed' exceeds 'checks_total'")
 
 
-def _fingerprint(run: Run) -> str:
+def fingerprint_of(run: Run) -> str:
     given = {r.get("suite_fingerprint") for r in run.records}
     if given == {None}:
         return task_fingerprint(run.task_keys)
@@ -94,6 +103,25 @@ def _results_file(path: Path) -> tuple[Path, str]:
     return path, path.resolve().parent.name or "run"
 
 
+def runs_of_records(base: str, source: Path, console_run: str,
+                    records: Sequence[dict[str, Any]]) -> list[Run]:
+    """One run per agent of one results file's records (checked), agents in name order: id
+    `base`, or ``base:agent`` when there are several agents."""
+    if not records:
+        raise CompareError(f"{source}: the results hold no record")
+    by_agent: dict[str, list[dict[str, Any]]] = {}
+    for record in records:
+        _check_record(source, record)
+        by_agent.setdefault(record["agent"], []).append(record)
+    runs = []
+    for agent in sorted(by_agent):
+        run_id = f"{base}:{agent}" if len(by_agent) > 1 else base
+        run = Run(run_id, source, console_run, agent, by_agent[agent])
+        run.fingerprint = fingerprint_of(run)
+        runs.append(run)
+    return runs
+
+
 def load_runs(paths: Sequence[Path]) -> list[Run]:
     """One run per (results file, agent) in argument order, agents in name order. A run's id
     is its folder's name (a file not named results.jsonl: its stem), with ``:agent`` when the
@@ -110,21 +138,11 @@ def load_runs(paths: Sequence[Path]) -> list[Run]:
         while console_run in console_ids:
             console_run += "+"
         console_ids.add(console_run)
-        records = read_records(file)
-        if not records:
-            raise CompareError(f"{file}: the results hold no record")
-        by_agent: dict[str, list[dict[str, Any]]] = {}
-        for record in records:
-            _check_record(file, record)
-            by_agent.setdefault(record["agent"], []).append(record)
         base = console_run if file.name == "results.jsonl" else file.stem
-        for agent in sorted(by_agent):
-            run_id = f"{base}:{agent}" if len(by_agent) > 1 else base
-            while run_id in taken:
-                run_id += "+"
-            taken.add(run_id)
-            run = Run(run_id, file, console_run, agent, by_agent[agent])
-            run.fingerprint = _fingerprint(run)
+        for run in runs_of_records(base, file, console_run, read_records(file)):
+            while run.id in taken:
+                run.id += "+"
+            taken.add(run.id)
             runs.append(run)
     return runs
 
