@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import statistics
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from html import escape
 from typing import Any
-from urllib.parse import quote, urlsplit
 
 from benchmark.charts import (
     FAIL_COLOR,
@@ -32,6 +30,12 @@ from benchmark.charts import (
     scatter,
 )
 from benchmark.failed_checks import failed_leaves
+from benchmark.inspector_links import (
+    DEFAULT_INSPECTOR_URL,
+    TaskLinks,
+    check_inspector_url,
+    inspector_link,
+)
 from benchmark.metrics import compute_metrics, finish_sort_key, level_sort_key, summarize
 from benchmark.metrics import unique_records as unique
 
@@ -44,7 +48,6 @@ __all__ = [
     "run_facts",
 ]
 
-DEFAULT_INSPECTOR_URL = "http://127.0.0.1:8765"
 ALL = "all"
 Record = Mapping[str, Any]
 
@@ -93,29 +96,6 @@ a { color: #2f5fc4; }
 """
 
 
-def check_inspector_url(url: str) -> str:
-    """`url` without a trailing slash when it is an http(s) URL with a host; else ValueError
-    saying what is expected."""
-    parts = urlsplit(url.strip()) if isinstance(url, str) else None
-    if parts is None or parts.scheme not in ("http", "https") or not parts.netloc:
-        raise ValueError(f"--inspector-url must be an http(s) URL such as "
-                         f"{DEFAULT_INSPECTOR_URL}, got {url!r}")
-    return url.strip().rstrip("/")
-
-
-def inspector_link(base: str, session: str, task: str, trial: int, *, run: str | None = None,
-                   agent: str | None = None) -> str:
-    """The inspector's page of one task:
-    ``{base}/inspect/{session}/{task}?run={run}&agent={agent}&trial={trial}``, `run` (the id
-    ``mavswarm replay`` gives the results folder) and `agent` only when given: with several
-    runs served, the run picks whose page opens."""
-    query = [("run", run), ("agent", agent), ("trial", str(int(trial)))]
-    text = "&".join(f"{name}={quote(str(value), safe='')}" for name, value in query
-                    if value is not None)
-    return (f"{base.rstrip('/')}/inspect/{quote(str(session), safe='')}/"
-            f"{quote(str(task), safe='')}?{text}")
-
-
 def _pct(rate: float | None) -> str:
     return "n/a" if rate is None else f"{rate * 100:.1f} %"
 
@@ -130,19 +110,6 @@ def _duration(seconds: float) -> str:
     if seconds < 7200.0:
         return f"{seconds / 60.0:.1f} min"
     return f"{seconds / 3600.0:.1f} h"
-
-
-@dataclass(frozen=True)
-class _Links:
-    """Where task links point: the inspector's URL and the run id it knows the results by."""
-
-    url: str
-    run: str | None
-
-
-def _link(base: _Links, record: Record) -> str:
-    return inspector_link(base.url, record["session"], record["task"], record.get("trial", 0),
-                          run=base.run, agent=None if base.run is None else record["agent"])
 
 
 def _cards(overall: Mapping[str, Any], records: Sequence[Record]) -> str:
@@ -219,7 +186,7 @@ def _task_title(r: Record) -> str:
             f"{verdict}, {r['checks_passed']}/{r['checks_total']} checks")
 
 
-def _tokens(records: Sequence[Record], base: _Links) -> str:
+def _tokens(records: Sequence[Record], base: TaskLinks) -> str:
     rows = [r for r in records if isinstance(r.get("tokens"), Mapping)]
     if not rows:
         return _panel("Tokens and cost per task", "", "No record reports tokens: this agent "
@@ -232,8 +199,8 @@ def _tokens(records: Sequence[Record], base: _Links) -> str:
         cost = float(t.get("cost_usd", 0.0) or 0.0)
         title = _task_title(r)
         token_bars.append(((prompt, completion), f"{title}; {prompt:,} prompt + "
-                           f"{completion:,} completion tokens", _link(base, r)))
-        cost_bars.append(((cost,), f"{title}; ${cost:.4f}", _link(base, r)))
+                           f"{completion:,} completion tokens", base.of(r)))
+        cost_bars.append(((cost,), f"{title}; ${cost:.4f}", base.of(r)))
     totals = [sum(parts) for parts, _, _ in token_bars]
     costs = [parts[0] for parts, _, _ in cost_bars]
     note = (f"{len(rows)} tasks report tokens: median {statistics.median(totals):,.0f}, "
@@ -251,11 +218,11 @@ def _tokens(records: Sequence[Record], base: _Links) -> str:
                   f"<div>{right}</div></div>", escape(note), ident="tokens")
 
 
-def _times(records: Sequence[Record], base: _Links) -> str:
+def _times(records: Sequence[Record], base: TaskLinks) -> str:
     points = [Point(float(r["sim_time_s"]), float(r["wall_time_s"]),
                     PASS_COLOR if r["passed"] else FAIL_COLOR,
                     f"{_task_title(r)}; {r['sim_time_s']:g} s simulated, "
-                    f"{r['wall_time_s']:g} s wall", _link(base, r))
+                    f"{r['wall_time_s']:g} s wall", base.of(r))
               for r in records if r["finish"] != "task_error"  # never ran
               and isinstance(r.get("sim_time_s"), int | float)
               and isinstance(r.get("wall_time_s"), int | float)]
@@ -273,7 +240,7 @@ def _times(records: Sequence[Record], base: _Links) -> str:
     return _panel("Simulated vs wall time", chart, escape(note), ident="times")
 
 
-def _failed_table(records: Sequence[Record], base: _Links) -> str:
+def _failed_table(records: Sequence[Record], base: TaskLinks) -> str:
     failed = [r for r in records if not r["passed"]]
     if not failed:
         return _panel("Failed tasks", '<p class="note">None: every task passed.</p>',
@@ -294,7 +261,7 @@ def _failed_table(records: Sequence[Record], base: _Links) -> str:
         if not items:
             items.append("<li>the check tree failed though every leaf passed</li>")
         rows.append(
-            f'<tr><td><a href="{escape(_link(base, r))}" target="_blank">'
+            f'<tr><td><a href="{escape(base.of(r))}" target="_blank">'
             f"{escape(r['session'])} {escape(r['task'])}</a><br>"
             f'<span class="leaf-condition">{escape(str(r["template"]))}, '
             f"{escape(str(r['agent']))}, trial {int(r.get('trial', 0))}</span></td>"
@@ -307,7 +274,7 @@ def _failed_table(records: Sequence[Record], base: _Links) -> str:
     return _panel(f"Failed tasks ({len(failed)})", table, ident="failed")
 
 
-def _all_table(records: Sequence[Record], base: _Links) -> str:
+def _all_table(records: Sequence[Record], base: TaskLinks) -> str:
     rows = []
     for r in records:
         tokens = r.get("tokens")
@@ -316,7 +283,7 @@ def _all_table(records: Sequence[Record], base: _Links) -> str:
         verdict = '<span class="pass">pass</span>' if r["passed"] else \
             '<span class="fail">fail</span>'
         rows.append(
-            f'<tr><td><a href="{escape(_link(base, r))}" target="_blank">'
+            f'<tr><td><a href="{escape(base.of(r))}" target="_blank">'
             f"{escape(r['session'])} {escape(r['task'])}</a></td>"
             f"<td>{escape(str(r['template']))}</td><td>{escape(str(r['category']))}</td>"
             f"<td>{escape(str(r['agent']))}</td><td class=\"num\">{int(r.get('trial', 0))}</td>"
@@ -362,7 +329,7 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
     ``mavswarm replay`` gives the results folder: its name) every task link names the run
     and the agent, so it opens this run's page when several runs are served."""
     base = check_inspector_url(inspector_url)
-    links = _Links(base, run_id)
+    links = TaskLinks(base, run_id)
     rows = unique(records)
     summary = summarize(rows)
     agents = ", ".join(summary.get("agents", [])) or "none"

@@ -100,6 +100,8 @@ def test_bootstrap_refuses_bad_settings() -> None:
         ClusterBootstrap(0)
     with pytest.raises(ValueError, match="resamples"):
         ClusterBootstrap(3, resamples=10)
+    with pytest.raises(ValueError, match="seed must be a non-negative integer"):
+        ClusterBootstrap(3, seed=-1)
     with pytest.raises(ValueError, match="confidence"):
         ClusterBootstrap(3, confidence=1.0)
     with pytest.raises(ValueError, match="one value per session"):

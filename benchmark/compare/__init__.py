@@ -13,8 +13,8 @@ from benchmark.compare.markdown import render_compare_markdown
 from benchmark.compare.model import CompareReport, compare_schema
 from benchmark.compare.page import render_compare_html
 from benchmark.compare.runs import CompareError, load_runs
+from benchmark.inspector_links import DEFAULT_INSPECTOR_URL
 from benchmark.report import write_text_atomic
-from benchmark.report_html import DEFAULT_INSPECTOR_URL
 
 __all__ = [
     "CompareError",

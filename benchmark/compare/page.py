@@ -19,13 +19,9 @@ from benchmark.compare.charts import (
 )
 from benchmark.compare.markdown import p_value, pct, pct_interval, signed_interval
 from benchmark.compare.model import CompareReport, PairComparison, RunSummary, Transitions
+from benchmark.inspector_links import DEFAULT_INSPECTOR_URL, check_inspector_url, inspector_link
 from benchmark.metrics import LEVEL_ORDER, level_sort_key
-from benchmark.report_html import (
-    DEFAULT_INSPECTOR_URL,
-    PAGE_CSS,
-    check_inspector_url,
-    inspector_link,
-)
+from benchmark.report_html import PAGE_CSS
 
 __all__ = ["render_compare_html"]
 

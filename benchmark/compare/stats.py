@@ -68,6 +68,8 @@ class ClusterBootstrap:
             raise ValueError(f"the bootstrap needs at least one session, got {clusters!r}")
         if isinstance(resamples, bool) or not isinstance(resamples, int) or resamples < 100:
             raise ValueError(f"bootstrap resamples must be an integer >= 100, got {resamples!r}")
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"the bootstrap seed must be a non-negative integer, got {seed!r}")
         if not 0.5 <= confidence < 1.0:
             raise ValueError(f"confidence must be in [0.5, 1), got {confidence!r}")
         self.clusters = clusters
