@@ -1,9 +1,14 @@
 // Two runs compared (/compare?a=RUN&b=RUN, ids as /api/leaderboard gives them): the headline
 // metrics with their differences and paired-bootstrap intervals, paired changes by family and
 // level (McNemar p), and the tasks side by side, optionally only those whose verdict differs.
+// With &session=S&task=T&trial=K: that task's two replays side by side, on one timeline (time
+// since each window opened), scrubbing or playing either moves both.
 
 import { getJson, pageUrl } from "./api.js";
+import { checkTree } from "./checks.js";
 import { el } from "./panel.js";
+import { ReplayPlayer } from "./replay.js";
+import { buildWorld } from "./world.js";
 
 const pct = (v) => (v === null || v === undefined ? "–" : `${(v * 100).toFixed(1)} %`);
 const span = (i) => `${pct(i.value)} [${(i.low * 100).toFixed(1)}, ${(i.high * 100).toFixed(1)}]`;
@@ -38,6 +43,45 @@ function groupTable(report, group) {
     }));
 }
 
+async function showPairedTask(root, params, a, b, side) {
+  const session = params.get("session"), task = params.get("task"), trial = params.get("trial") || "0";
+  const load = (id) => getJson(`/api/task/${encodeURIComponent(session)}/${encodeURIComponent(task)}?` +
+    new URLSearchParams({ trial, run: side(id).console_run, agent: side(id).agent }));
+  const views = await Promise.all([load(a), load(b)]);
+  const back = new URLSearchParams({ a, b });
+  root.replaceChildren(el("header", {}, el("h1", {}, `${session} / ${task} (trial ${trial})`),
+    el("a", { href: pageUrl("/compare", Object.fromEntries(back)) }, "← compare")),
+  el("p", { class: "task-text" }, views.find((v) => v.replay)?.replay.task?.text || "(task text not recorded)"));
+  const columns = el("div", { class: "paired-replays" });
+  root.append(columns);
+  const players = [];
+  views.forEach((view, k) => {
+    const id = [a, b][k], record = view.record;
+    const column = el("div", { class: "paired-side", id: `side-${"ab"[k]}` },
+      el("h2", {}, `${"AB"[k]}: ${id} `, el("span", { class: record.passed ? "ok" : "bad" }, record.passed ? "PASS" : "FAIL"),
+        ` ${record.checks_passed}/${record.checks_total} checks`),
+      el("a", { href: pageUrl(`/inspect/${session}/${task}`, { trial, run: side(id).console_run, agent: side(id).agent }) }, "inspect"));
+    columns.append(column);
+    if (!view.replay) { column.append(el("p", { class: "note" }, view.note || "no replay")); return; }
+    const player = new ReplayPlayer(column, { world: buildWorld(view.world || {}), replay: view.replay });
+    column.append(el("h3", {}, "Checks"), checkTree(record, view.replay.task?.checks));
+    players.push(player);
+  });
+  let following = false;
+  for (const player of players) {
+    const own = player.seek.bind(player);
+    player.seek = (t) => {
+      own(t);
+      if (following) return;
+      following = true;
+      for (const other of players) if (other !== player) other.seek(other.t0 + (player.t - player.t0));
+      following = false;
+    };
+  }
+  players.forEach((p) => p.seek(p.t0));
+  window.consoleView = { players, records: views.map((v) => v.record) };
+}
+
 export async function showCompare(root, params) {
   const board = (await getJson("/api/leaderboard")).rows;
   if (board.length < 2) { root.replaceChildren(el("p", {}, "Open two results folders (or a run with two agents) to compare.")); return; }
@@ -45,6 +89,7 @@ export async function showCompare(root, params) {
   const a = ids.includes(params.get("a")) ? params.get("a") : ids[0];
   const b = ids.includes(params.get("b")) && params.get("b") !== a ? params.get("b") : ids.find((id) => id !== a);
   const side = (id) => board.find((r) => r.id === id);
+  if (params.get("session") && params.get("task")) { await showPairedTask(root, params, a, b, side); return; }
   const [report, rowsA, rowsB] = await Promise.all([
     getJson(`/api/compare?a=${encodeURIComponent(a)}&b=${encodeURIComponent(b)}`),
     ...[a, b].map(async (id) => (await getJson(`/api/runs/${encodeURIComponent(side(id).console_run)}/tasks`)).rows
@@ -63,9 +108,10 @@ export async function showCompare(root, params) {
   function render() {
     const shown = rowsA.filter((r) => !only.checked || differs(r));
     count.textContent = `${shown.length} of ${rowsA.length} tasks shown`;
-    table.replaceChildren(el("tr", {}, ["session", "task", "trial", "A", "B"].map((h) => el("th", {}, h))),
+    table.replaceChildren(el("tr", {}, ["session", "task", "trial", "A", "B", "replays"].map((h) => el("th", {}, h))),
       ...shown.map((r) => el("tr", { class: differs(r) ? "differ" : "" },
-        el("td", {}, r.session), el("td", {}, r.task), el("td", {}, r.trial), cell(r, a), cell(byB.get(key(r)), b))));
+        el("td", {}, r.session), el("td", {}, r.task), el("td", {}, r.trial), cell(r, a), cell(byB.get(key(r)), b),
+        el("td", {}, byB.has(key(r)) ? el("a", { class: "side-by-side", href: pageUrl("/compare", { a, b, session: r.session, task: r.task, trial: r.trial }) }, "side by side") : ""))));
   }
   const t = report.pairs[0].overall;
   root.replaceChildren(el("header", {}, el("h1", {}, "Compare"), el("a", { href: pageUrl("/leaderboard") }, "leaderboard"),
