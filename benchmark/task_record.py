@@ -63,7 +63,7 @@ class TaskRecord(BaseModel):
     sim_time_s: _Seconds
     wall_time_s: _Seconds
     tokens: Tokens | None
-    overhead_s: dict[str, _Seconds]
+    overhead_s: dict[str, _Seconds] = {}  # absent in records written before it existed
     clock: str | None = None
     end_state: dict[str, Any] | None = None
     window_s: list[float] | None = None
