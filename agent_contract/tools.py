@@ -15,7 +15,15 @@ from typing import Any, TypeVar
 from agent_contract.budget import BudgetedTools
 from mavlink_gateway import Outcome, Status
 
-__all__ = ["AgentTools", "agent_tool", "tool_names"]
+__all__ = ["ERROR_STATUS", "RESULT_STATUSES", "AgentTools", "agent_tool", "tool_names"]
+
+ERROR_STATUS = "error"
+"""The status of a tool result that never reached the tool (unknown tool, bad arguments, a
+spent budget, no task running)."""
+
+RESULT_STATUSES: tuple[str, ...] = (*(status.value for status in Status), ERROR_STATUS)
+"""Every status a tool result can carry, on every surface: the gateway's `Status` values
+(what the tools return) and ERROR_STATUS. Schemas and instructions are made from this."""
 
 F = TypeVar("F", bound=Callable[..., Any])
 _MARK = "__agent_tool__"

@@ -1,5 +1,6 @@
 """Small inline SVG charts for the HTML report: a heatmap, horizontal bars, a line chart, a
-scatter plot and a sorted bar strip. Each function returns one ``<svg>`` element as text,
+scatter plot and a sorted bar strip (and the drawing helpers the comparison's charts in
+:mod:`benchmark.compare.charts` share). Each function returns one ``<svg>`` element as text,
 sized by its viewBox (it scales to the width of its container), with every label escaped and
 a ``<title>`` tooltip on each mark. Nothing is loaded from anywhere.
 """
@@ -13,7 +14,10 @@ from dataclasses import dataclass
 from html import escape
 
 __all__ = [
+    "AXIS_COLOR",
     "FAIL_COLOR",
+    "GRID_COLOR",
+    "MUTED_COLOR",
     "PASS_COLOR",
     "Bar",
     "Point",
@@ -23,6 +27,9 @@ __all__ = [
     "line_chart",
     "rate_color",
     "scatter",
+    "shorten",
+    "svg_root",
+    "svg_text",
 ]
 
 PASS_COLOR = "#2a9d5c"
@@ -306,3 +313,10 @@ def bar_strip(values: Sequence[tuple[Sequence[float], str, str | None]], *, labe
     body.append(_text(left + plot_w / 2, height - 8, f"{len(ordered)} tasks, largest first",
                       anchor="middle", size=11, color=MUTED_COLOR))
     return _svg(width, height, body, label)
+
+
+
+# The drawing helpers, for charts defined elsewhere.
+svg_root = _svg
+svg_text = _text
+shorten = _short

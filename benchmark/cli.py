@@ -10,6 +10,8 @@
                      [--verbose]
   mavswarm bench agents
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
+  mavswarm bench compare RUN [RUN ...] [--baseline RUN] [--intersect] [--out DIR]
+                         [--seed N] [--resamples N] [--inspector-url URL]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
 
@@ -46,7 +48,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="session ids to generate (e.g. area_search-easy-1)")
     gen.add_argument("--no-verify", action="store_true",
                      help="skip proving each task with the oracle (faster; not for release)")
-    gen.add_argument("--workers", type=int, default=1, help="sessions generated at once")
+    gen.add_argument("--workers", type=_at_least_one, default=1, help="sessions generated at once")
     _add_backend_arguments(gen)
     add_verbose_argument(gen)
 
@@ -73,8 +75,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        help="smoke: 3 easy sessions, 6 tasks each; full: 125 sessions, 2500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
-    run.add_argument("--workers", type=int, default=1, help="sessions run at once")
-    run.add_argument("--trials", type=int, default=1, help="repeats of every task (pass^k)")
+    run.add_argument("--workers", type=_at_least_one, default=1, help="sessions run at once")
+    run.add_argument("--trials", type=_at_least_one, default=1,
+                     help="repeats of every task (pass^k)")
     run.add_argument("--clock", choices=CLOCKS, default="lockstep",
                      help="lockstep (default): simulated time runs only while the agent waits "
                           "on the world, so results do not depend on think time; stepped: it "
@@ -92,15 +95,46 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                     f"plug-ins (entry points in the group {ENTRY_POINT_GROUP})")
 
     report = bsub.add_parser("report", help="metrics report of results files")
-    report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
+    report.add_argument("results", type=Path, nargs="+",
+                        help="results.jsonl files or their folders; several are reported "
+                             "each on its own")
     report.add_argument("--out", type=Path, default=None,
                         help="folder for report.md, report.json and report.html (default: "
                              "beside the first)")
     _add_inspector_argument(report)
 
+    compare = bsub.add_parser("compare", help="compare runs: paired transitions with McNemar "
+                              "tests, rates with bootstrap intervals (compare.md/.json/.html)")
+    compare.add_argument("runs", type=Path, nargs="+", metavar="RUN",
+                         help="results folders or results.jsonl files (a file with several "
+                              "agents counts as one run per agent)")
+    compare.add_argument("--baseline", default=None, metavar="RUN",
+                         help="the run the others are paired against: a run id or path "
+                              "(default: the first)")
+    compare.add_argument("--intersect", action="store_true",
+                         help="compare runs of different suites or task sets on the tasks all "
+                              "of them ran (default: refuse)")
+    compare.add_argument("--out", type=Path, default=Path("runs/compare"),
+                         help="folder for compare.md, compare.json and compare.html (default "
+                              "runs/compare)")
+    compare.add_argument("--seed", type=int, default=0, help="bootstrap seed (default 0)")
+    compare.add_argument("--resamples", type=int, default=2000,
+                         help="bootstrap resamples (default 2000)")
+    _add_inspector_argument(compare)
+
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+
+
+def _at_least_one(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return value
 
 
 def add_verbose_argument(parser: argparse.ArgumentParser) -> None:
@@ -144,7 +178,7 @@ def _generate(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from benchmark.agent_plugins import check_spec
     from benchmark.metrics import summarize
-    from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.orchestrator import RunPlan, check_session_files, run_benchmark
     from benchmark.progress import ProgressBar
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
@@ -154,6 +188,7 @@ def _run(args: argparse.Namespace) -> int:
         raise ValueError(f"--agent-timeout-s must be > 0, got {args.agent_timeout_s:g}")
     if args.sessions:
         paths, limit, label = tuple(args.sessions), None, "custom"
+        check_session_files(paths)  # unreadable or without tasks: refused, nothing runs
     else:
         paths, limit = suite_paths(args.suite)
         label = args.suite
@@ -181,10 +216,11 @@ def _run(args: argparse.Namespace) -> int:
     else:
         from mqtt_bus import BenchBus
         run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
-        from benchmark.results import ResultsError
+        from benchmark.results import ResultsError, read_task_records
         try:  # a resumed run first publishes what the file already holds
-            earlier = read_records(plan.results_path) if plan.results_path.exists() else []
-        except ResultsError:  # a torn last line: run_benchmark repairs it; nothing replayed
+            earlier = (read_task_records(plan.results_path) if plan.results_path.exists()
+                       else [])
+        except ResultsError:  # a damaged line: run_benchmark repairs or refuses it
             earlier = []
         with BenchBus(url, run_name) as bus:
             print(f"MQTT: {url.redacted()} topics {bus.topics.base}/tasks, .../progress")
@@ -197,7 +233,8 @@ def _run(args: argparse.Namespace) -> int:
             bus.finish(len(records))
         stats = bus.stats
         print(f"MQTT: {stats.published} messages published, {stats.dropped} dropped")
-    md, js, html = write_report(records, out, inspector_url=args.inspector_url)
+    md, js, html = write_report(records, out, inspector_url=args.inspector_url,
+                                run_id=out.resolve().name)
     print()
     print(metrics_table(summarize(records)))
     print(f"\n{outcome.records_written} new task records in {outcome.wall_s:.1f} s; "
@@ -218,15 +255,46 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 def _report(args: argparse.Namespace) -> int:
     from benchmark.metrics import summarize
     from benchmark.report import metrics_table, write_report
-    from benchmark.results import read_all_records
-    records = read_all_records(args.results)
-    out = args.out or args.results[0].parent
-    md, js, html = write_report(records, out, inspector_url=args.inspector_url,
-                                results_dir=args.results[0].parent)
-    print(metrics_table(summarize(records)))
+    from benchmark.report_html import check_inspector_url
+    from benchmark.report_runs import load_report_runs, write_runs_report
+    check_inspector_url(args.inspector_url)
+    runs = load_report_runs(args.results)
+    out = args.out or runs[0].source.parent
+    if len(runs) == 1:
+        md, js, html = write_report(runs[0].records, out, inspector_url=args.inspector_url,
+                                    results_dir=runs[0].source.parent, run_id=runs[0].id)
+        print(metrics_table(summarize(runs[0].records)))
+    else:  # each run on its own: never one pooled headline
+        md, js, html, *_ = write_runs_report(runs, out, inspector_url=args.inspector_url)
+        for run in runs:
+            print(f"{run.id} ({run.source}):\n{metrics_table(summarize(run.records))}\n")
+    folders = " ".join(str(run.source.parent) for run in runs)
     print(f"\nreport: {md}, {js}, {html}")
-    print(f"charts: open {html} in a browser; `mavswarm replay {args.results[0].parent}` "
-          "serves the task pages it links to")
+    print(f"charts: open {html} in a browser; `mavswarm replay {folders}` serves the task pages "
+          "it links to")
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from benchmark.compare import compare_paths, write_compare
+    from benchmark.compare.markdown import p_value, pct_interval
+    from benchmark.report_html import check_inspector_url
+    check_inspector_url(args.inspector_url)
+    report = compare_paths(args.runs, baseline=args.baseline, intersect=args.intersect,
+                           resamples=args.resamples, seed=args.seed)
+    folders = " ".join(sorted({str(Path(r.source).parent) for r in report.runs}))
+    paths = write_compare(report, args.out, inspector_url=args.inspector_url,
+                          serve_hint=folders)
+    for warning in report.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    for run in report.runs:
+        print(f"{run.id:<24} Task Pass {pct_interval(run.task_pass_rate)}  ({run.tasks} tasks)")
+    for pair in report.pairs:
+        t = pair.overall
+        print(f"{pair.run} vs {pair.baseline}: {t.fail_to_pass} fail->pass, {t.pass_to_fail} "
+              f"pass->fail, {t.both_pass} both pass, {t.both_fail} both fail; McNemar p = "
+              f"{p_value(t.mcnemar_p)}")
+    print(f"\ncompare: {', '.join(map(str, paths))}")
     return 0
 
 
@@ -258,7 +326,7 @@ def run_bench(args: argparse.Namespace) -> int:
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
     handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import,
-                "agents": _agents}
+                "agents": _agents, "compare": _compare}
     try:
         return handlers[args.bench_command](args)
     except (SessionFileError, ResultsError, ValueError, OSError) as error:

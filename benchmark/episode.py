@@ -25,6 +25,7 @@ from agent_contract import Agent, AgentTask, AgentTools, BudgetExhausted
 from benchmark.live_channel import LiveChannel, TaskWatch
 from benchmark.replay_data import encode_window
 from benchmark.session_file import Session, TaskSpec
+from benchmark.task_record import record_key
 from benchmark.tool_log import LoggedTools
 from benchmark.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from emulator.clock import ClockConfig
@@ -79,10 +80,6 @@ class EpisodeOptions:
     def __post_init__(self) -> None:
         if self.clock not in CLOCKS:
             raise ValueError(f"unknown clock {self.clock!r} (known: {', '.join(CLOCKS)})")
-
-
-def record_key(session_id: str, task_id: str, agent: str, trial: int) -> str:
-    return f"{session_id}/{task_id}/{agent}/{trial}"
 
 
 def _free_udp_port() -> int:

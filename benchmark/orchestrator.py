@@ -28,12 +28,13 @@ from benchmark.importer import load_any_session
 from benchmark.live_channel import LiveChannel
 from benchmark.progress import LineProgress, ProgressSink, task_line
 from benchmark.replay_data import session_world, write_task_replay
-from benchmark.results import ResultsLog, read_records
+from benchmark.results import ResultsLog, read_task_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 
-__all__ = ["AGENTS", "RunOutcome", "RunPlan", "make_agent", "run_benchmark", "run_unit"]
+__all__ = ["AGENTS", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
+           "run_benchmark", "run_unit"]
 
 # The built-in agents; NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone).
 # --agent also takes plug-ins (benchmark.agent_plugins: package.module:Name, path/to/file.py:Name,
@@ -193,6 +194,42 @@ def _done_by_unit(records: Sequence[Mapping[str, Any]]
     return done
 
 
+def check_session_files(paths: Sequence[Path]) -> None:
+    """Refuse, before anything runs, a session file that cannot be read as a JSON object or
+    that lists no tasks (nothing to run); SessionFileError naming the file."""
+    for path in paths:
+        data = read_session_json(path)
+        if not isinstance(data, dict):
+            raise SessionFileError(f"{path}: the top level must be a JSON object")
+        if not data.get("tasks"):
+            raise SessionFileError(f"{path}: the session has no tasks, so there is nothing to "
+                                   "run (add tasks in the console's editor, or fly it with "
+                                   "`mavswarm up --session`)")
+
+
+def _known_tasks(paths: Sequence[Path]) -> dict[str, frozenset[str]] | None:
+    """The sessions' ids and task ids, as their records name them (a session that cannot be
+    loaded: as its file lists them); None when a file lists none (its records cannot be told
+    from damaged ones)."""
+    known: dict[str, frozenset[str]] = {}
+    for path in paths:
+        try:
+            session, _ = load_any_session(path)
+            known[session.id] = frozenset(t.id for t in session.tasks)
+            continue
+        except SessionFileError:
+            pass
+        try:
+            data = read_session_json(path)
+        except SessionFileError:
+            return None
+        if not isinstance(data, dict) or not isinstance(data.get("id"), str):
+            return None
+        known[data["id"]] = frozenset(t["id"] for t in data.get("tasks") or []
+                                      if isinstance(t, dict) and isinstance(t.get("id"), str))
+    return known
+
+
 def _session_head(path: Path) -> tuple[str | None, int]:
     """A session file's id and number of tasks without validating it (an unreadable file:
     None and 0; the worker reports the problem)."""
@@ -233,7 +270,12 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
     keys = log.open()
     if log.repaired:
         out.say(f"repaired {log.repaired} torn line(s) at the end of {plan.results_path}")
-    previous = read_records(plan.results_path) if keys else []
+    try:  # resume: every record read back must be one of this run's tasks
+        previous = (read_task_records(plan.results_path, _known_tasks(plan.sessions))
+                    if keys else [])
+    except BaseException:
+        log.close()
+        raise
     done = _done_by_unit(previous)
     heads = {p: _session_head(p) for p in plan.sessions}
     units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))

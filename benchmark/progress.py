@@ -122,10 +122,12 @@ class ProgressBar(ProgressSink):
 
 
 def task_line(record: Mapping[str, Any], n: int) -> str:
-    """One finished task as a line: its verdict, checks, calls and times."""
+    """One finished task as a line: its verdict first (how it ended, if not by finishing, and
+    its checks), then which task it was, its calls and times. A terminal too narrow for the
+    whole line cuts its end, never the verdict."""
     verdict = "PASS" if record["passed"] else "fail"
-    extra = f"  [{record['finish']}]" if record["finish"] != "finished" else ""
-    return (f"{n:5d} {record['session']:<38} {record['task']:<4} {record['template']:<28} "
-            f"{verdict} {record['checks_passed']:>2}/{record['checks_total']:<2} checks "
-            f"{record['tool_calls']:>3} calls {record['sim_time_s']:>7.0f} s sim "
-            f"{record['wall_time_s']:>6.2f} s{extra}")
+    finish = f" [{record['finish']}]" if record["finish"] != "finished" else ""
+    return (f"{n:5d} {verdict}{finish} {record['checks_passed']:>2}/{record['checks_total']:<2} "
+            f"checks  {record['session']} {record['task']} {record['template']}  "
+            f"{record['tool_calls']} calls {record['sim_time_s']:.0f} s sim "
+            f"{record['wall_time_s']:.2f} s")

@@ -18,7 +18,7 @@ from typing import Any
 from benchmark.metrics import finish_sort_key, level_sort_key, summarize
 from benchmark.report_html import DEFAULT_INSPECTOR_URL, render_html
 
-__all__ = ["metrics_table", "render_markdown", "write_report"]
+__all__ = ["metrics_table", "render_markdown", "write_report", "write_text_atomic"]
 
 MISSING = "n/a"
 _GROUP_SECTIONS: tuple[tuple[str, str, str], ...] = (
@@ -179,7 +179,7 @@ def render_markdown(summary: Mapping[str, Any], *, title: str = "mavswarm benchm
     return "\n".join(parts) + "\n"
 
 
-def _write_text(path: Path, text: str) -> None:
+def write_text_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file, so readers never see half of it."""
     fd, temp_name = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
@@ -199,11 +199,12 @@ def write_report(
     title: str = "mavswarm benchmark",
     inspector_url: str = DEFAULT_INSPECTOR_URL,
     results_dir: str | Path | None = None,
+    run_id: str | None = None,
 ) -> tuple[Path, Path, Path]:
     """Write ``report.md``, ``report.json`` (sorted keys, 2-space indent) and ``report.html``
     (:mod:`benchmark.report_html`, its task links into the inspector at `inspector_url`, which
-    ``mavswarm replay RESULTS_DIR`` serves for `results_dir`, default `out_dir`) into
-    ``out_dir``.
+    ``mavswarm replay RESULTS_DIR`` serves for `results_dir`, default `out_dir`; with `run_id`
+    each link names the run) into ``out_dir``.
 
     Returns the paths of the Markdown, JSON and HTML files.
     """
@@ -211,12 +212,13 @@ def write_report(
     directory = Path(out_dir)
     summary = summarize(rows)
     page = render_html(rows, title=title, inspector_url=inspector_url,
-                       results_dir=str(results_dir if results_dir is not None else directory))
+                       results_dir=str(results_dir if results_dir is not None else directory),
+                       run_id=run_id)
     directory.mkdir(parents=True, exist_ok=True)
     md_path = directory / "report.md"
     json_path = directory / "report.json"
     html_path = directory / "report.html"
-    _write_text(json_path, json.dumps(summary, sort_keys=True, indent=2) + "\n")
-    _write_text(md_path, render_markdown(summary, title=title))
-    _write_text(html_path, page)
+    write_text_atomic(json_path, json.dumps(summary, sort_keys=True, indent=2) + "\n")
+    write_text_atomic(md_path, render_markdown(summary, title=title))
+    write_text_atomic(html_path, page)
     return md_path, json_path, html_path

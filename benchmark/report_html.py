@@ -5,7 +5,10 @@ and no other file. Charts: pass rate by family x level (a heatmap), by category,
 and by check endpoint, pass^k against k, tokens and cost per task, simulated against wall
 time per task. Tables: every failed task with its failing check leaves (measured value
 against threshold), and every task. Each task links into the inspector that
-``mavswarm replay RESULTS_DIR`` serves: ``{base}/inspect/{session}/{task}?trial={k}``.
+``mavswarm replay RESULTS_DIR`` serves:
+``{base}/inspect/{session}/{task}?run={run}&agent={agent}&trial={k}``, the run being the id
+the replay server gives the results folder (its name), so it opens that run's page even when
+several runs are served.
 """
 
 from __future__ import annotations
@@ -14,7 +17,6 @@ import statistics
 from collections.abc import Iterable, Mapping, Sequence
 from html import escape
 from typing import Any
-from urllib.parse import quote, urlsplit
 
 from benchmark.charts import (
     FAIL_COLOR,
@@ -28,16 +30,28 @@ from benchmark.charts import (
     scatter,
 )
 from benchmark.failed_checks import failed_leaves
+from benchmark.inspector_links import (
+    DEFAULT_INSPECTOR_URL,
+    TaskLinks,
+    check_inspector_url,
+    inspector_link,
+)
 from benchmark.metrics import compute_metrics, finish_sort_key, level_sort_key, summarize
 from benchmark.metrics import unique_records as unique
 
-__all__ = ["DEFAULT_INSPECTOR_URL", "check_inspector_url", "inspector_link", "render_html"]
+__all__ = [
+    "DEFAULT_INSPECTOR_URL",
+    "PAGE_CSS",
+    "check_inspector_url",
+    "inspector_link",
+    "render_html",
+    "run_facts",
+]
 
-DEFAULT_INSPECTOR_URL = "http://127.0.0.1:8765"
 ALL = "all"
 Record = Mapping[str, Any]
 
-_CSS = """
+PAGE_CSS = """
 :root { color-scheme: light; }
 * { box-sizing: border-box; }
 body { margin: 0; background: #f4f6f9; color: #1f2933;
@@ -82,22 +96,6 @@ a { color: #2f5fc4; }
 """
 
 
-def check_inspector_url(url: str) -> str:
-    """`url` without a trailing slash when it is an http(s) URL with a host; else ValueError
-    saying what is expected."""
-    parts = urlsplit(url.strip()) if isinstance(url, str) else None
-    if parts is None or parts.scheme not in ("http", "https") or not parts.netloc:
-        raise ValueError(f"--inspector-url must be an http(s) URL such as "
-                         f"{DEFAULT_INSPECTOR_URL}, got {url!r}")
-    return url.strip().rstrip("/")
-
-
-def inspector_link(base: str, session: str, task: str, trial: int) -> str:
-    """The inspector's page of one task: ``{base}/inspect/{session}/{task}?trial={trial}``."""
-    return (f"{base.rstrip('/')}/inspect/{quote(str(session), safe='')}/"
-            f"{quote(str(task), safe='')}?trial={int(trial)}")
-
-
 def _pct(rate: float | None) -> str:
     return "n/a" if rate is None else f"{rate * 100:.1f} %"
 
@@ -112,10 +110,6 @@ def _duration(seconds: float) -> str:
     if seconds < 7200.0:
         return f"{seconds / 60.0:.1f} min"
     return f"{seconds / 3600.0:.1f} h"
-
-
-def _link(base: str, record: Record) -> str:
-    return inspector_link(base, record["session"], record["task"], record.get("trial", 0))
 
 
 def _cards(overall: Mapping[str, Any], records: Sequence[Record]) -> str:
@@ -192,7 +186,7 @@ def _task_title(r: Record) -> str:
             f"{verdict}, {r['checks_passed']}/{r['checks_total']} checks")
 
 
-def _tokens(records: Sequence[Record], base: str) -> str:
+def _tokens(records: Sequence[Record], base: TaskLinks) -> str:
     rows = [r for r in records if isinstance(r.get("tokens"), Mapping)]
     if not rows:
         return _panel("Tokens and cost per task", "", "No record reports tokens: this agent "
@@ -205,8 +199,8 @@ def _tokens(records: Sequence[Record], base: str) -> str:
         cost = float(t.get("cost_usd", 0.0) or 0.0)
         title = _task_title(r)
         token_bars.append(((prompt, completion), f"{title}; {prompt:,} prompt + "
-                           f"{completion:,} completion tokens", _link(base, r)))
-        cost_bars.append(((cost,), f"{title}; ${cost:.4f}", _link(base, r)))
+                           f"{completion:,} completion tokens", base.of(r)))
+        cost_bars.append(((cost,), f"{title}; ${cost:.4f}", base.of(r)))
     totals = [sum(parts) for parts, _, _ in token_bars]
     costs = [parts[0] for parts, _, _ in cost_bars]
     note = (f"{len(rows)} tasks report tokens: median {statistics.median(totals):,.0f}, "
@@ -224,11 +218,11 @@ def _tokens(records: Sequence[Record], base: str) -> str:
                   f"<div>{right}</div></div>", escape(note), ident="tokens")
 
 
-def _times(records: Sequence[Record], base: str) -> str:
+def _times(records: Sequence[Record], base: TaskLinks) -> str:
     points = [Point(float(r["sim_time_s"]), float(r["wall_time_s"]),
                     PASS_COLOR if r["passed"] else FAIL_COLOR,
                     f"{_task_title(r)}; {r['sim_time_s']:g} s simulated, "
-                    f"{r['wall_time_s']:g} s wall", _link(base, r))
+                    f"{r['wall_time_s']:g} s wall", base.of(r))
               for r in records if r["finish"] != "task_error"  # never ran
               and isinstance(r.get("sim_time_s"), int | float)
               and isinstance(r.get("wall_time_s"), int | float)]
@@ -246,7 +240,7 @@ def _times(records: Sequence[Record], base: str) -> str:
     return _panel("Simulated vs wall time", chart, escape(note), ident="times")
 
 
-def _failed_table(records: Sequence[Record], base: str) -> str:
+def _failed_table(records: Sequence[Record], base: TaskLinks) -> str:
     failed = [r for r in records if not r["passed"]]
     if not failed:
         return _panel("Failed tasks", '<p class="note">None: every task passed.</p>',
@@ -267,7 +261,7 @@ def _failed_table(records: Sequence[Record], base: str) -> str:
         if not items:
             items.append("<li>the check tree failed though every leaf passed</li>")
         rows.append(
-            f'<tr><td><a href="{escape(_link(base, r))}" target="_blank">'
+            f'<tr><td><a href="{escape(base.of(r))}" target="_blank">'
             f"{escape(r['session'])} {escape(r['task'])}</a><br>"
             f'<span class="leaf-condition">{escape(str(r["template"]))}, '
             f"{escape(str(r['agent']))}, trial {int(r.get('trial', 0))}</span></td>"
@@ -280,7 +274,7 @@ def _failed_table(records: Sequence[Record], base: str) -> str:
     return _panel(f"Failed tasks ({len(failed)})", table, ident="failed")
 
 
-def _all_table(records: Sequence[Record], base: str) -> str:
+def _all_table(records: Sequence[Record], base: TaskLinks) -> str:
     rows = []
     for r in records:
         tokens = r.get("tokens")
@@ -289,7 +283,7 @@ def _all_table(records: Sequence[Record], base: str) -> str:
         verdict = '<span class="pass">pass</span>' if r["passed"] else \
             '<span class="fail">fail</span>'
         rows.append(
-            f'<tr><td><a href="{escape(_link(base, r))}" target="_blank">'
+            f'<tr><td><a href="{escape(base.of(r))}" target="_blank">'
             f"{escape(r['session'])} {escape(r['task'])}</a></td>"
             f"<td>{escape(str(r['template']))}</td><td>{escape(str(r['category']))}</td>"
             f"<td>{escape(str(r['agent']))}</td><td class=\"num\">{int(r.get('trial', 0))}</td>"
@@ -309,6 +303,19 @@ def _all_table(records: Sequence[Record], base: str) -> str:
             + "".join(rows) + "</tbody></table></details></section>")
 
 
+def run_facts(records: Iterable[Record]) -> str:
+    """What the records say a run ran with: its clock, model and link faults."""
+    rows = list(records)
+
+    def listed(name: str, missing: str) -> str:
+        values = sorted({str(r[name]) for r in rows if r.get(name) not in (None, "", {})})
+        return ", ".join(values) if values else missing
+
+    return (f"clock: {listed('clock', 'not recorded')}; model: "
+            f"{listed('model', 'not recorded')}; link faults: "
+            f"{listed('link_faults', 'none recorded')}")
+
+
 def _finish_note(summary: Mapping[str, Any]) -> str:
     finish = summary.get("finish") or {}
     parts = [f"{reason} {finish[reason]}" for reason in sorted(finish, key=finish_sort_key)]
@@ -316,10 +323,13 @@ def _finish_note(summary: Mapping[str, Any]) -> str:
 
 
 def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
-                inspector_url: str = DEFAULT_INSPECTOR_URL, results_dir: str = "RESULTS_DIR"
-                ) -> str:
-    """The whole page for `records` (unique by key, the first wins)."""
+                inspector_url: str = DEFAULT_INSPECTOR_URL, results_dir: str = "RESULTS_DIR",
+                run_id: str | None = None) -> str:
+    """The whole page for `records` (unique by key, the first wins). With `run_id` (the id
+    ``mavswarm replay`` gives the results folder: its name) every task link names the run
+    and the agent, so it opens this run's page when several runs are served."""
     base = check_inspector_url(inspector_url)
+    links = TaskLinks(base, run_id)
     rows = unique(records)
     summary = summarize(rows)
     agents = ", ".join(summary.get("agents", [])) or "none"
@@ -329,8 +339,9 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
             f"<code>mavswarm replay {escape(results_dir)}</code>.")
     parts = [
         f"<h1>{escape(title)}</h1>",
-        f'<p class="sub">{len(rows)} tasks; agents: {escape(agents)}; up to {trials} '
-        f"trial(s) per task. {escape(_finish_note(summary))}</p>",
+        f'<p class="sub">{len(rows)} tasks; agents: {escape(agents)}; '
+        f"{escape(run_facts(rows))}; up to {trials} trial(s) per task. "
+        f"{escape(_finish_note(summary))}</p>",
         f'<p class="hint">{hint}</p>',
     ]
     if not rows:
@@ -367,11 +378,11 @@ def render_html(records: Iterable[Record], *, title: str = "mavswarm benchmark",
                             '<p class="note">No check was evaluated.</p>',
                             "Leaf checks of each endpoint that passed, weakest first.",
                             ident="endpoints"))
-        parts.append(_tokens(rows, base))
-        parts.append(_times(rows, base))
-        parts.append(_failed_table(rows, base))
-        parts.append(_all_table(rows, base))
+        parts.append(_tokens(rows, links))
+        parts.append(_times(rows, links))
+        parts.append(_failed_table(rows, links))
+        parts.append(_all_table(rows, links))
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             '<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<title>{escape(title)}</title><style>{_CSS}</style></head>"
+            f"<title>{escape(title)}</title><style>{PAGE_CSS}</style></head>"
             f"<body><main>{''.join(parts)}</main></body></html>\n")

@@ -9,19 +9,26 @@ newline, or a last line that is not valid JSON. :meth:`ResultsLog.open` truncate
 away (counting the removed lines in :attr:`ResultsLog.repaired`) and :func:`read_records` skips
 it. A line that cannot be read anywhere else in the file is corruption, reported as
 :class:`ResultsError` with the file name and line number.
+
+:func:`read_task_records` (resume, reports) also checks each record is a task record
+(`benchmark.task_record`): its schema, a key made of its fields, and where the run's sessions
+are known, one of their tasks; the first line that is not stops the read, named by its number.
 """
 
 from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-__all__ = ["ResultsError", "ResultsLog", "read_all_records", "read_records"]
+from benchmark.task_record import KnownTasks, record_problem
+
+__all__ = ["ResultsError", "ResultsLog", "read_all_records", "read_all_task_records",
+           "read_records", "read_task_records"]
 
 
 class ResultsError(ValueError):
@@ -41,8 +48,10 @@ def _parse_line(raw: bytes) -> Any:
     return json.loads(raw.decode("utf-8"))
 
 
-def _scan(path: Path, data: bytes) -> _Scan:
-    """Parse ``data`` (the bytes of ``path``); the torn tail, if any, is left out."""
+def _scan(path: Path, data: bytes,
+          check: Callable[[Mapping[str, Any]], str | None] | None = None) -> _Scan:
+    """Parse ``data`` (the bytes of ``path``); the torn tail, if any, is left out. ``check``
+    says what is wrong with a record (None: nothing), line by line in file order."""
     torn_lines = 0
     intact_bytes = data.rfind(b"\n") + 1
     if intact_bytes < len(data):
@@ -55,7 +64,7 @@ def _scan(path: Path, data: bytes) -> _Scan:
             continue
         try:
             value = _parse_line(raw)
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        except (ValueError, RecursionError) as exc:  # bad UTF-8 or JSON, 5,000 digits, [[[...
             if index == len(lines) - 1:
                 intact_bytes -= len(raw) + 1
                 torn_lines += 1
@@ -76,6 +85,9 @@ def _scan(path: Path, data: bytes) -> _Scan:
             raise ResultsError(
                 f"{path}:{line_no}: record field 'key' must be a non-empty string, got {key!r}"
             )
+        problem = check(value) if check is not None else None
+        if problem is not None:
+            raise ResultsError(f"{path}:{line_no}: {problem}")
         if key in seen:
             raise ResultsError(f"{path}:{line_no}: duplicate record key {key!r}")
         seen.add(key)
@@ -181,14 +193,26 @@ class ResultsLog:
         self.close()
 
 
-def read_records(path: str | Path) -> list[dict[str, Any]]:
-    """All complete records of one results file, in file order; a torn last line is ignored."""
-    file_path = Path(path)
+def _read(file_path: Path,
+          check: Callable[[Mapping[str, Any]], str | None] | None = None) -> _Scan:
     try:
         data = file_path.read_bytes()
     except FileNotFoundError as exc:
         raise ResultsError(f"{file_path}: results file does not exist") from exc
-    return list(_scan(file_path, data).records)
+    return _scan(file_path, data, check)
+
+
+def read_records(path: str | Path) -> list[dict[str, Any]]:
+    """All complete records of one results file, in file order; a torn last line is ignored."""
+    return list(_read(Path(path)).records)
+
+
+def read_task_records(path: str | Path, known: KnownTasks | None = None
+                      ) -> list[dict[str, Any]]:
+    """`read_records`, each record checked to be a task record (of the tasks `known`, a
+    session id -> its task ids, if given); the first that is not raises ResultsError with
+    the file and line."""
+    return list(_read(Path(path), lambda record: record_problem(record, known)).records)
 
 
 def read_all_records(paths: Iterable[str | Path]) -> list[dict[str, Any]]:
@@ -197,6 +221,18 @@ def read_all_records(paths: Iterable[str | Path]) -> list[dict[str, Any]]:
     records: list[dict[str, Any]] = []
     for path in paths:
         for record in read_records(path):
+            if record["key"] not in seen:
+                seen.add(record["key"])
+                records.append(record)
+    return records
+
+
+def read_all_task_records(paths: Iterable[str | Path]) -> list[dict[str, Any]]:
+    """`read_all_records` of task records (see `read_task_records`)."""
+    seen: set[str] = set()
+    records: list[dict[str, Any]] = []
+    for path in paths:
+        for record in read_task_records(path):
             if record["key"] not in seen:
                 seen.add(record["key"])
                 records.append(record)

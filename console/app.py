@@ -11,6 +11,9 @@ opened for local files only (console.auth: 401, 403; the WebSocket closes with 4
 4404). Bodies are bounded and parsed as on the agent surfaces (llm_tools.body_limit: 413 over
 1 MiB, 422 naming the field); session files are read from the session folders only
 (benchmark.session_folders).
+
+`/leaderboard` ranks every (run, agent) served (`/api/leaderboard`, with intervals);
+`/api/compare?a=RUN&b=RUN` pairs two of them (benchmark.compare) for the compare view.
 """
 
 
@@ -49,7 +52,7 @@ from llm_tools.input_limits import MAX_SESSION_NUMBER_ABS
 __all__ = ["ConsoleState", "create_console_app"]
 
 PAGES = ("/", "/live/{rest:path}", "/runs", "/runs/{rest:path}", "/inspect/{rest:path}",
-         "/compare", "/replay", "/editor")
+         "/compare", "/leaderboard", "/replay", "/editor")
 ASSETS = {"app.js": "text/javascript", "style.css": "text/css"}
 _CLOSE_REASON_BYTES = 123
 session_body = json_body(max_number_abs=MAX_SESSION_NUMBER_ABS)
@@ -210,6 +213,22 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
                 return candidate.task_view(record)
         raise HTTPException(404, f"no record of task {task_id!r} of session {session_id!r} "
                                  f"(trial {trial}) in runs {', '.join(r.id for r in runs)}")
+
+    @app.get("/api/leaderboard")
+    def leaderboard(role: Staff) -> dict[str, Any]:
+        try:
+            return {"rows": state.index.leaderboard()}
+        except ValueError as error:
+            raise HTTPException(400, str(error)) from None
+
+    @app.get("/api/compare")
+    def compare(a: str, b: str, role: Staff) -> dict[str, Any]:
+        try:
+            return state.index.compare(a, b)
+        except KeyError as error:
+            raise HTTPException(404, str(error.args[0])) from None
+        except ValueError as error:
+            raise HTTPException(400, str(error)) from None
 
     @app.get("/api/truth")
     def truth(role: Staff) -> dict[str, Any]:

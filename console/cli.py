@@ -12,7 +12,9 @@ import argparse
 import asyncio
 import contextlib
 import functools
+import signal
 import sys
+import threading
 from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -29,7 +31,7 @@ from console.auth import ConsoleAuth
 from console.bench_watch import LiveBoard, serve_in_thread
 from console.bundle import bundle_problem
 from console.commands import Commander
-from console.live import DEFAULT_RATE_HZ, LiveSwarm
+from console.live import DEFAULT_RATE_HZ, LiveSwarm, check_rate_hz
 from console.results_index import open_paths
 from emulator import cli as emulator_cli
 from emulator.scenario_export import scenario_to_dict
@@ -76,7 +78,10 @@ def extend_parsers(sub: argparse._SubParsersAction) -> None:
     bench = sub.choices["bench"]
     bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
     run = bench_sub.choices["run"]
-    _add_web_arguments(run, "follow the sessions being run in the web console (prints the URL)")
+    _add_web_arguments(run, "follow the sessions being run in the web console (prints the URL); "
+                            "it stays open after the run until Ctrl-C")
+    run.add_argument("--web-exit", action="store_true",
+                     help="--web: close the console and exit when the run ends")
     bench.set_defaults(run=_run_bench)
 
 
@@ -85,8 +90,15 @@ def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument("--web-host", default=DEFAULT_HOST, help="--web: address to listen on")
     parser.add_argument("--web-port", type=int, default=DEFAULT_PORT, help="--web: TCP port")
     parser.add_argument("--web-key", help="--web: the operator key (default: generated)")
-    parser.add_argument("--web-hz", type=float, default=DEFAULT_RATE_HZ,
-                        help="--web: live updates per second")
+    parser.add_argument("--web-hz", type=_rate_hz, default=DEFAULT_RATE_HZ,
+                        help="--web: live updates per second (0.5 to 60)")
+
+
+def _rate_hz(text: str) -> float:
+    try:
+        return check_rate_hz(float(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a rate from 0.5 to 60 Hz") from None
 
 
 def _session_dir(text: str) -> Path:
@@ -152,12 +164,21 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
                          session_folders=session_folders or SessionFolders())
     app = create_console_app(state)
 
+    listening = asyncio.Event()
+
     def ready(url: str) -> None:
+        listening.set()
         if on_ready is not None:
             on_ready(url, key)
 
     server = asyncio.create_task(serve_asgi(app, host=host, port=port, on_ready=ready))
     try:
+        # A port that cannot be listened on ends the command (the error), not just the page.
+        started = asyncio.create_task(listening.wait())
+        await asyncio.wait({server, started}, return_when=asyncio.FIRST_COMPLETED)
+        started.cancel()
+        if server.done():
+            server.result()
         yield state
     finally:
         server.cancel()
@@ -197,7 +218,13 @@ def _run_bench(args: argparse.Namespace) -> int:
                              rate_hz=args.web_hz) as (url, key):
             _print(f"web console: {url}/?key={key} (pick the session to follow)")
             args.live_hz, args.on_live = args.web_hz, board.update
-            return bench_cli.run_bench(args)
+            status = bench_cli.run_bench(args)
+            if args.web_exit or status in (2, 130):  # asked to, bad input, or interrupted
+                return status
+            _print(f"the run is over; the web console stays open at {url}/?key={key} until "
+                   "Ctrl-C (--web-exit: exit when the run ends)")
+            _wait_for_interrupt()
+            return status
     except OSError as error:
         print(f"mavswarm: {error}", file=sys.stderr)
         return 2
@@ -206,6 +233,19 @@ def _run_bench(args: argparse.Namespace) -> int:
 def _run_serve(args: argparse.Namespace) -> int:
     args.extend = functools.partial(console_for_hub, session_dirs=args.session_dirs)
     return int(args.run_serve_next(args))
+
+
+def _wait_for_interrupt() -> None:
+    """Block until Ctrl-C (SIGINT) or SIGTERM."""
+    stop = threading.Event()
+    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey],

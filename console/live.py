@@ -22,7 +22,7 @@ from console.commands import Commander
 from emulator.live_state import live_state
 from emulator.swarm import Swarm
 
-__all__ = ["DEFAULT_RATE_HZ", "LiveFeed", "LiveSwarm"]
+__all__ = ["DEFAULT_RATE_HZ", "LiveFeed", "LiveSwarm", "check_rate_hz"]
 
 DEFAULT_RATE_HZ = 10.0
 log = logging.getLogger("mavswarm.console")
@@ -74,12 +74,18 @@ def build_frame(live: LiveSwarm) -> str:
     return json.dumps(live.state(), separators=(",", ":"))
 
 
+def check_rate_hz(rate_hz: float) -> float:
+    """`rate_hz` if it is a frame rate pages can take (0.5 to 60 Hz), else ValueError."""
+    if not (math.isfinite(rate_hz) and 0.5 <= rate_hz <= 60.0):
+        raise ValueError(f"rate_hz must be within 0.5..60, got {rate_hz}")
+    return rate_hz
+
+
 class LiveFeed:
     """Pushes frames of one live swarm to its subscribers (asyncio queues of JSON text)."""
 
     def __init__(self, live: LiveSwarm, rate_hz: float = DEFAULT_RATE_HZ) -> None:
-        if not (math.isfinite(rate_hz) and 0.5 <= rate_hz <= 60.0):
-            raise ValueError(f"rate_hz must be within 0.5..60, got {rate_hz}")
+        check_rate_hz(rate_hz)
         self.live = live
         self.period_s = 1.0 / rate_hz
         self._subscribers: set[asyncio.Queue[str]] = set()

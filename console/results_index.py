@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from benchmark.compare.build import build_compare, summarize_run
+from benchmark.compare.runs import Run, runs_of_records
 from benchmark.replay_data import (
     encode_window,
     read_json_gz,
@@ -130,6 +132,38 @@ class ReplayIndex:
 
     runs: dict[str, ResultsRun] = field(default_factory=dict)
     truth: TruthReplay | None = None
+    _board: list[dict[str, Any]] | None = field(default=None, repr=False)
+
+    def agent_runs(self) -> dict[str, Run]:
+        """Every (run, agent) the served results hold, as compared runs: id ``RUN`` or, for a
+        run of several agents, ``RUN:agent``."""
+        out: dict[str, Run] = {}
+        for run in self.runs.values():
+            if not run.records:
+                continue
+            for agent_run in runs_of_records(run.id, run.path / "results.jsonl", run.id,
+                                             run.records):
+                out[agent_run.id] = agent_run
+        return out
+
+    def leaderboard(self) -> list[dict[str, Any]]:
+        """One row per (run, agent): its metrics with session-clustered 95 % intervals
+        (computed once; the served results do not change)."""
+        if self._board is None:
+            self._board = [summarize_run(run).model_dump(exclude={"by_template"})
+                           for run in self.agent_runs().values()]
+        return self._board
+
+    def compare(self, baseline: str, other: str) -> dict[str, Any]:
+        """`other` against `baseline` (ids from :meth:`agent_runs`) on the tasks both ran.
+        Raises KeyError naming an unknown id, ValueError for runs that cannot be compared."""
+        runs = self.agent_runs()
+        for name in (baseline, other):
+            if name not in runs:
+                raise KeyError(f"no run {name!r}; runs: {', '.join(runs) or 'none'}")
+        if baseline == other:
+            raise ValueError("pick two different runs to compare")
+        return build_compare([runs[baseline], runs[other]], intersect=True).model_dump()
 
 
 def _run_folders(path: Path) -> list[Path]:

@@ -8,6 +8,7 @@ import contextlib
 import json
 import math
 import multiprocessing
+import os
 import signal
 import sys
 import time
@@ -15,6 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from emulator.capacity import MAX_VEHICLES_PER_NETWORK, Machine, check_capacity
 from emulator.clock import ClockConfig
 from emulator.link_faults import (
     LinkFaults,
@@ -25,9 +27,7 @@ from emulator.reference_mapping import notes_to_show
 from emulator.scenario import Scenario, ScenarioError, default_scenario, load_scenario
 from emulator.swarm import PortPlan, Swarm
 
-__all__ = ["Attachment", "add_parsers", "run_up"]
-
-MAX_VEHICLES_PER_NETWORK = 250
+__all__ = ["MAX_VEHICLES_PER_NETWORK", "Attachment", "add_parsers", "run_up"]
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -149,15 +149,33 @@ def _truth_path(args: argparse.Namespace) -> Path | None:
     return Path("runs") / f"mavswarm-{stamp}.truth.npz"
 
 
+def _writable(path: Path) -> Path:
+    """`path` if a file can be written there at the end (its folder made now); else OSError."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise OSError(f"--truth-out {path}: cannot make its folder: {error.strerror}") from None
+    if path.is_dir() or not os.access(path.parent, os.W_OK):
+        raise OSError(f"--truth-out {path}: not a file that can be written")
+    return path
+
+
 def _up(args: argparse.Namespace) -> int:
     args.truth_out = _truth_path(args)
+    if args.truth_out is not None:
+        _writable(args.truth_out)
     if args.drones is not None and args.drones < 1:
         raise ValueError(f"--drones must be at least 1, got {args.drones}")
     clock = ClockConfig(physics_hz=args.physics_hz, speed=args.speed, stepped=args.stepped)
     total = args.drones
     if args.session is None and total is not None and total > MAX_VEHICLES_PER_NETWORK:
+        if args.per_vehicle_ports:
+            raise ValueError(f"--per-vehicle-ports is limited to {MAX_VEHICLES_PER_NETWORK} "
+                             "vehicles (one MAVLink network)")
+        check_capacity(total, Machine.measure())  # before any process starts
         return _up_networks(args, clock, total)
     scenario = _scenario(args)
+    check_capacity(len(scenario.vehicles), Machine.measure())
     link_faults = _link_faults(args, scenario)
     bind = args.bind_port if args.bind_port is not None else (
         18570 if args.per_vehicle_ports else 14580)
@@ -171,8 +189,6 @@ def _up(args: argparse.Namespace) -> int:
 
 def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> int:
     """More than 250 vehicles: one process per MAVLink network of at most 250."""
-    if args.per_vehicle_ports:
-        raise ValueError("--per-vehicle-ports is limited to 250 vehicles")
     count = math.ceil(total / MAX_VEHICLES_PER_NETWORK)
     link_faults = _link_faults(args, None)
     bind = args.bind_port if args.bind_port is not None else 14580

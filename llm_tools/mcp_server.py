@@ -24,6 +24,7 @@ from mcp.server.stdio import stdio_server
 from starlette.applications import Starlette
 
 from agent_contract import AgentTools, BudgetExhausted
+from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
 from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry
@@ -35,9 +36,9 @@ ToolsProvider = Callable[[], AgentTools | None]
 """Returns the tool surface of the task now running, or None when none is."""
 
 SERVER_NAME = "mavswarm"
-ERROR_STATUSES = frozenset({"error", "rejected"})
-_INSTRUCTIONS = ("Tools that command a swarm of drones. Every result has a status (ok, partial, "
-                 "blocked, rejected, timeout, error) and a message; read them before the next "
+ERROR_STATUSES = frozenset({ERROR_STATUS, "rejected"})
+_INSTRUCTIONS = ("Tools that command a swarm of drones. Every result has a status "
+                 f"({', '.join(RESULT_STATUSES)}) and a message; read them before the next "
                  "call, and call finish once the task is done.")
 
 
@@ -61,7 +62,7 @@ def call_result(result: Mapping[str, Any]) -> types.CallToolResult:
 
 
 def _error(message: str) -> dict[str, Any]:
-    return {"status": "error", "message": message}
+    return {"status": ERROR_STATUS, "message": message}
 
 
 def build_server(registry: ToolRegistry, provider: ToolsProvider, *,

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from agent_contract import AgentTools, BudgetExhausted, tool_names
+from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
 from llm_tools.schema import describe, schema_for, validate
 
@@ -21,10 +22,9 @@ __all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry"]
 OUTPUT_SCHEMA: dict[str, Any] = {
     "type": "object",
     "properties": {
-        "status": {"type": "string",
-                   "enum": ["ok", "partial", "blocked", "rejected", "timeout", "unknown",
-                            "failed", "error"]},
+        "status": {"type": "string", "enum": list(RESULT_STATUSES)},
         "message": {"type": "string"},
+        "state": {"type": "object", "description": "the drone's state after the call"},
     },
     "required": ["status", "message"],
 }
@@ -40,7 +40,7 @@ class ToolSpec:
 
 
 def _error(message: str) -> dict[str, Any]:
-    return {"status": "error", "message": message}
+    return {"status": ERROR_STATUS, "message": message}
 
 
 class ToolRegistry:

@@ -8,6 +8,7 @@ import time
 from collections.abc import Sequence
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
+from mavsdk.asyncio.exceptions import MavsdkConnectionError
 
 from mavlink_gateway.drone_link import LANDED_STATE_HZ, DroneLink, DroneProfile
 from mavlink_gateway.interfaces import GeoFrame
@@ -50,7 +51,10 @@ class FleetConnection:
         set_mavsdk_log()  # MAVSDK's own log lines: dropped unless this process asked for them
         mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         try:
-            await mavsdk.add_any_connection(url)
+            try:
+                await mavsdk.add_any_connection(url)
+            except MavsdkConnectionError as error:
+                raise FleetError(f"cannot open the MAVLink connection {url!r}: {error}") from None
             drones = await _attach(mavsdk, url, profiles, origin, timeout_s, landed_state_hz)
         except BaseException:
             mavsdk.destroy()

@@ -7,7 +7,10 @@ from dataclasses import asdict, dataclass
 from enum import StrEnum
 from typing import Any
 
-__all__ = ["DroneState", "Outcome", "Status"]
+__all__ = ["RESERVED_KEYS", "DroneState", "Outcome", "Status"]
+
+RESERVED_KEYS = frozenset({"status", "message", "state"})
+"""The keys of an outcome's own fields in `Outcome.to_dict`; its data never uses them."""
 
 
 class Status(StrEnum):
@@ -62,6 +65,11 @@ class Outcome:
     message: str
     state: DroneState | None = None
     data: dict[str, Any] | None = None
+
+    def __post_init__(self) -> None:
+        clash = RESERVED_KEYS.intersection(self.data or ())
+        if clash:  # to_dict would let the data replace the outcome's own fields
+            raise ValueError(f"an outcome's data may not use the key(s) {sorted(clash)}")
 
     @property
     def ok(self) -> bool:

@@ -173,7 +173,7 @@ class PayloadPrimitives(FlightPrimitives):
         except Refusal as refusal:
             return Outcome(Status.REJECTED, f"wait refused: {refusal}")
         waited_s, message = await wait_world(self.services, link.drone_id, duration)
-        data = {"waited_s": round(waited_s, 3), "message": message}
+        data = {"waited_s": round(waited_s, 3), "message_arrived": bool(message)}
         if message:
             return Outcome(Status.OK, f"a message for {link.drone_id} arrived after "
                            f"{waited_s:.1f} s: read it with read_messages", link.state(), data)

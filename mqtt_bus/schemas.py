@@ -8,6 +8,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from agent_contract.tools import RESULT_STATUSES
+
 __all__ = ["SCHEMAS"]
 
 _NUM = {"type": ["number", "null"]}  # null: not reported (e.g. a battery not yet heard)
@@ -125,7 +127,7 @@ SERVICES_REPLY: dict[str, Any] = {
     "properties": {
         "id": {"type": ["string", "null"]}, "drone": _DRONE, "tool": {"type": ["string",
                                                                               "null"]},
-        "status": {"enum": ["ok", "partial", "blocked", "rejected", "timeout", "error"]},
+        "status": {"enum": list(RESULT_STATUSES)},
         "message": {"type": "string"},
         "state": {"type": "object", "description": "the drone's state after (as every "
                                                    "surface's tool results)"},

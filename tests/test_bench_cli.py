@@ -41,7 +41,7 @@ def test_bad_arguments_say_what_is_wrong(tmp_path: Path) -> None:
     assert agent.returncode == 2 and "gpt-9" in agent.stderr
     missing = _mavswarm("bench", "run", "--agent", "noop", "--sessions",
                         str(tmp_path / "nope.json"), "--out", str(tmp_path / "o"))
-    assert missing.returncode == 1 and "nope.json" in missing.stderr
+    assert missing.returncode == 2 and "nope.json" in missing.stderr
     corrupt = tmp_path / "bad.jsonl"
     corrupt.write_text('{"key": "a", "passed": true}\nnot json\n{"key": "b"}\n')
     report = _mavswarm("bench", "report", str(corrupt))

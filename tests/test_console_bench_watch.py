@@ -31,8 +31,8 @@ def test_bench_run_web_follows_the_session_picked(browser: Any, tmp_path: Path) 
     proc = subprocess.Popen(
         [*MAVSWARM, "bench", "run", "--agent", "oracle", "--sessions", *map(str, paths),
          "--workers", "2", "--out", str(tmp_path / "run"), "--web", "--web-port", str(port),
-         "--web-key", "watch"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
+         "--web-key", "watch", "--web-exit"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:
         printed = read_until(proc, "web console:", 60)
         assert f"http://127.0.0.1:{port}/?key=watch" in printed

@@ -161,7 +161,7 @@ async def test_one_agent_per_drone_over_the_radio_is_deterministic() -> None:
         if drone == "d1":
             continue
         heard = dict(log)["heard"]
-        assert heard["message"] is True and heard["waited_s"] > 0.0
+        assert heard["message_arrived"] is True and heard["waited_s"] > 0.0
         assert dict(log)["read"] == ["area clear, go"]
         assert dict(log)["move"] is Status.OK
 

@@ -24,7 +24,7 @@ from benchmark.server.session_loading import add_session_loading_routes
 from benchmark.server.views import session_view, task_view
 from llm_tools.body_limit import bound_inputs
 from llm_tools.input_limits import InputError, preview
-from llm_tools.registry import ToolRegistry, default_registry
+from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry, default_registry
 
 __all__ = ["create_app", "drone_or_404"]
 
@@ -102,8 +102,8 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     def list_tools(session_id: str, caller: Annotated[Caller, Depends(anyone)]
                    ) -> list[dict[str, Any]]:
         live_session(hub, caller, session_id)
-        return [{"name": s.name, "description": s.description, "input_schema": s.input_schema}
-                for s in registry.specs()]
+        return [{"name": s.name, "description": s.description, "input_schema": s.input_schema,
+                 "output_schema": OUTPUT_SCHEMA} for s in registry.specs()]
 
     @app.post("/sessions/{session_id}/tools/{name}", tags=["tools"],
               summary="Call an agent tool (agent, admin); the body is its arguments object",

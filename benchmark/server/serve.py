@@ -30,6 +30,7 @@ import uvicorn
 from benchmark.importer import load_any_session
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.hub import LiveSession
+from benchmark.server.listen import listen_socket
 from benchmark.server.operator_rule import served_refusal
 from benchmark.server.session_runner import (
     FREE_FLIGHT,
@@ -168,9 +169,10 @@ async def serve_asgi(app: Any, *, host: str, port: int,
                      on_ready: Callable[[str], None] | None = None) -> None:
     """Run `app` under uvicorn until this task is cancelled or the server is told to stop
     by a signal; `on_ready(base_url)` is called once it listens (port 0 picks a free one)."""
+    sock = listen_socket(host, port)  # a busy port: one OSError, before uvicorn starts
     server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level="warning",
                                            lifespan="on"))
-    task = asyncio.create_task(server.serve())
+    task = asyncio.create_task(server.serve(sockets=[sock]))
     try:
         while not server.started:
             if task.done():

@@ -1,11 +1,13 @@
 // The run inspector: runs -> tasks (filterable), a task's page (text, replay of its window, the
-// agent's tool calls on the same timeline, the check tree), and two runs compared task by task.
+// agent's tool calls on the same timeline, the check tree); the compare view is in compare.js.
 
 import { getJson, pageUrl } from "./api.js";
 import { checkTree, coverageOverlay } from "./checks.js";
 import { el, fmt } from "./panel.js";
 import { ReplayPlayer, callText } from "./replay.js";
 import { buildWorld } from "./world.js";
+
+export { showCompare } from "./compare.js";
 
 const FILTERS = ["family", "level", "category", "template", "agent"];
 
@@ -44,7 +46,8 @@ export async function showRuns(root, runId) {
   }
   const runLinks = el("div", { class: "runs" }, runs.map((r) => el("a", { href: pageUrl(`/runs/${r.id}`), class: r.id === runId ? "current" : "" },
     `${r.id} (${r.agents.join(", ")}: ${r.passed}/${r.tasks} passed)`)),
-    runs.length > 1 || runs[0].agents.length > 1 ? el("a", { href: pageUrl("/compare") }, "compare two runs…") : null);
+    runs.length > 1 || runs[0].agents.length > 1 ? el("a", { href: pageUrl("/compare") }, "compare two runs…") : null,
+    el("a", { href: pageUrl("/leaderboard") }, "leaderboard"));
   root.replaceChildren(el("header", {}, el("h1", {}, `Runs — ${runId}`)), runLinks, filters, count, table);
   render();
 }
@@ -92,30 +95,6 @@ function callList(player) {
   if (!player.calls.length) return el("p", { class: "muted" }, "no tool calls recorded");
   return el("ol", { class: "calls", id: "call-list" }, player.calls.map((c) => el("li", {
     class: `status-${c.status}`, onclick: () => player.seek(c.t0_s) }, callText(c, player.t0))));
-}
-
-export async function showCompare(root, params) {
-  const info = await getJson("/api/info");
-  const sides = [];
-  for (const run of info.runs) for (const agent of run.agents) sides.push({ run: run.id, agent, label: `${run.id} · ${agent}` });
-  if (sides.length < 2) { root.replaceChildren(el("p", {}, "Open two results folders (or a run with two agents) to compare.")); return; }
-  const pick = (name, k) => sides.findIndex((s) => s.label === params.get(name)) >= 0 ? sides.findIndex((s) => s.label === params.get(name)) : k;
-  const a = sides[pick("a", 0)], b = sides[pick("b", 1)];
-  const load = async (s) => (await getJson(`/api/runs/${encodeURIComponent(s.run)}/tasks`)).rows.filter((r) => r.agent === s.agent);
-  const [rowsA, rowsB] = await Promise.all([load(a), load(b)]);
-  const key = (r) => `${r.session}/${r.task}/${r.trial}`;
-  const byB = new Map(rowsB.map((r) => [key(r), r]));
-  const chooser = (name, current) => el("select", { id: `compare-${name}`, onchange: (e) => { params.set(name, e.target.value); location.search = params.toString(); } },
-    sides.map((s) => el("option", { value: s.label, ...(s.label === current.label ? { selected: "" } : {}) }, s.label)));
-  const cell = (r, side) => r ? el("td", { class: r.passed ? "pass" : "fail" },
-    el("a", { href: pageUrl(`/inspect/${r.session}/${r.task}`, { trial: r.trial, run: side.run, agent: side.agent }) }, r.passed ? "PASS" : "FAIL"),
-    ` ${r.checks_passed}/${r.checks_total}`) : el("td", {}, "–");
-  const differ = rowsA.filter((r) => byB.has(key(r)) && !!byB.get(key(r)).passed !== !!r.passed).length;
-  root.replaceChildren(el("header", {}, el("h1", {}, "Compare")), el("div", { class: "filters" }, "A ", chooser("a", a), " B ", chooser("b", b)),
-    el("p", { id: "compare-summary" }, `A passes ${rowsA.filter((r) => r.passed).length}/${rowsA.length}, B passes ${rowsB.filter((r) => r.passed).length}/${rowsB.length}; ${differ} tasks differ`),
-    el("table", { class: "tasks", id: "compare-table" }, el("tr", {}, ["session", "task", "trial", "A", "B"].map((h) => el("th", {}, h))),
-      rowsA.map((r) => el("tr", { class: byB.has(key(r)) && !!byB.get(key(r)).passed !== !!r.passed ? "differ" : "" },
-        el("td", {}, r.session), el("td", {}, r.task), el("td", {}, r.trial), cell(r, a), cell(byB.get(key(r)), b)))));
 }
 
 export async function showTruth(root) {

@@ -3,6 +3,7 @@
 import { config, getJson, pageUrl } from "./api.js";
 import { showEditor } from "./editor.js";
 import { showCompare, showRuns, showTask, showTruth } from "./inspector.js";
+import { showLeaderboard } from "./leaderboard.js";
 import { showLive } from "./live.js";
 import { el } from "./panel.js";
 
@@ -50,6 +51,7 @@ async function route() {
     else if (parts[0] === "runs") await showRuns(root, parts[1]);
     else if (parts[0] === "inspect" && parts.length >= 3) await showTask(root, parts[1], parts[2], params);
     else if (parts[0] === "compare") await showCompare(root, params);
+    else if (parts[0] === "leaderboard") await showLeaderboard(root);
     else if (parts[0] === "replay") await showTruth(root);
     else if (parts[0] === "editor") await showEditor(root);
     else await showHome(root);
