@@ -21,6 +21,8 @@ from typing import Any
 
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
+from benchmark.hosted import EXTERNAL
+from benchmark.hosted.run import add_hosted_arguments
 from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
@@ -49,7 +51,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_verbose_argument(gen)
 
     run = bsub.add_parser("run", help="run an agent over the benchmark")
-    run.add_argument("--agent", choices=AGENTS, default="oracle")
+    run.add_argument("--agent", choices=(*AGENTS, EXTERNAL), default="oracle",
+                     help="the agent to run; external: host the run for an agent outside "
+                          "this process (README \"Hosted runs\")")
     run.add_argument("--model", default="", help="LLM agents: model name (or OPENAI_MODEL)")
     run.add_argument("--base-url", default="",
                      help="LLM agents: OpenAI-compatible base URL (or OPENAI_BASE_URL; the "
@@ -77,6 +81,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_verbose_argument(run)
     add_mqtt_arguments(run, session=False)
     add_link_arguments(run)
+    add_hosted_arguments(run)
 
     report = bsub.add_parser("report", help="metrics report of results files")
     report.add_argument("results", type=Path, nargs="+", help="results.jsonl files")
@@ -148,7 +153,7 @@ def _run(args: argparse.Namespace) -> int:
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
                    clock=args.clock, backend=args.backend, ray_address=args.ray_address,
                    mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0),
-                   link_faults=_link_faults_json(args))
+                   link_faults=_link_faults_json(args), external_host=args.host)
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
@@ -156,9 +161,10 @@ def _run(args: argparse.Namespace) -> int:
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
     on_live = getattr(args, "on_live", None)
+    on_message = getattr(args, "on_message", None)  # --agent external (_run_hosted)
     if url is None:
         with ProgressBar("tasks") as bar:
-            outcome = run_benchmark(plan, sink=bar, on_live=on_live)
+            outcome = run_benchmark(plan, sink=bar, on_live=on_live, on_message=on_message)
         records = read_records(plan.results_path)
     else:
         from mqtt_bus import BenchBus
@@ -174,7 +180,7 @@ def _run(args: argparse.Namespace) -> int:
                 bus.record(record)
             with ProgressBar("tasks") as bar:
                 outcome = run_benchmark(plan, sink=bar, on_record=bus.record,
-                                        on_live=on_live)
+                                        on_live=on_live, on_message=on_message)
             records = read_records(plan.results_path)
             bus.finish(len(records))
         stats = bus.stats
@@ -189,6 +195,14 @@ def _run(args: argparse.Namespace) -> int:
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
+
+
+def _run_hosted(args: argparse.Namespace) -> int:
+    """--agent external: `_run` with the hosted run's endpoint around it (benchmark/hosted)."""
+    from benchmark.hosted.run import hosting
+    with hosting(workers=args.workers, host=args.host, port=args.port) as on_message:
+        args.on_message = on_message
+        return _run(args)
 
 
 def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -227,7 +241,9 @@ def run_bench(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm bench` command; bad input is printed, exit 2."""
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
-    handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import}
+    hosted = getattr(args, "agent", None) == EXTERNAL
+    handlers = {"generate": _generate, "run": _run_hosted if hosted else _run,
+                "report": _report, "import": _import}
     try:
         return handlers[args.bench_command](args)
     except (SessionFileError, ResultsError, ValueError, OSError) as error:

@@ -11,10 +11,11 @@ last one left.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import json
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,7 @@ from agent_contract import Agent
 from benchmark.agents import NoopAgent
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
+from benchmark.hosted import EXTERNAL
 from benchmark.importer import load_any_session
 from benchmark.live_channel import LiveChannel
 from benchmark.progress import LineProgress, ProgressSink, task_line
@@ -61,6 +63,7 @@ class RunPlan:
     # link faults for every session (emulator.link_faults.LinkFaults.to_json()), else each
     # session file's own ``link_faults``, if any
     link_faults: dict[str, Any] | None = None
+    external_host: str = "127.0.0.1"  # --agent external: where each session's server listens
 
     @property
     def results_path(self) -> Path:
@@ -121,9 +124,14 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
             send(("note", f"{path}: {note}"))
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
-    agent = make_agent(plan.agent, session, plan)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock,
                              link_faults=plan.link_faults)
+    if plan.agent == EXTERNAL:  # a hosted run: the agent is outside (benchmark/hosted)
+        from benchmark.hosted.agent import UNBOUNDED_WALL_S, ExternalAgent
+        agent: Agent = ExternalAgent(session, send, trial=trial, host=plan.external_host)
+        options = replace(options, agent_wall_timeout_s=UNBOUNDED_WALL_S)
+    else:
+        agent = make_agent(plan.agent, session, plan)
     world = _world_of(path)
 
     def emit(record: dict[str, Any]) -> None:
@@ -136,10 +144,21 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     if plan.live_hz > 0:
         live = LiveChannel(lambda payload: send(("live", payload)), plan.live_hz)
     try:
-        asyncio.run(run_session(session, agent, emit=emit,
-                                done=done, options=options, live=live))
+        asyncio.run(_in_agent_context(agent, run_session(session, agent, emit=emit,
+                                                         done=done, options=options,
+                                                         live=live)))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+async def _in_agent_context(agent: Agent, work: Awaitable[None]) -> None:
+    """Run `work`, inside `agent` when it is an async context manager (what it serves or
+    holds for the whole session: a hosted agent's server)."""
+    if isinstance(agent, contextlib.AbstractAsyncContextManager):
+        async with agent:
+            await work
+    else:
+        await work
 
 
 def _world_of(path: str) -> dict[str, Any] | None:
@@ -212,12 +231,14 @@ def _session_head(path: Path) -> tuple[str | None, int]:
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                   sink: ProgressSink | None = None,
                   on_record: Callable[[dict[str, Any]], None] | None = None,
-                  on_live: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
+                  on_live: Callable[[dict[str, Any]], None] | None = None,
+                  on_message: Handle | None = None) -> RunOutcome:
     """Run the plan; returns what was written. Results go to plan.results_path. Each task's
     line and every note or error go to `sink` (default: lines handed to `progress`);
     `on_record` hears each record right after it was appended (e.g. the MQTT bus). With
-    `plan.live_hz`, each live frame a session publishes is handed to `on_live`."""
-    if plan.agent not in AGENTS:
+    `plan.live_hz`, each live frame a session publishes is handed to `on_live`; messages of
+    other kinds (a hosted run's ``("hosted", ...)``) go to `on_message`."""
+    if plan.agent not in AGENTS and plan.agent != EXTERNAL:
         raise ValueError(f"unknown agent {plan.agent!r}; choose one of {', '.join(AGENTS)}")
     if plan.agent in LLM_AGENTS:
         from llm_tools.agents import ModelConfig
@@ -262,6 +283,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
             out.say(f"note: {payload}")
         elif kind == "live" and on_live is not None:
             on_live(payload)
+        elif kind != "live" and on_message is not None:
+            on_message(message)
 
     try:
         backend.run(functools.partial(run_unit, plan), units, handle)
