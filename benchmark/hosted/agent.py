@@ -17,7 +17,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import secrets
-import threading
 from typing import cast
 from urllib.parse import quote
 
@@ -88,7 +87,6 @@ class ExternalAgent:
         spec = next(t for t in self._session.tasks if t.id == task.task_id)
         gateway, services, swarm = _world(tools)
         key = secrets.token_urlsafe(18)
-        loop, loop_thread = asyncio.get_running_loop(), threading.get_ident()
         ended = asyncio.Event()
         told = False
 
@@ -99,13 +97,7 @@ class ExternalAgent:
                 self._notify(Notice(kind=NoticeKind.ENDED, key=key))
             ended.set()
 
-        def on_end() -> None:  # sync routes call tools in a worker thread
-            if threading.get_ident() == loop_thread:
-                end()
-            else:
-                loop.call_soon_threadsafe(end)
-
-        hosted = HostedTools(tools, current_thinker(), on_end)
+        hosted = HostedTools(tools, current_thinker(), end)
         live = LiveSession(self._session, spec, swarm, services, gateway,
                            cast(AgentTools, hosted), services.clock_s())
         url = self._server.url

@@ -84,7 +84,7 @@ def endpoint_app(board: Board, seats: Seats) -> FastAPI:
                   lifespan=lifespan)
     app.add_middleware(BodyLimit)
 
-    wait = Query(DEFAULT_WAIT_S, ge=0.0, le=MAX_WAIT_S,
+    wait = Query(ge=0.0, le=MAX_WAIT_S,
                  description="seconds to wait for a task before answering 503")
 
     @app.get("/next", summary="Take the next task (200), or 204 once the run is over")

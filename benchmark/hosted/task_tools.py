@@ -13,8 +13,11 @@ are added, nothing changed:
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import functools
 import inspect
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -27,15 +30,18 @@ _TOOLS = frozenset(tool_names())
 
 
 class HostedTools:
-    """`tools` with every tool run as `thinker`; `on_end()` is called once, when the task
-    ends through a tool (finish, or a call that finds the budget spent). Everything else
-    (counters, the call log, `spent`, `finished`) reads through to `tools`."""
+    """`tools` with every tool run as `thinker`, in the loop's thread (made in it); `on_end()`
+    is called, in that thread, when the task ends through a tool (finish, or a call that
+    finds the budget spent). Everything else (counters, the call log, `spent`, `finished`)
+    reads through to `tools`."""
 
     def __init__(self, tools: AgentTools, thinker: Thinker | None,
                  on_end: Callable[[], None]) -> None:
         self._tools = tools
         self._thinker = thinker
         self._on_end = on_end
+        self._loop = asyncio.get_running_loop()
+        self._loop_thread = threading.get_ident()
         self._wrapped: dict[str, Any] = {}
 
     @property
@@ -71,8 +77,7 @@ class HostedTools:
                     self._ended()
             return call_async
 
-        @functools.wraps(method)
-        def call_sync(*args: Any, **kwargs: Any) -> Any:
+        def in_loop(*args: Any, **kwargs: Any) -> Any:
             try:
                 return method(*args, **kwargs)
             except BudgetExhausted:
@@ -80,4 +85,21 @@ class HostedTools:
                 raise
             finally:
                 self._ended()
+
+        @functools.wraps(method)
+        def call_sync(*args: Any, **kwargs: Any) -> Any:
+            if threading.get_ident() == self._loop_thread:
+                return in_loop(*args, **kwargs)
+            # A synchronous route runs in a worker thread: the call itself runs in the loop's
+            # thread, like every other call on the world, one at a time.
+            done: concurrent.futures.Future[Any] = concurrent.futures.Future()
+
+            def run() -> None:
+                try:
+                    done.set_result(in_loop(*args, **kwargs))
+                except BaseException as error:
+                    done.set_exception(error)
+
+            self._loop.call_soon_threadsafe(run)
+            return done.result()
         return call_sync
