@@ -200,7 +200,9 @@ def _run(args: argparse.Namespace) -> int:
 def _run_hosted(args: argparse.Namespace) -> int:
     """--agent external: `_run` with the hosted run's endpoint around it (benchmark/hosted)."""
     from benchmark.hosted.run import hosting
-    with hosting(workers=args.workers, host=args.host, port=args.port) as on_message:
+    sessions = args.sessions or suite_paths(args.suite)[0]
+    with hosting(workers=args.workers, units=args.trials * len(sessions), host=args.host,
+                 port=args.port) as on_message:
         args.on_message = on_message
         return _run(args)
 

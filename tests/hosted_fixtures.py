@@ -20,8 +20,17 @@ from llm_tools.registry import default_registry
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
 
-__all__ = ["COMPARED", "CLIENT", "SCRIPT", "Host", "ScriptedAgent", "compared",
-           "in_process_records", "session_file", "start_host"]
+__all__ = [
+    "CLIENT",
+    "COMPARED",
+    "SCRIPT",
+    "Host",
+    "ScriptedAgent",
+    "compared",
+    "in_process_records",
+    "session_file",
+    "start_host",
+]
 
 CLIENT = str(ROOT / "tests" / "hosted_client.py")
 SCRIPT: dict[str, list[list[Any]]] = {

@@ -76,6 +76,7 @@ class ExternalAgent:
 
     async def __aexit__(self, *exc: object) -> None:
         await self._server.close()
+        self._notify(Notice(kind=NoticeKind.CLOSED))
 
     def _notify(self, notice: Notice) -> None:
         self._send(("hosted", notice.model_dump(mode="json")))

@@ -3,11 +3,11 @@ whether the run is over. Units post their notices from whatever thread the backe
 them over in; every change is applied in the endpoint's event loop, where `/next` waits on it.
 
 `/next` semantics (README "Hosted runs"): a task on offer is handed out at once, to one
-caller only. With none on offer, the call waits for one while fewer tasks are out than the
-run hosts sessions at once (`--workers`); when that many are out already, it answers 409
-(after a short grace, so an agent asking right after its `finish` gets its next task rather
-than a 409 while the end of its last one is on its way from the unit). Once every unit is
-done, it answers 204.
+caller only. With none on offer, the call waits for one while fewer tasks are out than
+sessions can be hosted at once (`--workers`, or fewer once fewer units are left); when that
+many are out already, it answers 409 (after a short grace, so an agent asking right after its
+`finish` gets its next task rather than a 409 while the end of its last one is on its way
+from the unit). Once every unit is done, it answers 204.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ class AllOut(Exception):
     def __init__(self, out: list[TaskOffer], workers: int) -> None:
         names = ", ".join(f"{o.session}/{o.task_id}" for o in out)
         super().__init__(f"every task this run hosts at once is already out ({names}): "
-                         f"finish one first (the run hosts {workers} session(s) at once, "
+                         f"finish one first (the run hosts {workers} session(s) at once now; "
                          "--workers)")
 
 
@@ -41,8 +41,10 @@ class NotYet(Exception):
 
 
 class Board:
-    def __init__(self, workers: int) -> None:
+    def __init__(self, workers: int, units: int) -> None:
         self.workers = workers
+        self.units = units  # (session, trial) units in the run; each closes when done
+        self._closed = 0
         self._offers: collections.OrderedDict[str, TaskOffer] = collections.OrderedDict()
         self._out: dict[str, TaskOffer] = {}
         self._over = False
@@ -83,6 +85,8 @@ class Board:
         elif notice.kind is NoticeKind.ENDED:
             self._offers.pop(notice.key, None)
             self._out.pop(notice.key, None)
+        elif notice.kind is NoticeKind.CLOSED:
+            self._closed += 1
 
     def _close(self) -> None:
         self._over = True
@@ -97,13 +101,19 @@ class Board:
         return key in self._out
 
     @property
+    def at_once(self) -> int:
+        """How many tasks can be out at once now: one per session hosted at once."""
+        return max(1, min(self.workers, self.units - self._closed))
+
+    @property
     def over(self) -> bool:
         return self._over
 
     def counts(self) -> dict[str, Any]:
         return {"on_offer": len(self._offers), "out": len(self._out),
                 "handed_out": self.handed_out, "over": self._over,
-                "sessions_at_once": self.workers}
+                "sessions_at_once": self.at_once, "units": self.units,
+                "units_done": self._closed}
 
     async def take(self, wait_s: float) -> TaskOffer | None:
         """The next task for a caller (out with it from now), or None once the run is over.
@@ -121,10 +131,10 @@ class Board:
             if self._over:
                 return None
             now = time.monotonic()
-            if len(self._out) >= self.workers:
+            if len(self._out) >= self.at_once:
                 grace_until = grace_until or now + GRACE_S
                 if now >= grace_until:
-                    raise AllOut(list(self._out.values()), self.workers)
+                    raise AllOut(list(self._out.values()), self.at_once)
             else:
                 grace_until = None
             if now >= deadline:

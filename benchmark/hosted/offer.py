@@ -46,6 +46,7 @@ class TaskOffer(BaseModel):
 class NoticeKind(StrEnum):
     OFFER = "offer"  # a task is ready for an agent (`offer` holds it)
     ENDED = "ended"  # the task is over (finish, budget, timeout): its key no longer works
+    CLOSED = "closed"  # the unit is done: it offers no more tasks
 
 
 class Notice(BaseModel):
@@ -54,5 +55,5 @@ class Notice(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     kind: NoticeKind
-    key: str
+    key: str = ""  # the task's key ("" for CLOSED)
     offer: TaskOffer | None = None

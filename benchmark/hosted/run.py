@@ -32,14 +32,16 @@ def add_hosted_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 @contextlib.contextmanager
-def hosting(*, workers: int, host: str, port: int, say: Callable[[str], None] | None = None
+def hosting(*, workers: int, units: int, host: str, port: int,
+            say: Callable[[str], None] | None = None
             ) -> Iterator[Callable[[tuple[str, Any]], None]]:
-    """Serve the endpoint while the block runs the benchmark; yields the handler of the
-    units' ``("hosted", ...)`` messages (`run_benchmark`'s `on_message`)."""
+    """Serve the endpoint while the block runs the benchmark's `units` ((session, trial)
+    pairs) on `workers`; yields the handler of the units' ``("hosted", ...)`` messages
+    (`run_benchmark`'s `on_message`)."""
     if not 0 <= port <= 65535:
         raise ValueError(f"--port must be 0 to 65535, got {port}")
     say = say or functools.partial(print, flush=True)
-    board = Board(workers)
+    board = Board(workers, units)
     seats = Seats(workers)
     endpoint = Endpoint(board, seats, host=host, port=port)
     endpoint.start()
