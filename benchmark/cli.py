@@ -2,11 +2,11 @@
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
                           [--backend local|ray [--ray-address ADDR]] [--verbose]
-  mavswarm bench run --agent oracle|noop|react|workflow [--model M --base-url URL]
+  mavswarm bench run --agent oracle|noop|react|workflow|external [--model M --base-url URL]
                      [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--clock lockstep|stepped] [--out DIR]
                      [--backend local|ray [--ray-address ADDR]] [--inspector-url URL]
-                     [--verbose]
+                     [--host H --port P] [--verbose]
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench import FILE [FILE ...] --out DIR
 """
