@@ -19,7 +19,7 @@ __all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "LINGER_S", "add_hosted_arguments", "
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8770
-LINGER_S = 1.0  # after the last task: /next answers 204 this long before the endpoint closes
+LINGER_S = 0.5  # after the last task: /next answers 204 this long before the endpoint closes
 
 
 def add_hosted_arguments(parser: argparse.ArgumentParser) -> None:

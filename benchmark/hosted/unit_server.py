@@ -2,17 +2,20 @@
 with that task's key.
 
 A unit (one session and trial, wherever the backend runs it) starts one server on a free port
-the first time its agent is given a task. For each task it builds the REST app `mavswarm serve`
-builds (`benchmark.server.create_app`, its tool, drone and MultiUAV-Plat routes) over a hub
-holding this session alone and one agent key, and the MCP app (`llm_tools.mcp_server`) over
-the same tools. A request with the task's key reaches them; a key whose task has ended gets
-410, any other key (or none) 401. Nothing else is served: no operator or admin key exists, so
-the hidden checks and the whole-map views answer 403 as they do to any agent.
+the first time its agent is given a task. It serves the REST app `mavswarm serve` builds
+(`benchmark.server.create_app`: its tool, drone and MultiUAV-Plat routes) over a hub holding
+this session alone, whose live task is swapped as tasks go, and for each task an MCP app
+(`llm_tools.mcp_server`) over that task's tools. A request with the task's key reaches them
+(the REST app sees an agent key of its own instead, so it never holds a task's key); a key
+whose task has ended gets 410, any other key (or none) 401. Nothing else is served: no
+operator or admin key exists, so the hidden checks and the whole-map views answer 403 as they
+do to any agent.
 """
 
 
 import asyncio
 import contextlib
+import secrets
 import socket
 import time
 from collections.abc import AsyncIterator, Iterator
@@ -65,6 +68,7 @@ class _Hosted:
     mcp: ASGIApp
     seen: bool = False  # a request with the key has arrived
     in_flight: int = 0  # requests with the key not yet answered
+    rest_in_flight: int = 0  # of which REST requests
     last_wall_s: float = 0.0  # when the last one was answered (time.monotonic)
 
 
@@ -105,7 +109,14 @@ class UnitServer:
         self.url = ""
         self._registry = registry or default_registry()
         self._current: _Hosted | None = None
+        self._last: _Hosted | None = None
         self._retired: dict[str, str] = {}  # key -> what it was for
+        # The REST app of `mavswarm serve` over this session alone, reached with a key only
+        # this server knows: requests with the current task's key are passed on with it.
+        self._hub = Hub()
+        self._inner_key = secrets.token_urlsafe(24)
+        self._inner = self._inner_key.encode("latin-1")
+        self._rest: FastAPI | None = None
         self._server: QuietServer | None = None
         self._task: asyncio.Task[None] | None = None
         self.app = BodyLimit(self._dispatch)
@@ -147,20 +158,32 @@ class UnitServer:
         from then on."""
         if self._current is not None:
             raise RuntimeError("a hosted session serves one task at a time")
-        hub = Hub()
-        hub.add_session(live)
-        hub.add_key(key, Role.AGENT, live.id)
-        rest = create_app(hub, self._registry)
-        _add_mark_done(rest, hub)
+        await self._drained()
+        if self._rest is None:  # the REST app is built once per session, on its first task
+            self._hub.add_session(live)
+            self._hub.add_key(self._inner_key, Role.AGENT, live.id)
+            self._rest = create_app(self._hub, self._registry)
+            _add_mark_done(self._rest, self._hub)
+        else:
+            self._hub.sessions[live.id] = live
         mcp = streamable_http_app(self._registry, lambda: live.tools, path=MCP_PATH,
                                   host=self.host)
         async with mcp.router.lifespan_context(mcp):
-            self._current = _Hosted(key, live, rest, mcp)
+            self._current = hosted = _Hosted(key, live, self._rest, mcp)
             try:
                 yield
             finally:
                 self._current = None
                 self._retired[key] = f"task {live.task.id} of session {live.id}"
+                self._last = hosted
+
+    async def _drained(self, timeout_s: float = 30.0) -> None:
+        """Wait until no request of the last task is still being answered: the REST app
+        reads its task from the hub, so the next task goes in only once they are done (the
+        episode has cancelled the primitives they waited on)."""
+        last, deadline = self._last, time.monotonic() + timeout_s
+        while last is not None and last.rest_in_flight and time.monotonic() < deadline:
+            await asyncio.sleep(0.005)
 
     async def _dispatch(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -173,7 +196,16 @@ class UnitServer:
             is_mcp = path == MCP_PATH or path.startswith(MCP_PATH + "/")
             current.in_flight += 1
             try:
-                await (current.mcp if is_mcp else current.rest)(scope, receive, send)
+                if is_mcp:
+                    await current.mcp(scope, receive, send)
+                else:
+                    headers = [(k, self._inner if k == _HEADER else v)
+                               for k, v in scope["headers"]]
+                    current.rest_in_flight += 1
+                    try:
+                        await current.rest({**scope, "headers": headers}, receive, send)
+                    finally:
+                        current.rest_in_flight -= 1
             finally:
                 current.in_flight -= 1
                 current.last_wall_s = time.monotonic()
