@@ -158,6 +158,9 @@ class Scripted:
 def in_process_run(out: str, paths: list[str]) -> None:
     """(In a process of its own.) The scripted agent over the sessions in-process, as `bench
     run` runs an agent: the orchestrator writes the results, then the reports."""
+    here = str(Path(__file__).resolve().parent)  # its scripts would shadow packages
+    sys.path[:] = [p for p in sys.path if p not in (here, "")]
+    import mavswarm.cli  # noqa: F401  (what `mavswarm bench run` loads before it runs)
     from benchmark import orchestrator
     from benchmark.report import write_report
     from benchmark.results import read_records

@@ -167,7 +167,7 @@ class UnitServer:
         else:
             self._hub.sessions[live.id] = live
         mcp = streamable_http_app(self._registry, lambda: live.tools, path=MCP_PATH,
-                                  host=self.host)
+                                  host=self.host, json_response=True)
         async with mcp.router.lifespan_context(mcp):
             self._current = hosted = _Hosted(key, live, self._rest, mcp)
             try:
