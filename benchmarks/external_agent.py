@@ -70,7 +70,7 @@ class Probe:
     name = "probe"
 
     def __init__(self, calls: int) -> None:
-        self.calls, self.samples = calls, []
+        self.calls, self.samples = calls, list[float]()
         self.registry = default_registry()
 
     async def run(self, task: AgentTask, tools: AgentTools) -> None:

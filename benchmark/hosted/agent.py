@@ -111,14 +111,18 @@ class ExternalAgent:
         try:
             async with self._server.hosting(key, live):
                 self._notify(Notice(kind=NoticeKind.OFFER, key=key, offer=offer))
-                await self._until_over(ended, hosted, key)
+                gone = await self._until_over(ended, hosted, key)
         finally:
             end()
+        if gone:  # raised out here: the MCP app's task group would wrap it
+            raise AgentGone(f"the external agent made no request for "
+                            f"{self._idle_timeout_s:g} s after taking the task")
 
-    async def _until_over(self, ended: asyncio.Event, hosted: HostedTools, key: str) -> None:
+    async def _until_over(self, ended: asyncio.Event, hosted: HostedTools, key: str) -> bool:
+        """Wait for the task's end; True when its agent went silent instead."""
         while not ended.is_set() and not hosted.over:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(ended.wait(), 1.0)
             if self._server.idle_s(key) > self._idle_timeout_s:
-                raise AgentGone(f"the external agent made no request for "
-                                f"{self._idle_timeout_s:g} s after taking the task")
+                return True
+        return False
