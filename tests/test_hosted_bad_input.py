@@ -6,6 +6,8 @@ and changes nothing; the run still records every task exactly once and exits 0."
 from __future__ import annotations
 
 import asyncio
+import socket
+import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -15,6 +17,7 @@ import pytest
 
 from benchmark.results import read_records
 from llm_tools.input_limits import MAX_BODY_BYTES
+from tests.cli_fixtures import MAVSWARM
 from tests.hosted_fixtures import session_file, start_host
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
@@ -121,3 +124,17 @@ async def test_garbage_gets_clear_4xx_and_changes_nothing(tmp_path: Path) -> Non
     assert len({r["key"] for r in records}) == 2
     assert records[0]["finish"] == "tool_call_budget" and records[0]["tool_calls"] == budget
     assert records[1]["finish"] == "finished" and records[1]["tool_calls"] == 0
+
+
+def test_a_port_in_use_or_out_of_range_stops_before_anything_runs(tmp_path: Path) -> None:
+    session = session_file(tmp_path)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        for bad, words in ((str(port), "cannot listen on 127.0.0.1"), ("70000", "0 to 65535")):
+            run = subprocess.run([*MAVSWARM, "bench", "run", "--agent", "external",
+                                  "--sessions", str(session), "--out", str(tmp_path / "out"),
+                                  "--port", bad], capture_output=True, text=True, timeout=60)
+            assert run.returncode == 2 and words in run.stderr, (run.stdout, run.stderr)
+    assert not (tmp_path / "out" / "results.jsonl").exists()
