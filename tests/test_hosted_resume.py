@@ -111,3 +111,31 @@ def test_two_sessions_hosted_at_once(tmp_path: Path) -> None:
         for t in ("t01", "t02"))
     assert all(r["finish"] == "finished" for r in records)
     json.dumps(records)
+
+
+def _children(pid: int) -> set[int]:
+    found: set[int] = set()
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        found |= {int(c) for c in (task / "children").read_text().split()}
+    return found
+
+
+def test_worker_processes_of_a_killed_host_exit(tmp_path: Path) -> None:
+    one = session_file(tmp_path, "one.json")
+    two = session_file(tmp_path, "two.json", id="twin-session")
+    host = start_host([one, two], tmp_path / "out", "--workers", "2")
+    try:
+        deadline = time.monotonic() + 60
+        while httpx.get(f"{host.url}/status").json()["on_offer"] < 2:
+            assert time.monotonic() < deadline, "the two sessions never offered a task"
+            time.sleep(0.1)
+        workers = _children(host.proc.pid)
+        assert len(workers) >= 2
+        host.proc.send_signal(signal.SIGKILL)
+        host.proc.wait(timeout=10)
+        deadline = time.monotonic() + 20
+        while any(Path(f"/proc/{pid}").exists() for pid in workers):
+            assert time.monotonic() < deadline, "orphaned hosted sessions kept running"
+            time.sleep(0.1)
+    finally:
+        host.kill()

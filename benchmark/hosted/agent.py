@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import multiprocessing
 import secrets
 from typing import cast
 from urllib.parse import quote
@@ -114,15 +115,25 @@ class ExternalAgent:
                 gone = await self._until_over(ended, hosted, key)
         finally:
             end()
-        if gone:  # raised out here: the MCP app's task group would wrap it
+        # Raised out here: inside, the MCP app's task group would wrap them.
+        if gone == "orphaned":
+            raise SystemExit("the driver of this hosted run is gone; nothing can record "
+                             "this session's results")
+        if gone == "silent":
             raise AgentGone(f"the external agent made no request for "
                             f"{self._idle_timeout_s:g} s after taking the task")
 
-    async def _until_over(self, ended: asyncio.Event, hosted: HostedTools, key: str) -> bool:
-        """Wait for the task's end; True when its agent went silent instead."""
+    async def _until_over(self, ended: asyncio.Event, hosted: HostedTools, key: str
+                          ) -> str | None:
+        """Wait for the task's end; "silent" when its agent stopped making requests
+        instead, "orphaned" when this unit runs in a worker process whose driver died (a
+        hosted task would wait for an agent forever)."""
+        driver = multiprocessing.parent_process()
         while not ended.is_set() and not hosted.over:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(ended.wait(), 1.0)
             if self._server.idle_s(key) > self._idle_timeout_s:
-                return True
-        return False
+                return "silent"
+            if driver is not None and not driver.is_alive():
+                return "orphaned"
+        return None
