@@ -99,7 +99,7 @@ class ExternalAgent:
                 self._notify(Notice(kind=NoticeKind.ENDED, key=key))
             ended.set()
 
-        hosted = HostedTools(tools, current_thinker(), end)
+        hosted = HostedTools(tools, current_thinker(), end, lockstep=services.lockstep)
         live = LiveSession(self._session, spec, swarm, services, gateway,
                            cast(AgentTools, hosted), services.clock_s())
         url = self._server.url

@@ -15,6 +15,7 @@ do to any agent.
 
 import asyncio
 import contextlib
+import contextvars
 import secrets
 import socket
 import time
@@ -126,7 +127,9 @@ class UnitServer:
         config = uvicorn.Config(self.app, host=self.host, port=0, log_level="warning",
                                 lifespan="off", timeout_graceful_shutdown=1)
         self._server = QuietServer(config)
-        self._task = asyncio.create_task(self._server.serve())
+        # In a context of its own: requests must not inherit the thread of control of the
+        # task that happened to start the server (HostedTools runs them as the current one).
+        self._task = asyncio.create_task(self._server.serve(), context=contextvars.Context())
         while not self._server.started:
             if self._task.done():
                 self._task.result()
