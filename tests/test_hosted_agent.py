@@ -1,6 +1,7 @@
 """The hosted agent inside an episode: it offers each task to the driver, serves it with the
 task's key until the task ends, and then tells the driver; a taken task whose agent goes
-silent ends as an agent error naming the reason, and the session goes on to its next task."""
+silent ends as an agent error naming the reason, and the session goes on to its next task;
+the token use an agent reports lands in its task's record."""
 
 from __future__ import annotations
 
@@ -38,8 +39,18 @@ async def test_a_silent_agent_ends_its_task_and_the_next_is_offered(tmp_path: Pa
                                 headers={"X-API-Key": first["key"]})
             assert r.status_code == 200  # ...and then nothing
             second = await offer(2)
-            r = await http.post(f"{second['tools_url']}/finish", json={},
-                                headers={"X-API-Key": second["key"]})
+            key = {"X-API-Key": second["key"]}
+            tokens = f"{second['base_url']}/sessions/current/tokens"
+            for use in ({"prompt": 100, "completion": 20, "cost_usd": 0.5},
+                        {"prompt": 1, "completion": 2}):
+                r = await http.post(tokens, json=use, headers=key)
+                assert r.status_code == 200, r.text
+            for bad in ({"prompt": -1, "completion": 0}, {"prompt": 1}, {"prompt": 1,
+                                                                         "completion": 1,
+                                                                         "model": "x"}):
+                r = await http.post(tokens, json=bad, headers=key)
+                assert r.status_code == 422, (bad, r.text)
+            r = await http.post(f"{second['tools_url']}/finish", json={}, headers=key)
             assert r.status_code == 200
             r = await http.post(f"{first['tools_url']}/drone_state", json={"drone_id": "d1"},
                                 headers={"X-API-Key": first["key"]})
@@ -52,6 +63,8 @@ async def test_a_silent_agent_ends_its_task_and_the_next_is_offered(tmp_path: Pa
     assert [(r["task"], r["finish"]) for r in records] == [("t01", "agent_error"),
                                                           ("t02", "finished")]
     assert "no request for 1 s" in records[0]["error"] and records[0]["tool_calls"] == 1
+    assert records[0]["tokens"] is None
+    assert records[1]["tokens"] == {"prompt": 101, "completion": 22, "cost_usd": 0.5}
     kinds = [(n["kind"], n.get("offer", {}) and n["offer"]["task_id"]) for n in notices]
     assert [k for k, _ in kinds] == ["offer", "ended", "offer", "ended", "closed"]
     keys = [n["key"] for n in notices if n["kind"] == "ended"]

@@ -12,7 +12,7 @@ from enum import StrEnum
 
 from pydantic import BaseModel, ConfigDict, Field
 
-__all__ = ["BudgetView", "Notice", "NoticeKind", "TaskOffer"]
+__all__ = ["BudgetView", "Notice", "NoticeKind", "TaskOffer", "TokenUse"]
 
 
 class BudgetView(BaseModel):
@@ -41,6 +41,17 @@ class TaskOffer(BaseModel):
     tools_url: str = Field(description="POST {tools_url}/{tool} with the arguments as a JSON "
                                        "object; GET {tools_url} lists the tools")
     mcp_url: str = Field(description="the same tools over MCP (streamable HTTP)")
+
+
+class TokenUse(BaseModel):
+    """Token use an agent reports for its task (`POST {base_url}/sessions/current/tokens`),
+    added up in the task's record as an in-process agent's `tools.add_tokens` is."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    prompt: int = Field(ge=0, le=10**9, description="prompt tokens of the model calls")
+    completion: int = Field(ge=0, le=10**9, description="completion tokens")
+    cost_usd: float = Field(0.0, ge=0.0, le=10**6, description="their price in USD")
 
 
 class NoticeKind(StrEnum):

@@ -28,6 +28,7 @@ from fastapi import Depends, FastAPI, HTTPException
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from benchmark.hosted.offer import TokenUse
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.auth import API_KEY_HEADER, live_session, require
 from benchmark.server.hub import Caller, LiveSession
@@ -73,9 +74,19 @@ class _Hosted:
     last_wall_s: float = 0.0  # when the last one was answered (time.monotonic)
 
 
-def _add_mark_done(app: FastAPI, hub: Hub) -> None:
-    """MultiUAV-Plat's `mark-done`: for the agent, it ends its task as `finish` does."""
+def _add_task_routes(app: FastAPI, hub: Hub) -> None:
+    """What a hosted task adds to `mavswarm serve`'s routes: token use, and MultiUAV-Plat's
+    `mark-done`, which ends the task as `finish` does."""
     agent = require(hub, Role.AGENT)
+
+    @app.post("/sessions/current/tokens", tags=["tasks"],
+              summary="Report the token use of the agent's model calls for this task")
+    async def tokens(use: TokenUse, caller: Annotated[Caller, Depends(agent)]) -> dict[str, Any]:
+        assert caller.session_id is not None
+        tools = live_session(hub, caller, caller.session_id).tools
+        tools.add_tokens(use.prompt, use.completion, use.cost_usd)
+        return {"prompt": tools.prompt_tokens, "completion": tools.completion_tokens,
+                "cost_usd": round(tools.cost_usd, 6)}
 
     def mark(live: LiveSession, task_id: str) -> dict[str, Any]:
         if task_id != live.task.id:
@@ -166,7 +177,7 @@ class UnitServer:
             self._hub.add_session(live)
             self._hub.add_key(self._inner_key, Role.AGENT, live.id)
             self._rest = create_app(self._hub, self._registry)
-            _add_mark_done(self._rest, self._hub)
+            _add_task_routes(self._rest, self._hub)
         else:
             self._hub.sessions[live.id] = live
         mcp = streamable_http_app(self._registry, lambda: live.tools, path=MCP_PATH,
