@@ -22,7 +22,7 @@ from typing import Any
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
 from benchmark.hosted import EXTERNAL
-from benchmark.hosted.run import add_hosted_arguments
+from benchmark.hosted.options import add_hosted_arguments
 from benchmark.orchestrator import AGENTS
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths

@@ -4,7 +4,6 @@ done; the run itself (records, resume, reports) is `run_benchmark`'s, as for any
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import functools
 import time
@@ -15,20 +14,9 @@ from benchmark.hosted.board import Board
 from benchmark.hosted.endpoint import Endpoint, Seats, on_hosted
 from benchmark.hosted.unit_server import advertised_host
 
-__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "LINGER_S", "add_hosted_arguments", "hosting"]
+__all__ = ["LINGER_S", "hosting"]
 
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_PORT = 8770
 LINGER_S = 0.5  # after the last task: /next answers 204 this long before the endpoint closes
-
-
-def add_hosted_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--host", default=DEFAULT_HOST,
-                        help="--agent external: the address the hosted run listens on "
-                             f"(default {DEFAULT_HOST})")
-    parser.add_argument("--port", type=int, default=DEFAULT_PORT,
-                        help="--agent external: the endpoint's TCP port (0: a free one; "
-                             f"default {DEFAULT_PORT})")
 
 
 @contextlib.contextmanager

@@ -119,6 +119,7 @@ class UnitServer:
                  registry: ToolRegistry | None = None) -> None:
         self.host = host
         self.url = ""
+        # The tools REST and MCP serve (one registry, so both list the same tools).
         self._registry = registry or default_registry()
         self._current: _Hosted | None = None
         self._last: _Hosted | None = None
