@@ -7,7 +7,7 @@
    over REST) against the same agent in-process, each run as a process of its own; target:
    within 1.5x.
 
-    ./dev bench external_agent [--calls 300] [--suite smoke | --sessions FILE ...]
+    ./dev bench external_agent [--calls 300] [--repeats 3] [--suite smoke | --sessions FILE ...]
 """
 
 from __future__ import annotations
@@ -185,37 +185,44 @@ def _external_client(url: str) -> int:
     return tasks
 
 
-def whole_run(paths: list[Path], limit: int | None, folder: Path) -> None:
+def _one_pair(paths: list[Path], folder: Path, k: int) -> tuple[float, float, int]:
+    t = time.perf_counter()
+    subprocess.run([sys.executable, __file__, "--in-process-run", str(folder / f"local-{k}"),
+                    *map(str, paths)], check=True, cwd=ROOT, env=_env())
+    local_s = time.perf_counter() - t
+    t = time.perf_counter()
+    proc, url = _host(paths, folder / f"hosted-{k}")
+    try:
+        tasks = _external_client(url)
+        proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    return local_s, time.perf_counter() - t, tasks
+
+
+def whole_run(paths: list[Path], limit: int | None, folder: Path, repeats: int) -> None:
     if limit is not None:  # the hosted run takes session files: cut them to the limit
         cut = []
         for path in paths:
             data = json.loads(path.read_text())
             cut.append(write_json(folder / path.name, {**data, "tasks": data["tasks"][:limit]}))
         paths = cut
-    t = time.perf_counter()
-    subprocess.run([sys.executable, __file__, "--in-process-run", str(folder / "local-run"),
-                    *map(str, paths)], check=True, cwd=ROOT, env=_env())
-    local_s = time.perf_counter() - t
-    t = time.perf_counter()
-    proc, url = _host(paths, folder / "hosted-run")
-    try:
-        tasks = _external_client(url)
-        proc.wait(timeout=120)
-    finally:
-        proc.kill()
-    hosted_s = time.perf_counter() - t
-    print(f"\n2. a whole run, {len(paths)} session(s), {tasks} tasks, the same scripted agent "
-          "(target: hosted within 1.5x)")
-    print(table(["run", "wall s", "ratio"],
-                [["in-process", f"{local_s:.1f}", "1.00"],
-                 ["hosted, REST client process", f"{hosted_s:.1f}",
-                  f"{hosted_s / local_s:.2f}"]]))
+    pairs = [_one_pair(paths, folder, k) for k in range(repeats)]
+    rows = [[str(k + 1), f"{local_s:.1f}", f"{hosted_s:.1f}", f"{hosted_s / local_s:.2f}"]
+            for k, (local_s, hosted_s, _) in enumerate(pairs)]
+    ratios = sorted(hosted_s / local_s for local_s, hosted_s, _ in pairs)
+    print(f"\n2. a whole run, {len(paths)} session(s), {pairs[0][2]} tasks, the same scripted "
+          "agent in-process and as a REST client process, each run a `bench run`-like "
+          "process of its own (target: hosted within 1.5x)")
+    print(table(["pair", "in-process s", "hosted s", "ratio"], rows))
+    print(f"median ratio {ratios[len(ratios) // 2]:.2f}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--calls", type=int, default=300)
+    parser.add_argument("--repeats", type=int, default=3, help="whole-run pairs")
     parser.add_argument("--suite", default="smoke")
     parser.add_argument("--sessions", type=Path, nargs="+")
     parser.add_argument("--in-process-run", nargs="+", help=argparse.SUPPRESS)
@@ -227,7 +234,7 @@ def main() -> None:
     paths, limit = (list(args.sessions), None) if args.sessions else suite_paths(args.suite)
     with tempfile.TemporaryDirectory() as tmp:
         per_call(args.calls, Path(tmp))
-        whole_run(list(paths), limit, Path(tmp))
+        whole_run(list(paths), limit, Path(tmp), args.repeats)
 
 
 if __name__ == "__main__":
