@@ -6,7 +6,8 @@ reference routes) and scores it exactly as an in-process agent.
   (`unit_server.UnitServer`, `task_tools.HostedTools`);
 - `endpoint.Endpoint` runs in the driver: `GET /next` hands out the tasks units offer
   (`board.Board`), reference clients play through seat keys;
-- `offer` holds the shapes that cross the wire; `run` wires it into `bench run`.
+- `offer` holds the shapes that cross the wire; `run` wires it into `bench run`, whose
+  `--host`/`--port` options are in `options`.
 
 This module itself imports nothing heavy: the orchestrator reads `EXTERNAL` from it.
 """
