@@ -1,17 +1,21 @@
 """Hosted runs (`mavswarm bench run --agent external`) played by agents in processes of their
 own over real sockets: a scripted client over REST and one over MCP (the official SDK's client)
-score exactly as the same calls made in-process, whatever they think in between, and the run
-writes its records and reports and exits 0 once `/next` has answered 204."""
+score exactly as the same calls made in-process, whatever they think in between, as do two
+clients playing two sessions hosted at once; the run writes its records and reports and exits
+0 once `/next` has answered 204."""
 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from benchmark.results import read_records
 from tests.hosted_fixtures import (
+    CLIENT,
     SCRIPT,
     compared,
     in_process_records,
@@ -79,3 +83,26 @@ def test_an_mcp_client_process_thinking_scores_the_same(
     assert compared(records) == compared(in_process)
     took_off = played[0]["results"][0][1]
     assert took_off["status"] == "ok" and "took off" in took_off["message"]
+
+
+def test_two_client_processes_play_two_sessions_at_once_as_in_process(
+        session: Path, script: Path, in_process: list[dict], tmp_path: Path) -> None:
+    twin = session_file(tmp_path, "twin.json", id="twin-session")
+    out = tmp_path / "parallel"
+    host = start_host([session, twin], out, "--workers", "2")
+    try:
+        clients = [subprocess.Popen([sys.executable, CLIENT, "rest", host.url, str(script)],
+                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                   for _ in range(2)]
+        played = [c.communicate(timeout=120) for c in clients]
+        status, printed = host.wait()
+    finally:
+        host.kill()
+    assert [c.returncode for c in clients] == [0, 0], played
+    assert status == 0, printed
+    records = read_records(out / "results.jsonl")
+    assert len(records) == len({r["key"] for r in records}) == 4
+    for session_id in ("area_search-easy-1", "twin-session"):
+        mine = [{**r, "session": "area_search-easy-1"} for r in records
+                if r["session"] == session_id]
+        assert compared(mine) == compared(in_process), session_id
