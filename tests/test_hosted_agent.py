@@ -1,6 +1,6 @@
 """The hosted agent inside an episode: it offers each task to the driver, serves it with the
 task's key until the task ends, and then tells the driver; a taken task whose agent goes
-silent ends as an agent error naming the reason, and the session goes on to its next task;
+silent (or never makes a request) ends as an agent error naming the reason, and the session goes on to its next task;
 the token use an agent reports lands in its task's record."""
 
 from __future__ import annotations
@@ -35,9 +35,10 @@ async def test_a_silent_agent_ends_its_task_and_the_next_is_offered(tmp_path: Pa
     async def external() -> None:
         async with httpx.AsyncClient(timeout=30.0) as http:
             first = await offer(1)
-            r = await http.post(f"{first['tools_url']}/drone_state", json={"drone_id": "d1"},
+            # The driver's word that an agent took it (as /next sends it), then nothing.
+            r = await http.post(f"{first['base_url']}/taken",
                                 headers={"X-API-Key": first["key"]})
-            assert r.status_code == 200  # ...and then nothing
+            assert r.status_code == 204
             second = await offer(2)
             key = {"X-API-Key": second["key"]}
             tokens = f"{second['base_url']}/sessions/current/tokens"
@@ -62,7 +63,7 @@ async def test_a_silent_agent_ends_its_task_and_the_next_is_offered(tmp_path: Pa
     await client
     assert [(r["task"], r["finish"]) for r in records] == [("t01", "agent_error"),
                                                           ("t02", "finished")]
-    assert "no request for 1 s" in records[0]["error"] and records[0]["tool_calls"] == 1
+    assert "no request for 1 s" in records[0]["error"] and records[0]["tool_calls"] == 0
     assert records[0]["tokens"] is None
     assert records[1]["tokens"] == {"prompt": 101, "completion": 22, "cost_usd": 0.5}
     kinds = [(n["kind"], n.get("offer", {}) and n["offer"]["task_id"]) for n in notices]

@@ -25,7 +25,7 @@ from fastapi.responses import JSONResponse, Response
 
 from benchmark.hosted.board import AllOut, Board, NotYet
 from benchmark.hosted.offer import TaskOffer
-from benchmark.hosted.unit_server import QuietServer
+from benchmark.hosted.unit_server import TAKEN_PATH, QuietServer
 from benchmark.server.auth import API_KEY_HEADER
 from llm_tools.body_limit import BodyLimit
 
@@ -42,6 +42,10 @@ class Seats:
     def __init__(self, count: int) -> None:
         self.keys = [f"seat-{secrets.token_urlsafe(12)}" for _ in range(count)]
         self.held: dict[str, TaskOffer | None] = dict.fromkeys(self.keys)
+        self._locks: dict[str, asyncio.Lock] = {}
+
+    def lock(self, seat: str) -> asyncio.Lock:
+        return self._locks.setdefault(seat, asyncio.Lock())
 
     def seat_of(self, request: Request) -> str:
         key = request.headers.get(API_KEY_HEADER, "")
@@ -59,13 +63,27 @@ def _json(status: int, detail: str, **headers: str) -> JSONResponse:
     return JSONResponse({"detail": detail}, status_code=status, headers=headers or None)
 
 
-async def _take(board: Board, wait_s: float) -> TaskOffer | JSONResponse | None:
+async def _take(board: Board, wait_s: float, http: httpx.AsyncClient
+                ) -> TaskOffer | JSONResponse | None:
     try:
-        return await board.take(wait_s)
+        offer = await board.take(wait_s)
     except AllOut as error:
         return _json(409, str(error))
     except NotYet as error:
         return _json(503, str(error), **{"Retry-After": "0"})
+    if offer is not None:  # the unit starts the task's idle clock (a taken task left alone)
+        task = asyncio.create_task(_tell_taken(http, offer))
+        _telling.add(task)
+        task.add_done_callback(_telling.discard)
+    return offer
+
+
+_telling: set[asyncio.Task[None]] = set()
+
+
+async def _tell_taken(http: httpx.AsyncClient, offer: TaskOffer) -> None:
+    with contextlib.suppress(httpx.HTTPError):
+        await http.post(f"{offer.base_url}{TAKEN_PATH}", headers={API_KEY_HEADER: offer.key})
 
 
 def endpoint_app(board: Board, seats: Seats) -> FastAPI:
@@ -89,7 +107,7 @@ def endpoint_app(board: Board, seats: Seats) -> FastAPI:
 
     @app.get("/next", summary="Take the next task (200), or 204 once the run is over")
     async def next_task(wait_s: Annotated[float, wait] = DEFAULT_WAIT_S) -> Response:
-        taken = await _take(board, wait_s)
+        taken = await _take(board, wait_s, http())
         if isinstance(taken, JSONResponse):
             return taken
         if taken is None:
@@ -105,15 +123,16 @@ def endpoint_app(board: Board, seats: Seats) -> FastAPI:
     async def seat_next(request: Request,
                         wait_s: Annotated[float, wait] = DEFAULT_WAIT_S) -> Response:
         seat = seats.seat_of(request)
-        held = seats.held[seat]
-        if held is None or not board.is_out(held.key):
-            taken = await _take(board, wait_s)
-            if isinstance(taken, JSONResponse):
-                return taken
-            if taken is None:
-                seats.held[seat] = None
-                return _json(404, "no task is left: the hosted run is over")
-            seats.held[seat] = held = taken
+        async with seats.lock(seat):  # one task per seat, however many ask at once
+            held = seats.held[seat]
+            if held is None or not board.is_out(held.key):
+                taken = await _take(board, wait_s, http())
+                if isinstance(taken, JSONResponse):
+                    return taken
+                if taken is None:
+                    seats.held[seat] = None
+                    return _json(404, "no task is left: the hosted run is over")
+                seats.held[seat] = held = taken
         return JSONResponse({"id": held.task_id, "content": held.text})
 
     @app.api_route("/{path:path}", methods=["GET", "POST", "PUT", "PATCH", "DELETE"],

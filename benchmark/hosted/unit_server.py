@@ -25,7 +25,7 @@ from typing import Annotated, Any
 
 import uvicorn
 from fastapi import Depends, FastAPI, HTTPException
-from starlette.responses import JSONResponse
+from starlette.responses import JSONResponse, Response
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from benchmark.hosted.offer import TokenUse
@@ -37,9 +37,10 @@ from llm_tools.input_limits import preview
 from llm_tools.mcp_server import streamable_http_app
 from llm_tools.registry import ToolRegistry, default_registry
 
-__all__ = ["MCP_PATH", "QuietServer", "UnitServer", "advertised_host"]
+__all__ = ["MCP_PATH", "TAKEN_PATH", "QuietServer", "UnitServer", "advertised_host"]
 
 MCP_PATH = "/mcp"
+TAKEN_PATH = "/taken"  # the driver says an agent took the task (POST, with the task's key)
 _HEADER = API_KEY_HEADER.lower().encode("latin-1")
 
 
@@ -208,6 +209,10 @@ class UnitServer:
         if current is not None and key == current.key:
             current.seen = True
             path = scope["path"]
+            if path == TAKEN_PATH and scope["method"] == "POST":
+                current.last_wall_s = time.monotonic()  # the idle clock starts now
+                await Response(status_code=204)(scope, receive, send)
+                return
             is_mcp = path == MCP_PATH or path.startswith(MCP_PATH + "/")
             current.in_flight += 1
             try:
