@@ -40,6 +40,8 @@ async def _endpoint_refusals(http: httpx.AsyncClient, url: str) -> None:
     for query in ({"wait_s": "-1"}, {"wait_s": "soon"}, {"wait_s": "1e9"}):
         r = await http.get(f"{url}/next", params=query)
         assert r.status_code == 422, (query, r.text)
+    r = await http.post(f"{url}/next", json={})
+    assert r.status_code == 405 and "GET" in _detail(r)
     r = await http.post(f"{url}/sessions/current/tasks/next", content=BIG)
     assert r.status_code == 413 and "limit" in _detail(r)
     for headers in ({}, {"X-API-Key": "seat-forged"}):

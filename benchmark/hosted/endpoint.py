@@ -138,6 +138,8 @@ def endpoint_app(board: Board, seats: Seats) -> FastAPI:
     @app.api_route("/{path:path}", methods=["GET", "POST", "PUT", "PATCH", "DELETE"],
                    tags=["multiuav-plat"], summary="Passed on to the seat's task")
     async def seat_route(path: str, request: Request) -> Response:
+        if path in ("next", "status"):
+            return _json(405, f"/{path} answers GET only", Allow="GET")
         seat = seats.seat_of(request)
         held = seats.held[seat]
         if held is None or not board.is_out(held.key):
