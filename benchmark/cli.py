@@ -2,12 +2,12 @@
 
   mavswarm bench generate [--out DIR] [--only ID ...] [--no-verify] [--workers N]
                           [--backend local|ray [--ray-address ADDR]] [--verbose]
-  mavswarm bench run --agent oracle|noop|react|workflow|NAME|module:Name|file.py:Name
+  mavswarm bench run --agent oracle|noop|react|workflow|external|NAME|module:Name|file.py:Name
                      [--model M --base-url URL] [--agent-timeout-s S]
                      [--suite smoke|full | --sessions FILE ...]
                      [--workers N] [--trials K] [--clock lockstep|stepped] [--out DIR]
                      [--backend local|ray [--ray-address ADDR]] [--inspector-url URL]
-                     [--verbose]
+                     [--host H --port P] [--verbose]
   mavswarm bench agents
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench compare RUN [RUN ...] [--baseline RUN] [--intersect] [--out DIR]
@@ -26,6 +26,8 @@ from typing import Any
 from benchmark.agent_plugins import ENTRY_POINT_GROUP
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
+from benchmark.hosted import EXTERNAL
+from benchmark.hosted.options import add_hosted_arguments
 from benchmark.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.suite import SUITES, suite_paths
 from emulator.link_faults import add_link_arguments, link_faults_from_args
@@ -57,7 +59,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                      help="oracle (default), noop, react, workflow, an installed plug-in's "
                           "name, package.module:Name or path/to/file.py:Name (an agent, its "
                           "class or a factory: README 'Bring your own agent'); NAME:per-drone "
-                          "gives each drone its own instance. `mavswarm bench agents` lists them")
+                          "gives each drone its own instance. `mavswarm bench agents` lists them; "
+                          "external: host the run for an agent outside this process "
+                          "(README 'Hosted runs')")
     run.add_argument("--agent-timeout-s", type=float, default=600.0, metavar="S",
                      help="stop an agent that makes no tool call and lets no simulated time "
                           "pass for S wall seconds (hung); its task ends as agent_error "
@@ -90,6 +94,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_verbose_argument(run)
     add_mqtt_arguments(run, session=False)
     add_link_arguments(run)
+    add_hosted_arguments(run)
 
     bsub.add_parser("agents", help="list the agents --agent can name: built-in and installed "
                     f"plug-ins (entry points in the group {ENTRY_POINT_GROUP})")
@@ -183,7 +188,8 @@ def _run(args: argparse.Namespace) -> int:
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
     from benchmark.results import read_records
-    check_spec(args.agent)  # a bad --agent is one line, before anything starts
+    if args.agent != EXTERNAL:
+        check_spec(args.agent)  # a bad --agent is one line, before anything starts
     if not args.agent_timeout_s > 0:
         raise ValueError(f"--agent-timeout-s must be > 0, got {args.agent_timeout_s:g}")
     if args.sessions:
@@ -201,7 +207,8 @@ def _run(args: argparse.Namespace) -> int:
                    price_in_usd_per_mtok=args.price_in, price_out_usd_per_mtok=args.price_out,
                    clock=args.clock, backend=args.backend, ray_address=args.ray_address,
                    mavsdk_log=args.verbose, live_hz=getattr(args, "live_hz", 0.0),
-                   link_faults=_link_faults_json(args), agent_timeout_s=args.agent_timeout_s)
+                   link_faults=_link_faults_json(args), agent_timeout_s=args.agent_timeout_s,
+                   external_host=args.host)
     where = ""
     if args.backend == "ray":
         where = f" as Ray tasks at {args.ray_address}" if args.ray_address else " as Ray tasks"
@@ -209,9 +216,10 @@ def _run(args: argparse.Namespace) -> int:
           f"{f' ({limit} tasks each)' if limit else ''}, {args.trials} trial(s), "
           f"{args.workers} worker(s){where}; results in {plan.results_path}")
     on_live = getattr(args, "on_live", None)
+    on_message = getattr(args, "on_message", None)  # --agent external (_run_hosted)
     if url is None:
         with ProgressBar("tasks") as bar:
-            outcome = run_benchmark(plan, sink=bar, on_live=on_live)
+            outcome = run_benchmark(plan, sink=bar, on_live=on_live, on_message=on_message)
         records = read_records(plan.results_path)
     else:
         from mqtt_bus import BenchBus
@@ -228,7 +236,7 @@ def _run(args: argparse.Namespace) -> int:
                 bus.record(record)
             with ProgressBar("tasks") as bar:
                 outcome = run_benchmark(plan, sink=bar, on_record=bus.record,
-                                        on_live=on_live)
+                                        on_live=on_live, on_message=on_message)
             records = read_records(plan.results_path)
             bus.finish(len(records))
         stats = bus.stats
@@ -244,6 +252,16 @@ def _run(args: argparse.Namespace) -> int:
     for error in outcome.errors:
         print(f"error: {error}", file=sys.stderr)
     return 1 if outcome.errors else 0
+
+
+def _run_hosted(args: argparse.Namespace) -> int:
+    """--agent external: `_run` with the hosted run's endpoint around it (benchmark/hosted)."""
+    from benchmark.hosted.run import hosting
+    sessions = args.sessions or suite_paths(args.suite)[0]
+    with hosting(workers=args.workers, units=args.trials * len(sessions), host=args.host,
+                 port=args.port) as on_message:
+        args.on_message = on_message
+        return _run(args)
 
 
 def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
@@ -325,8 +343,9 @@ def run_bench(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm bench` command; bad input is printed, exit 2."""
     from benchmark.results import ResultsError
     from benchmark.session_file import SessionFileError
-    handlers = {"generate": _generate, "run": _run, "report": _report, "import": _import,
-                "agents": _agents, "compare": _compare}
+    hosted = getattr(args, "agent", None) == EXTERNAL
+    handlers = {"generate": _generate, "run": _run_hosted if hosted else _run,
+                "report": _report, "import": _import, "agents": _agents, "compare": _compare}
     try:
         return handlers[args.bench_command](args)
     except (SessionFileError, ResultsError, ValueError, OSError) as error:

@@ -11,11 +11,12 @@ last one left.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import json
 import os
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,7 @@ from agent_contract import Agent, AgentOptions
 from benchmark import agent_plugins
 from benchmark.backends import Handle, Unit, make_backend
 from benchmark.episode import EpisodeOptions, base_record, error_record, run_session
+from benchmark.hosted import EXTERNAL
 from benchmark.importer import load_any_session
 from benchmark.live_channel import LiveChannel
 from benchmark.progress import LineProgress, ProgressSink, task_line
@@ -69,6 +71,7 @@ class RunPlan:
     agent_timeout_s: float = 600.0
     # where a plug-in's relative file path is found (default: this process's directory)
     agent_base_dir: str = ""
+    external_host: str = "127.0.0.1"  # --agent external: where each session's server listens
 
     @property
     def results_path(self) -> Path:
@@ -119,10 +122,15 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
             send(("note", f"{path}: {note}"))
     if not session.tasks:
         send(("note", f"{path}: the session has no tasks; nothing to run"))
-    agent = make_agent(plan.agent, session, plan, trial)
     options = EpisodeOptions(trial=trial, physics_hz=plan.physics_hz, clock=plan.clock,
                              link_faults=plan.link_faults,
                              agent_wall_timeout_s=plan.agent_timeout_s)
+    if plan.agent == EXTERNAL:  # a hosted run: the agent is outside (benchmark/hosted)
+        from benchmark.hosted.agent import UNBOUNDED_WALL_S, ExternalAgent
+        agent: Agent = ExternalAgent(session, send, trial=trial, host=plan.external_host)
+        options = replace(options, agent_wall_timeout_s=UNBOUNDED_WALL_S)
+    else:
+        agent = make_agent(plan.agent, session, plan, trial)
     world = _world_of(path)
 
     def emit(record: dict[str, Any]) -> None:
@@ -135,10 +143,21 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     if plan.live_hz > 0:
         live = LiveChannel(lambda payload: send(("live", payload)), plan.live_hz)
     try:
-        asyncio.run(run_session(session, agent, emit=emit,
-                                done=done, options=options, live=live))
+        asyncio.run(_in_agent_context(agent, run_session(session, agent, emit=emit,
+                                                         done=done, options=options,
+                                                         live=live)))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+async def _in_agent_context(agent: Agent, work: Awaitable[None]) -> None:
+    """Run `work`, inside `agent` when it is an async context manager (what it serves or
+    holds for the whole session: a hosted agent's server)."""
+    if isinstance(agent, contextlib.AbstractAsyncContextManager):
+        async with agent:
+            await work
+    else:
+        await work
 
 
 def _world_of(path: str) -> dict[str, Any] | None:
@@ -247,14 +266,17 @@ def _session_head(path: Path) -> tuple[str | None, int]:
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                   sink: ProgressSink | None = None,
                   on_record: Callable[[dict[str, Any]], None] | None = None,
-                  on_live: Callable[[dict[str, Any]], None] | None = None) -> RunOutcome:
+                  on_live: Callable[[dict[str, Any]], None] | None = None,
+                  on_message: Handle | None = None) -> RunOutcome:
     """Run the plan; returns what was written. Results go to plan.results_path. Each task's
     line and every note or error go to `sink` (default: lines handed to `progress`);
     `on_record` hears each record right after it was appended (e.g. the MQTT bus). With
-    `plan.live_hz`, each live frame a session publishes is handed to `on_live`."""
+    `plan.live_hz`, each live frame a session publishes is handed to `on_live`; messages of
+    other kinds (a hosted run's ``("hosted", ...)``) go to `on_message`."""
     if not plan.agent_base_dir:
         plan = replace(plan, agent_base_dir=os.getcwd())
-    agent_plugins.check_spec(plan.agent, plan.agent_base_dir)  # one line, before anything runs
+    if plan.agent != EXTERNAL:  # one line, before anything runs
+        agent_plugins.check_spec(plan.agent, plan.agent_base_dir)
     if not plan.agent_timeout_s > 0:
         raise ValueError(f"the agent timeout must be > 0 s, got {plan.agent_timeout_s:g}")
     if plan.agent in LLM_AGENTS:
@@ -305,6 +327,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
             out.say(f"note: {payload}")
         elif kind == "live" and on_live is not None:
             on_live(payload)
+        elif kind != "live" and on_message is not None:
+            on_message(message)
 
     try:
         backend.run(functools.partial(run_unit, plan), units, handle)
