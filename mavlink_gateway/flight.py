@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from mavsdk.asyncio.plugins.mission_raw import MissionItem
 
+from mavlink_gateway import effects
 from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import wrap_heading_deg
@@ -51,8 +52,8 @@ class FlightPrimitives(GatewayCore):
             texts = len(link.status_texts)
             await self._mavsdk(link, "the takeoff altitude",
                                lambda: link.action.set_takeoff_altitude(altitude))
-            await self._mavsdk(link, "arming", lambda: link.action.arm())
-            await self._mavsdk(link, "takeoff", lambda: link.action.takeoff())
+            await self._mavsdk(link, "arming", lambda: link.action.arm(), effects.armed)
+            await self._mavsdk(link, "takeoff", lambda: link.action.takeoff(), effects.in_air)
             home_z = link.home_m[2] if link.home_m else 0.0
             target = (x, y, home_z + altitude)
 
@@ -77,7 +78,7 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             height = link.state().altitude_m
             texts = len(link.status_texts)
-            await self._mavsdk(link, "landing", lambda: link.action.land())
+            await self._mavsdk(link, "landing", lambda: link.action.land(), effects.landing)
 
             def done() -> Outcome | None:
                 if self._landed(link):
@@ -178,7 +179,7 @@ class FlightPrimitives(GatewayCore):
                 if link.flight_state == "on_ground":
                     return Outcome(Status.OK, f"{link.drone_id} is on the ground: nothing to "
                                    "hold", link.state(), data)
-                await self._mavsdk(link, "hold", link.action.hold)
+                await self._mavsdk(link, "hold", link.action.hold, effects.holding)
             await self._show_mode(link, "HOLD")
             x, y, z = link.position_m or (math.nan,) * 3
             ended = f"; {interrupted} interrupted" if interrupted else ""
@@ -193,7 +194,8 @@ class FlightPrimitives(GatewayCore):
             start = link.position_m or (0.0, 0.0, 0.0)
             home = link.home_m or (0.0, 0.0, 0.0)
             texts = len(link.status_texts)
-            await self._mavsdk(link, "return to launch", lambda: link.action.return_to_launch())
+            await self._mavsdk(link, "return to launch", lambda: link.action.return_to_launch(),
+                               effects.returning)
 
             def done() -> Outcome | None:
                 if self._landed(link):

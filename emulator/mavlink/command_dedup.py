@@ -7,9 +7,17 @@ air", and the client would report a refusal of something that happened. So a sta
 command identical to the last one from the same client, arriving in the same physics step (a
 lockstep clock stands still while a client exchanges commands) or within the client's
 retransmission span while the vehicle is still as the first copy left it, is answered with the
-cached result and not executed again. Commands that
-only ask for data are always executed (answering them twice is harmless), and camera captures
-use the camera protocol's capture sequence number instead (see emulator.mavlink.camera).
+cached result and not executed again.
+
+A stepped clock runs flat out: within the retransmission span the first copy's goal may have
+run its whole course (the take-off climbed, the landing touched down), so the vehicle is no
+longer as the copy left it, and the copy is executed as a new command (an identical move sent
+again after the vehicle stopped at an obstacle must fly again). Such a copy that is *refused*,
+when the first copy was accepted and no other state-changing command reached the vehicle
+since, is answered with the first copy's result instead (`acted_before`): its refusal would
+only say that the first copy acted. Commands that only ask for data are always executed
+(answering them twice is harmless), and camera captures use the camera protocol's capture
+sequence number instead (see emulator.mavlink.camera).
 """
 
 from __future__ import annotations
@@ -17,7 +25,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from mavlink_vocabulary import MavCmd, MessageId
+from mavlink_vocabulary import MavCmd, MavResult, MessageId
 
 __all__ = ["RETRANSMIT_WINDOW_S", "STATEFUL_COMMANDS", "CommandDedup", "command_key"]
 
@@ -52,6 +60,7 @@ class _Answered:
     wall_s: float
     result: int
     state: object  # the vehicle's state right after it acted
+    serial: int  # state-changing commands this vehicle had executed, this one included
 
 
 class CommandDedup:
@@ -59,6 +68,7 @@ class CommandDedup:
 
     def __init__(self) -> None:
         self._last: dict[tuple[int, int], _Answered] = {}
+        self._serial = 0  # state-changing commands executed, from any client
         self.duplicates = 0
 
     def repeat_of(self, source: tuple[int, int], key: tuple[object, ...], step: int,
@@ -77,9 +87,24 @@ class CommandDedup:
         self.duplicates += 1
         return last.result
 
+    def acted_before(self, source: tuple[int, int], key: tuple[object, ...], wall_s: float
+                     ) -> int | None:
+        """For a copy that was executed again and refused: the first copy's result if it was
+        accepted, this copy repeats it within the retransmission span (from the latest
+        copy), and no other state-changing command reached the vehicle since (the refusal
+        then says only that the first copy acted), else None."""
+        last = self._last.get(source)
+        if last is None or last.key != key or last.result != MavResult.ACCEPTED \
+                or last.serial != self._serial or wall_s - last.wall_s > RETRANSMIT_WINDOW_S:
+            return None
+        last.wall_s = wall_s
+        self.duplicates += 1
+        return last.result
+
     def answered(self, source: tuple[int, int], key: tuple[object, ...], step: int,
                  wall_s: float, result: int, state: object) -> None:
-        self._last[source] = _Answered(key, step, wall_s, result, state)
+        self._serial += 1
+        self._last[source] = _Answered(key, step, wall_s, result, state, self._serial)
 
     def forget(self) -> None:
         """The vehicle's state changed otherwise (an operator moved it, a client changed its

@@ -203,6 +203,11 @@ class VehicleLink:
             self._ack(m, args.command, repeated, target_component)
             return
         reply = execute_command(self, args)
+        if reply.result != MavResult.ACCEPTED:  # refused: because a first copy acted?
+            acted = self.dedup.acted_before(self._peer(m), key, self.wall_now_s)
+            if acted is not None:
+                self._ack(m, args.command, acted, target_component)
+                return
         self._answer(m, args.command, reply, target_component)
         self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result,
                             self._state_key())
