@@ -53,7 +53,8 @@ async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[
                        goal: Goal | None, sent: Callable[[], None],
                        refresh: Callable[[], Awaitable[bool]], acted: Acted | None = None
                        ) -> None:
-    """Run a MAVSDK call (`call()` makes it; `sent()` is told before each try). A refusal by
+    """Run a MAVSDK call (`call()` makes it; `sent()` is told before each try, and again
+    once it is answered if a later copy than the first may have acted). A refusal by
     the autopilot becomes a Refusal with its reason, unless it may answer a copy sent after
     an earlier one acted (see the module docstring): then `acted(link)`, on telemetry sent
     after `refresh()` (False: none came, nothing can be seen), decides. A call that got no
@@ -68,6 +69,8 @@ async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[
         start = time.monotonic()
         try:
             await call()
+            if time.monotonic() - start >= RETRANSMITTED_AFTER_S:
+                sent()  # a later copy may be the one that acted: its goal starts by now
             return
         except Refusal:
             raise
@@ -91,7 +94,8 @@ async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[
                 fresh = await refresh()
                 verdict = acted(link) if acted is not None and fresh else None
                 if verdict is True:
-                    return  # it acted: a repeat's refusal is the command's success
+                    sent()  # it acted, at some time before now
+                    return  # a repeat's refusal is the command's success
                 if verdict is None:
                     raise NoAnswer(f"{link.drone_id} refused a repeat of {what} ({detail}), "
                                    f"and an earlier copy may have acted") from None

@@ -105,11 +105,13 @@ def test_a_refused_copy_stays_refused_when_another_command_came_between() -> Non
 
 # ----------------------------------------------------- the gateway (MAVSDK over UDP)
 class AckLoss:
-    """Loses the ACK of the next accepted copy of each command put in `next_lost`, and counts
+    """Loses the ACK of the next accepted copy of each command put in `next_lost`, or the
+    next copy itself of each command in `next_unheard` (lost on its way up), and counts
     what it lost."""
 
     def __init__(self) -> None:
         self.next_lost: set[int] = set()
+        self.next_unheard: set[int] = set()
         self.dropped: Counter[int] = Counter()
 
 
@@ -127,7 +129,17 @@ def ack_loss(monkeypatch: pytest.MonkeyPatch) -> AckLoss:
             return
         ack(self, m, command, result, component)
 
+    on_command = vehicle_link.VehicleLink._on_command
+
+    def unheard(self: Any, m: Any, args: Any) -> None:
+        if args.command in loss.next_unheard:
+            loss.next_unheard.discard(args.command)
+            loss.dropped[args.command] += 1
+            return
+        on_command(self, m, args)
+
     monkeypatch.setattr(vehicle_link.VehicleLink, "_ack", lose)
+    monkeypatch.setattr(vehicle_link.VehicleLink, "_on_command", unheard)
     monkeypatch.setattr(CommandDedup, "repeat_of", lambda *a, **k: None)
     monkeypatch.setattr(CommandDedup, "acted_before", lambda *a, **k: None)
     return loss
@@ -155,6 +167,24 @@ async def test_the_gateway_calls_a_refused_repeat_of_a_command_that_acted_a_succ
         assert ack_loss.dropped[MavCmd.DO_SET_MODE] == 1
         assert out.status is Status.OK and "returned home" in out.message, out
         assert not ap.in_air and math.dist(ap.position_m[:2], (0.0, 0.0)) < 1.0
+
+
+@pytest.mark.mavsdk
+async def test_a_budget_counts_from_the_copy_that_acted(ack_loss: AckLoss) -> None:
+    # d2 flies far, so the stepped clock runs flat out while d1's first take-off copy is lost
+    # on its way up and MAVSDK sends it again 0.5 s of wall time later: minutes of simulated
+    # time. d1's take-off budget (130 s) must count from the copy that acted, not the lost
+    # one (the climb to 100 m is still on when the answer comes).
+    async with gateway_session(tiny_scenario([vehicle(1), vehicle(2, 50.0, 0.0)])) as s:
+        assert (await s.gw.take_off("d2", 10.0)).ok
+        far = asyncio.create_task(s.gw.move_to("d2", 5000.0, 0.0, 10.0))
+        ack_loss.next_unheard.add(MavCmd.NAV_TAKEOFF)
+        t0 = s.now_s
+        out = await s.gw.take_off("d1", 100.0)
+        assert ack_loss.dropped[MavCmd.NAV_TAKEOFF] == 1
+        assert s.now_s - t0 > 130.0  # the clock ran past the budget while the copy was lost
+        assert out.status is Status.OK and out.message == "d1 took off to 100.0 m", out
+        assert (await far).ok
 
 
 # ------------------------------------------ every call against the truth, stepped clock
