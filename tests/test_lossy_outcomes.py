@@ -18,12 +18,14 @@ from typing import Any
 
 import pytest
 
+from emulator.flight.autopilot_mission import MissionState
 from emulator.flight.modes import FlightMode
 from emulator.link_faults import LinkFaults, LinkProfile
 from emulator.mavlink import vehicle_link
 from emulator.mavlink.command_dedup import RETRANSMIT_WINDOW_S, CommandDedup
+from emulator.world import Obstacle
 from mavlink_gateway import Status
-from mavlink_vocabulary import MavCmd, MavResult
+from mavlink_vocabulary import MavCmd, MavFrame, MavResult
 from tests.gateway_fixtures import gateway_session
 from tests.memory_link import MemoryLink
 from tests.scenario_fixtures import tiny_scenario, vehicle
@@ -101,6 +103,45 @@ def test_a_refused_copy_stays_refused_when_another_command_came_between() -> Non
     bad = _command(link, MavCmd.COMPONENT_ARM_DISARM, 7.0)
     assert _copy(link, bad, after_s=0.0)[0] == [MavResult.DENIED]
     assert _copy(link, bad, after_s=0.5)[0] == [MavResult.DENIED]
+
+
+def test_a_mission_start_copy_after_the_mission_finished_does_not_fly_it_again() -> None:
+    link = MemoryLink(1)
+    ap = link.fleet.autopilots[0]
+    link.arm_and_take_off(1)
+    lat, lon, _ = link.fleet.world.origin.to_geodetic(0.0, 30.0, 0.0)
+    item = link.mission_item(1, 0, MavCmd.NAV_WAYPOINT, lat, lon, 10.0)
+    assert link.upload_mission(1, [item]).type == 0
+    start = _command(link, MavCmd.MISSION_START, 0, 0)
+    assert _copy(link, start, after_s=0.0)[0] == [MavResult.ACCEPTED]
+    _run_physics(link, 60.0)  # the whole mission, while the ACK is lost on the way
+    assert ap.mission.state == MissionState.COMPLETE, ap.mission.state
+    assert _copy(link, start, after_s=0.5)[0] == [MavResult.ACCEPTED]
+    starts = link.swarm.recorder.events("d1", kinds=("mission_start",))
+    assert len(starts) == 1, starts  # not started over
+    assert ap.mission.state == MissionState.COMPLETE
+
+
+def test_the_same_move_sent_again_after_an_obstacle_stop_flies_again() -> None:
+    wall = Obstacle.disc("o-wall", "Wall", (0.0, 60.0), 10.0, height_m=0.0)
+    link = MemoryLink(scenario=tiny_scenario([vehicle(1)], obstacles=[wall]))
+    ap = link.fleet.autopilots[0]
+    link.arm_and_take_off(1)
+    lat, lon, alt = link.fleet.world.origin.to_geodetic(0.0, 100.0, 10.0)
+    move = link.pack(link.mav.command_int_encode(
+        1, 1, MavFrame.GLOBAL, MavCmd.DO_REPOSITION, 0, 0, -1.0, 0.0, 0.0, math.nan,
+        round(lat * 1e7), round(lon * 1e7), alt))
+    assert _copy(link, move, after_s=0.0)[0] == [MavResult.ACCEPTED]
+    _run_physics(link, 60.0)
+    stops = link.swarm.recorder.events("d1", kinds=("obstacle_stop",))
+    assert len(stops) == 1 and ap.position_m[1] < 50.0
+    # The obstacle stopped the goal: the same command again is a new one, executed (it meets
+    # the obstacle at once and stops again), not a retransmission answered from the cache.
+    duplicates = link.swarm.links[0].dedup.duplicates
+    assert _copy(link, move, after_s=0.5)[0] == [MavResult.ACCEPTED]
+    _run_physics(link, 5.0)
+    assert link.swarm.links[0].dedup.duplicates == duplicates
+    assert len(link.swarm.recorder.events("d1", kinds=("obstacle_stop",))) == 2
 
 
 # ----------------------------------------------------- the gateway (MAVSDK over UDP)
