@@ -31,6 +31,7 @@ NAV_WAYPOINT, NAV_LOITER_TIME = int(MavCmd.NAV_WAYPOINT), int(MavCmd.NAV_LOITER_
 CRUISE_M_S = 5.0  # a conservative speed for time budgets
 MAX_WAYPOINTS = 100
 MAX_HOVER_S = 3600.0
+MISSION_STATE_COMPLETE = 5  # MAVLink MISSION_STATE_COMPLETE, in MISSION_CURRENT.mission_state
 
 
 def _fmt(p: Sequence[float]) -> str:
@@ -233,15 +234,22 @@ class FlightPrimitives(GatewayCore):
         link.mission_progress = (0, len(items))
         await self._mavsdk(link, f"the {what} mission start", lambda: link.mission.start_mission())
         total = len(items)
+        states_mark = link.seen.get("mission_current", 0)
 
         async def done() -> Outcome | None:
+            if not self._arrived(link, goal, ARRIVAL_M):
+                return None
+            # MISSION_CURRENT (periodic) says the mission is complete even when the one
+            # MISSION_ITEM_REACHED of its last item was lost on the way.
+            if link.seen.get("mission_current", 0) > states_mark and \
+                    link.mission_state == (total, MISSION_STATE_COMPLETE):
+                return Outcome(Status.OK, "", link.state())
             # A lockstep wait asks only where the clock stopped, so it asks MAVSDK directly;
             # otherwise the progress stream says when asking is worth it (a progress update
             # dropped under load then only delays the answer).
             current, reported = link.mission_progress
             near_end = self.services.lockstep or (reported == total and current >= total - 1)
-            if near_end and self._arrived(link, goal, ARRIVAL_M) \
-                    and await link.mission.is_mission_finished():
+            if near_end and await link.mission.is_mission_finished():
                 return Outcome(Status.OK, "", link.state())
             return None
 

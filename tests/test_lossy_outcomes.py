@@ -228,6 +228,23 @@ async def test_a_budget_counts_from_the_copy_that_acted(ack_loss: AckLoss) -> No
         assert (await far).ok
 
 
+@pytest.mark.mavsdk
+async def test_a_mission_whose_last_item_reached_was_lost_still_ends_ok(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # MISSION_ITEM_REACHED comes once per item; lost, MAVSDK never calls the mission finished.
+    # MISSION_CURRENT (periodic) still says it is complete.
+    monkeypatch.setattr(vehicle_link.VehicleLink, "on_mission_item_reached",
+                        lambda self, seq: setattr(self, "last_reached", seq))
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
+        assert (await s.gw.take_off("d1", 10.0)).ok
+        out = await asyncio.wait_for(s.gw.hover("d1", 5.0), 20.0)
+        assert out.status is Status.OK and out.message.startswith("d1 hovered 5 s"), out
+        out = await asyncio.wait_for(
+            s.gw.move_along_path("d1", [[0.0, 30.0], [30.0, 30.0]]), 20.0)
+        assert out.status is Status.OK and "path of 2 waypoints" in out.message, out
+        assert math.dist(s.ap("d1").position_m[:2], (30.0, 30.0)) < 1.0
+
+
 # ------------------------------------------ every call against the truth, stepped clock
 LOSSY = LinkProfile(loss=0.2)
 RATES = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATUS": 1.0,
@@ -235,8 +252,8 @@ RATES = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATUS": 1.0,
 
 
 async def _chains(s: Any, drone: str, chains: int, tally: Counter[str]) -> None:
-    """take_off, move_to, take_photo, return_home or land, each outcome judged at once
-    against the drone's ground truth."""
+    """take_off, move_to, take_photo, hover, move_along_path (missions), return_home or land,
+    each outcome judged at once against the drone's ground truth."""
     gw, ap = s.gw, s.ap(drone)
     for k in range(chains):
         x, y, _ = ap.position_m
@@ -256,6 +273,12 @@ async def _chains(s: Any, drone: str, chains: int, tally: Counter[str]) -> None:
         photos = ap.photo_count
         out = await gw.take_photo(drone)
         judge("take_photo", out.status, ap.photo_count > photos)
+        path = [[x, y + 20.0], [x + 20.0, y + 20.0]]
+        for name, args in (("hover", (5.0,)), ("move_along_path", (path,))):
+            t0 = s.now_s
+            out = await getattr(gw, name)(drone, *args)
+            started = s.swarm.recorder.events(drone, t0_s=t0, kinds=("mission_start",))
+            judge(name, out.status, bool(started))
         if k % 2:
             out = await gw.return_home(drone)
             judge("return_home", out.status, ap.mode in (FlightMode.RTL, FlightMode.LAND)
