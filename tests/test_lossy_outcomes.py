@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import math
 from collections import Counter
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -26,9 +27,11 @@ from emulator.mavlink.command_dedup import RETRANSMIT_WINDOW_S, CommandDedup
 from emulator.world import Obstacle
 from mavlink_gateway import Status
 from mavlink_vocabulary import MavCmd, MavFrame, MavResult
+from tests.bench_fixtures import small_session
 from tests.gateway_fixtures import gateway_session
 from tests.memory_link import MemoryLink
 from tests.scenario_fixtures import tiny_scenario, vehicle
+from tests.test_serve_faults import AGENT, _serving
 
 NAN7 = (math.nan,) * 7
 
@@ -300,4 +303,33 @@ async def test_no_call_is_rejected_when_it_acted_on_a_lossy_link_under_the_stepp
         await asyncio.gather(*(_chains(s, d, 3, tally) for d in ("d1", "d2", "d3")))
     calls = sum(v for k, v in tally.items() if ":" in k)
     assert calls >= 30, tally
+    assert tally["false"] == 0, tally
+
+
+@pytest.mark.mavsdk
+@pytest.mark.slow
+async def test_serve_agents_over_rest_get_no_false_refusal_on_a_lossy_link(tmp_path: Path):
+    # `mavswarm serve` (stepped clock) over real HTTP, as an external agent drives it.
+    data = {**small_session(["takeoff_hold"]), "link_faults": {"seed": 5, "loss": 0.2}}
+    tally: Counter[str] = Counter()
+    async with _serving(tmp_path, data) as (client, live):
+        base = f"/sessions/{live.id}/tools"
+        drones = [d["id"] for d in data["drones"]][:3]
+
+        async def fly(drone: str) -> None:
+            ap = live.swarm.fleet.autopilots[live.swarm.fleet.index_by_id[drone]]
+            for _ in range(3):
+                for name, args, acted in (
+                        ("take_off", {"altitude_m": 10.0}, lambda: ap.in_air),
+                        ("land", {}, lambda: not ap.in_air or ap.mode is FlightMode.LAND)):
+                    answer = await client.post(f"{base}/{name}", headers=AGENT,
+                                               json={"drone_id": drone, **args})
+                    assert answer.status_code == 200, answer.text
+                    status = answer.json()["status"]
+                    tally[f"{name}:{status}"] += 1
+                    if acted() and status in ("rejected", "timeout"):
+                        tally["false"] += 1
+
+        await asyncio.gather(*(fly(d) for d in drones))
+    assert sum(v for k, v in tally.items() if ":" in k) == 18, tally
     assert tally["false"] == 0, tally
