@@ -2,13 +2,15 @@
 
     ./dev bench lossy_link [--drones 3] [--chains 5] [--loss 0,0.05,0.2] [--latency-ms 0]
                            [--jitter-ms 0] [--via relay|faults] [--clock lockstep|stepped]
-                           [--seed 1]
+                           [--primitives basic|all] [--seed 1]
 
 Each drone flies --chains chains side by side with the others (one thread of control per
-drone, as the benchmark's agents do). A chain succeeds when all four primitives answer `ok`.
+drone, as the benchmark's agents do). A chain succeeds when all its primitives answer `ok`:
+take_off, move_to 200 m, take_photo, land; with `--primitives all` also a 5 s hover and a
+two-waypoint path (missions), and every other chain returns home instead of landing.
 Every outcome is compared with the ground truth right after it, and these are counted as
-false reports: `rejected` while the truth shows the drone did act (it took off, landed, took
-the photo), and `timeout` or `rejected` for a photo that was taken. `unknown` is never false:
+false reports: `rejected` or `timeout` while the truth shows the drone did act (it took off,
+arrived, took the photo, started the mission, returned, landed). `unknown` is never false:
 it says the outcome could not be known.
 
 --via relay: a UDP relay between the swarm and the gateway drops (and delays) whole datagrams
@@ -87,7 +89,8 @@ class Relay(asyncio.DatagramProtocol):
             self.transport.sendto(data, to)
 
 
-async def chain(gw: Gateway, swarm: Swarm, drone: str, k: int, tally: Counter[str]) -> None:
+async def chain(gw: Gateway, swarm: Swarm, drone: str, k: int, tally: Counter[str],
+                every: bool) -> None:
     ap = swarm.fleet.autopilots[swarm.fleet.index_by_id[drone]]
 
     def judge(name: str, status: str, acted: bool) -> None:
@@ -111,16 +114,30 @@ async def chain(gw: Gateway, swarm: Swarm, drone: str, k: int, tally: Counter[st
         out = await gw.take_photo(drone)
         judge("take_photo", out.status.value, ap.photo_count > photos)
         ok &= out.ok
-        out = await gw.land(drone)
-        judge("land", out.status.value, not ap.in_air)
+        if every:
+            x1, y1, _ = ap.position_m
+            path = [[x1, y1 + 20.0], [x1 - dx / 10.0, y1 + 20.0]]
+            for name, args in (("hover", (5.0,)), ("move_along_path", (path,))):
+                t0 = swarm.fleet.now_s
+                out = await getattr(gw, name)(drone, *args)
+                started = swarm.recorder.events(drone, t0_s=t0, kinds=("mission_start",))
+                judge(name, out.status.value, bool(started))
+                ok &= out.ok
+        if every and k % 2:
+            out = await gw.return_home(drone)
+            judge("return_home", out.status.value, not ap.in_air
+                  and math.dist(ap.position_m[:2], ap.home_m[:2]) < 1.0)
+        else:
+            out = await gw.land(drone)
+            judge("land", out.status.value, not ap.in_air)
         ok &= out.ok
     tally["chains_ok" if ok else "chains_failed"] += 1
 
 
 async def drone_thread(gw: Gateway, swarm: Swarm, drone: str, chains: int,
-                       tally: Counter[str]) -> None:
+                       tally: Counter[str], every: bool) -> None:
     for k in range(chains):
-        await chain(gw, swarm, drone, k, tally)
+        await chain(gw, swarm, drone, k, tally, every)
         ap = swarm.fleet.autopilots[swarm.fleet.index_by_id[drone]]
         if ap.in_air:  # a failed chain left it flying: put it down for the next one
             await gw.land(drone)
@@ -159,7 +176,8 @@ async def run(loss: float, args: argparse.Namespace) -> dict[str, float]:
             t0 = time.perf_counter()
             thinker = Thinker(services)
             await run_as(thinker, run_concurrently(services, [
-                drone_thread(gw, swarm, d, args.chains, tally) for d in fleet.drones]))
+                drone_thread(gw, swarm, d, args.chains, tally, args.primitives == "all")
+                for d in fleet.drones]))
             thinker.close()
             wall = time.perf_counter() - t0
     result = {"loss": loss, "wall_s": wall, **{k: float(v) for k, v in tally.items()}}
@@ -178,12 +196,16 @@ def main() -> None:
     p.add_argument("--jitter-ms", type=float, default=0.0)
     p.add_argument("--via", choices=("relay", "faults"), default="faults")
     p.add_argument("--clock", choices=("lockstep", "stepped"), default="lockstep")
+    p.add_argument("--primitives", choices=("basic", "all"), default="basic",
+                   help="all: also hover, a path and return home")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("-v", "--verbose", action="store_true", help="print every outcome count")
     args = p.parse_args()
     total = args.drones * args.chains
-    print(f"{args.drones} drones x {args.chains} chains (take_off, move_to 200 m, take_photo, "
-          f"land), via {args.via}, {args.clock} clock, latency {args.latency_ms:g} +- "
+    steps = "take_off, move_to 200 m, take_photo, " + (
+        "hover, path, land or return_home" if args.primitives == "all" else "land")
+    print(f"{args.drones} drones x {args.chains} chains ({steps}), via {args.via}, "
+          f"{args.clock} clock, latency {args.latency_ms:g} +- "
           f"{args.jitter_ms:g} ms, seed {args.seed}")
     print(f"{'loss':>6} {'chains ok':>10} {'false reports':>14} {'unknown':>8} {'wall s':>8}")
     for loss in (float(v) for v in args.loss.split(",")):

@@ -9,7 +9,9 @@ import time
 from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
+from mavlink_gateway.command_send import Acted, NoAnswer, Refusal, send_command
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.effects import holding
 from mavlink_gateway.goals import Goal, Interrupted
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.lockstep_wait import (
@@ -25,29 +27,13 @@ from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
 __all__ = ["GatewayCore", "Interrupted", "NoAnswer", "Refusal"]
 
 POLL_S = 0.01  # longest wait between two looks at an outcome when no telemetry arrives
-STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUSTEXT
 WALL_MARGIN_S = 60.0
 LANDED_Z_M = 0.3  # the ground is z = 0 of the local frame everywhere
 FRESH_WAIT_S = 3.0  # wall time to wait for every periodic stream (battery is 0.5 Hz)
-# A command MAVSDK got no answer to (it retransmits 3 times itself) is sent again this many
-# times in all; the vehicle acts on a command once (emulator.mavlink.command_dedup).
-COMMAND_TRIES = 3
-# An interrupted primitive's last look at the world: these streams, sent after the interruption
+# A look at the world now (an interrupted goal, a refusal that may answer a repeat): these
+# streams, sent after the look began
 JUDGED_STREAMS = ("position", "velocity", "landed_state", "in_air", "flight_mode")
-JUDGE_WALL_S = 1.0
-SILENT_WALL_S = 5.0  # a drone whose telemetry stopped this long ago is tried only once
-# MAVSDK results that mean "no answer came", not "the vehicle said no"
-NO_ANSWER_RESULTS = frozenset({"TIMEOUT", "CONNECTION_ERROR", "NO_SYSTEM", "UNKNOWN", "BUSY"})
-# MAVSDK results given both for a refusal and for no answer (a parameter write that timed out)
-AMBIGUOUS_RESULTS = frozenset({"PARAMETER_ERROR"})
-
-
-class Refusal(Exception):
-    """A precondition failed: the primitive is refused and nothing is sent."""
-
-
-class NoAnswer(Exception):
-    """A command got no answer: whether the drone acted cannot be known."""
+JUDGE_WALL_S = 1.5  # the heartbeat (armed, mode) is 1 Hz by default
 
 
 def no_answer_outcome(link: DroneLink, name: str, error: NoAnswer) -> Outcome:
@@ -132,7 +118,8 @@ class GatewayCore:
             if replaced is not None:
                 self._replaced[link.drone_id] = replaced
                 if not held:
-                    await self._mavsdk(link, f"hold (to end {replaced})", link.action.hold)
+                    await self._mavsdk(link, f"hold (to end {replaced})", link.action.hold,
+                                       holding)
             return await body(link)
         except Refusal as refusal:
             return Outcome(Status.REJECTED, f"{name} refused: {refusal}", link.state())
@@ -186,52 +173,16 @@ class GatewayCore:
             raise Refusal(f"{name} {coordinate:g} m is beyond the 100 km map limit")
         return coordinate
 
-    async def _mavsdk(self, link: DroneLink, what: str, call: Callable[[], Awaitable[Any]]
-                      ) -> None:
-        """Run a MAVSDK call (`call()` makes it); a refusal by the autopilot becomes a Refusal
-        with its reason. A call that got no answer is made again (the vehicle acts on a
-        command once, so a repeat is answered as the first was) up to COMMAND_TRIES times in
-        all, then raises NoAnswer: the outcome cannot be known, and is never called a
-        refusal."""
-        tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
-        goal = self._goal(link)
-        for attempt in range(1, tries + 1):
-            if goal is not None:
-                goal.check()  # interrupted: send nothing more
-            texts = len(link.status_texts)
+    async def _mavsdk(self, link: DroneLink, what: str, call: Callable[[], Awaitable[Any]],
+                      acted: Acted | None = None) -> None:
+        """Send a command (see mavlink_gateway.command_send); `acted` tells whether fresh
+        telemetry shows its effect, for a refusal that may answer a repeat."""
+        def sent() -> None:
             # A budget starts when the command that counts was sent (the last try's).
             self._command_s[link.drone_id] = self.services.clock_s()
-            try:
-                await call()
-                return
-            except Refusal:
-                raise
-            except Exception as error:  # MAVSDK raises one error class per plugin
-                result = getattr(getattr(error, "result", None), "name", "UNKNOWN")
-                if result in AMBIGUOUS_RESULTS:  # a refusal comes with the autopilot's text
-                    await self._refusal_text(link, texts)
-                    if len(link.status_texts) == texts:
-                        result = "TIMEOUT"
-                if result in NO_ANSWER_RESULTS:
-                    if attempt == tries:
-                        raise NoAnswer(f"no answer from {link.drone_id} to {what} after "
-                                       f"{attempt} tr{'y' if attempt == 1 else 'ies'} "
-                                       f"(the link is lossy or down)") from None
-                    continue
-                await self._refusal_text(link, texts)
-                reason = next(iter(link.status_texts[texts:]), None)
-                detail = reason or str(error)
-                raise Refusal(f"the autopilot refused {what}: {detail}") from None
 
-    @staticmethod
-    async def _refusal_text(link: DroneLink, texts: int) -> None:
-        """The autopilot's STATUSTEXT follows its ACK: wait for it, not for a fixed time."""
-        deadline = time.monotonic() + STATUSTEXT_WAIT_S
-        while len(link.status_texts) == texts:
-            left = deadline - time.monotonic()
-            if left <= 0.0:
-                break
-            await link.wait_update(link.updates, left)
+        await send_command(link, what, call, goal=self._goal(link), sent=sent,
+                           refresh=lambda: self._fresh_telemetry(link), acted=acted)
 
     # ----------------------------------------------------------------- waits
     async def _wait(self, link: DroneLink, budget_s: float, what: str,
@@ -269,18 +220,24 @@ class GatewayCore:
                 return outcome
             raise
 
+    async def _fresh_telemetry(self, link: DroneLink) -> bool:
+        """Wait for telemetry sent after this call (a lockstep clock stands still: the swarm
+        is asked for it); False if none came within JUDGE_WALL_S."""
+        if self.services.lockstep:
+            self.services.refresh_telemetry(link.drone_id)
+            return await settle_telemetry(link, self.services)
+        mark, deadline = dict(link.seen), time.monotonic() + JUDGE_WALL_S
+        while not link.refreshed_since(mark, JUDGED_STREAMS):
+            if time.monotonic() >= deadline:
+                return False
+            await link.wait_update(link.updates, POLL_S)
+        return True
+
     async def _judge_now(self, link: DroneLink,
                          done: Callable[[], Outcome | Awaitable[Outcome | None] | None]
                          ) -> Outcome | None:
-        """`done()` on telemetry sent after this call (a lockstep clock is asked for it)."""
-        if self.services.lockstep:
-            self.services.refresh_telemetry(link.drone_id)
-            await settle_telemetry(link, self.services)
-        else:
-            mark, deadline = dict(link.seen), time.monotonic() + JUDGE_WALL_S
-            while not link.refreshed_since(mark, JUDGED_STREAMS) and \
-                    time.monotonic() < deadline:
-                await link.wait_update(link.updates, POLL_S)
+        """`done()` on telemetry sent after this call."""
+        await self._fresh_telemetry(link)
         try:
             outcome = done()
             if inspect.isawaitable(outcome):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import enum
+import json
 import math
 import time
 from collections.abc import AsyncIterator, Callable
@@ -98,6 +99,9 @@ class DroneLink:
         self.mode = "UNKNOWN"
         self.home_m: tuple[float, float, float] | None = None
         self.mission_progress = (0, 0)
+        # MISSION_CURRENT's (total, mission_state): its periodic stream says a mission is
+        # complete even when the one MISSION_ITEM_REACHED of its last item was lost
+        self.mission_state: tuple[int, int] = (0, 0)
         self.status_texts: list[str] = []
         self.captures: list[Any] = []
         self.updates = 0  # telemetry messages seen; lets waits know fresh data arrived
@@ -131,6 +135,8 @@ class DroneLink:
         follow("mission_progress", self.mission.subscribe_mission_progress(),
                lambda p: setattr(self, "mission_progress", (p.current, p.total)))
         follow("capture", self.camera.subscribe_capture_info(), self.captures.append)
+        follow("mission_current", self.direct.subscribe_message("MISSION_CURRENT"),
+               self._on_mission_current)
         self._tasks.append(asyncio.create_task(self._request_rates(),
                                                name=f"telemetry-rates-{self.drone_id}"))
 
@@ -210,6 +216,11 @@ class DroneLink:
         if self.landed_state == "ON_GROUND" and v.name in ("TAKING_OFF", "IN_AIR"):
             self.armed = True
         self.landed_state = v.name
+
+    def _on_mission_current(self, m: Any) -> None:
+        with contextlib.suppress(ValueError, TypeError, KeyError, AttributeError):
+            fields = json.loads(m.fields_json)
+            self.mission_state = (int(fields["total"]), int(fields["mission_state"]))
 
     def _on_position(self, p: Any) -> None:
         x, y, z = self.origin.to_local(p.latitude_deg, p.longitude_deg, p.absolute_altitude_m)

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from mavsdk.asyncio.plugins.mission_raw import MissionItem
 
+from mavlink_gateway import effects
 from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import wrap_heading_deg
@@ -30,6 +31,7 @@ NAV_WAYPOINT, NAV_LOITER_TIME = int(MavCmd.NAV_WAYPOINT), int(MavCmd.NAV_LOITER_
 CRUISE_M_S = 5.0  # a conservative speed for time budgets
 MAX_WAYPOINTS = 100
 MAX_HOVER_S = 3600.0
+MISSION_STATE_COMPLETE = 5  # MAVLink MISSION_STATE_COMPLETE, in MISSION_CURRENT.mission_state
 
 
 def _fmt(p: Sequence[float]) -> str:
@@ -51,8 +53,8 @@ class FlightPrimitives(GatewayCore):
             texts = len(link.status_texts)
             await self._mavsdk(link, "the takeoff altitude",
                                lambda: link.action.set_takeoff_altitude(altitude))
-            await self._mavsdk(link, "arming", lambda: link.action.arm())
-            await self._mavsdk(link, "takeoff", lambda: link.action.takeoff())
+            await self._mavsdk(link, "arming", lambda: link.action.arm(), effects.armed)
+            await self._mavsdk(link, "takeoff", lambda: link.action.takeoff(), effects.in_air)
             home_z = link.home_m[2] if link.home_m else 0.0
             target = (x, y, home_z + altitude)
 
@@ -77,7 +79,7 @@ class FlightPrimitives(GatewayCore):
             self._require_air(link)
             height = link.state().altitude_m
             texts = len(link.status_texts)
-            await self._mavsdk(link, "landing", lambda: link.action.land())
+            await self._mavsdk(link, "landing", lambda: link.action.land(), effects.landing)
 
             def done() -> Outcome | None:
                 if self._landed(link):
@@ -178,7 +180,7 @@ class FlightPrimitives(GatewayCore):
                 if link.flight_state == "on_ground":
                     return Outcome(Status.OK, f"{link.drone_id} is on the ground: nothing to "
                                    "hold", link.state(), data)
-                await self._mavsdk(link, "hold", link.action.hold)
+                await self._mavsdk(link, "hold", link.action.hold, effects.holding)
             await self._show_mode(link, "HOLD")
             x, y, z = link.position_m or (math.nan,) * 3
             ended = f"; {interrupted} interrupted" if interrupted else ""
@@ -193,7 +195,8 @@ class FlightPrimitives(GatewayCore):
             start = link.position_m or (0.0, 0.0, 0.0)
             home = link.home_m or (0.0, 0.0, 0.0)
             texts = len(link.status_texts)
-            await self._mavsdk(link, "return to launch", lambda: link.action.return_to_launch())
+            await self._mavsdk(link, "return to launch", lambda: link.action.return_to_launch(),
+                               effects.returning)
 
             def done() -> Outcome | None:
                 if self._landed(link):
@@ -231,15 +234,22 @@ class FlightPrimitives(GatewayCore):
         link.mission_progress = (0, len(items))
         await self._mavsdk(link, f"the {what} mission start", lambda: link.mission.start_mission())
         total = len(items)
+        states_mark = link.seen.get("mission_current", 0)
 
         async def done() -> Outcome | None:
+            if not self._arrived(link, goal, ARRIVAL_M):
+                return None
+            # MISSION_CURRENT (periodic) says the mission is complete even when the one
+            # MISSION_ITEM_REACHED of its last item was lost on the way.
+            if link.seen.get("mission_current", 0) > states_mark and \
+                    link.mission_state == (total, MISSION_STATE_COMPLETE):
+                return Outcome(Status.OK, "", link.state())
             # A lockstep wait asks only where the clock stopped, so it asks MAVSDK directly;
             # otherwise the progress stream says when asking is worth it (a progress update
             # dropped under load then only delays the answer).
             current, reported = link.mission_progress
             near_end = self.services.lockstep or (reported == total and current >= total - 1)
-            if near_end and self._arrived(link, goal, ARRIVAL_M) \
-                    and await link.mission.is_mission_finished():
+            if near_end and await link.mission.is_mission_finished():
                 return Outcome(Status.OK, "", link.state())
             return None
 

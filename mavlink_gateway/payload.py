@@ -7,6 +7,7 @@ from typing import Any
 
 from mavsdk.plugins.mavlink_direct import MavlinkMessage
 
+from mavlink_gateway import effects
 from mavlink_gateway.core import Refusal, _number
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.flight import FlightPrimitives
@@ -110,7 +111,8 @@ class PayloadPrimitives(FlightPrimitives):
                 if not moved.ok:
                     return moved
                 texts = len(link.status_texts)
-                await self._mavsdk(link, "landing", lambda: link.action.land())
+                await self._mavsdk(link, "landing", lambda: link.action.land(),
+                                   effects.landing)
             start_pct = link.battery_pct
 
             def done() -> Outcome | None:

@@ -19,6 +19,7 @@ import pytest
 
 from emulator.clock import ClockConfig
 from emulator.flight.modes import FlightMode
+from emulator.link_faults import LinkFaults, LinkProfile
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, Outcome, Status, profiles_from_scenario
@@ -31,6 +32,7 @@ pytestmark = pytest.mark.mavsdk
 
 T = TypeVar("T")
 PROMPT_WALL_S = 3.0  # an interrupted primitive answers within this much wall time
+LOSSY = LinkProfile(loss=0.2)
 
 
 async def _until(condition: Callable[[], bool], what: str, timeout_s: float = 20.0) -> None:
@@ -41,8 +43,8 @@ async def _until(condition: Callable[[], bool], what: str, timeout_s: float = 20
 
 
 async def _hold_during(s: GatewaySession, call: Awaitable[Outcome], after_s: float,
-                       hold: Callable[[], Awaitable[Outcome]] | None = None
-                       ) -> tuple[Outcome, Outcome]:
+                       hold: Callable[[], Awaitable[Outcome]] | None = None, *,
+                       prompt_s: float = PROMPT_WALL_S) -> tuple[Outcome, Outcome]:
     """Start `call`, and once `after_s` of simulated time have passed (a stepped clock runs
     flat out: it is held there), hold the drone (or call `hold`); (the running primitive's
     outcome, the hold's). The running one must end promptly once asked to."""
@@ -52,8 +54,8 @@ async def _hold_during(s: GatewaySession, call: Awaitable[Outcome], after_s: flo
         await _until(lambda: s.now_s >= stop_s - 1e-6, f"{after_s} s of simulated time")
         t0 = time.monotonic()
         held = asyncio.ensure_future(hold() if hold is not None else s.gw.hold("d1"))
-        out = await asyncio.wait_for(running, PROMPT_WALL_S)
-        assert time.monotonic() - t0 < PROMPT_WALL_S
+        out = await asyncio.wait_for(running, prompt_s)
+        assert time.monotonic() - t0 < prompt_s
     return out, await held  # a goal that replaced it flies once the clock runs on
 
 
@@ -196,3 +198,20 @@ async def test_hold_interrupts_an_agent_waiting_under_the_lockstep_clock():
         assert 5.0 < ap.position_m[0] < 800.0
         back = await run_as(thinker, gw.move_to("d1", 0.0, 0.0, 10.0))
         assert back.ok, back
+
+
+async def test_hold_on_a_lossy_link_is_never_refused_and_ok_means_holding():
+    async with gateway_session(tiny_scenario([vehicle(1)])) as s:
+        assert (await s.gw.take_off("d1", 10.0)).ok
+        s.swarm.set_link_faults(LinkFaults(seed=3, uplink=LOSSY, downlink=LOSSY))
+        ap = s.ap("d1")
+        for k in range(5):
+            x = 300.0 if k % 2 == 0 else -300.0
+            # a lost HOLD or telemetry costs MAVSDK's retransmissions (0.5 s each)
+            out, hold = await _hold_during(s, s.gw.move_to("d1", x, 0.0, 10.0), 5.0,
+                                           prompt_s=8.0)
+            assert out.status in (Status.INTERRUPTED, Status.OK, Status.UNKNOWN), out
+            assert hold.status in (Status.OK, Status.UNKNOWN), hold
+            if hold.ok:
+                assert ap.mode is FlightMode.HOLD and ap.in_air, (hold, ap.mode)
+                await _stays(s, "d1")

@@ -136,6 +136,7 @@ class VehicleLink:
 
     # ------------------------------------------------------ autopilot listener
     def on_statustext(self, severity: int, text: str) -> None:
+        self.dedup.on_vehicle_text(severity, text)
         self.statustext(severity, text)
 
     def on_mission_item_reached(self, seq: int) -> None:
@@ -197,15 +198,18 @@ class VehicleLink:
             self._answer(m, args.command, execute_command(self, args), target_component)
             return
         key, step = command_key(m), self.ap.fleet.step_count
-        repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s,
-                                        self._state_key())
+        repeated = self.dedup.repeat_of(self._peer(m), key, step, self.wall_now_s)
         if repeated is not None:  # a retransmission: the first copy's answer again
             self._ack(m, args.command, repeated, target_component)
             return
         reply = execute_command(self, args)
+        if reply.result != MavResult.ACCEPTED:  # refused: because a first copy acted?
+            acted = self.dedup.acted_before(self._peer(m), key, self.wall_now_s)
+            if acted is not None:
+                self._ack(m, args.command, acted, target_component)
+                return
         self._answer(m, args.command, reply, target_component)
-        self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result,
-                            self._state_key())
+        self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result)
 
     def _answer(self, m, command: int, reply: Reply, target_component: int) -> None:
         """The ACK, the reason as a STATUSTEXT, then what follows an accepted command."""
@@ -221,12 +225,6 @@ class VehicleLink:
                 self.send(follow_up.message, follow_up.component)
             elif isinstance(follow_up, Action):
                 follow_up.run()
-
-    def _state_key(self) -> tuple[object, ...]:
-        """What a command changes: mode, arming, landed state, goal, whether a goal runs."""
-        ap, fleet = self.ap, self.ap.fleet
-        return (ap.mode, ap.armed, ap.landed_state, fleet.dyn.goal_m[self.k].tobytes(),
-                bool(fleet.busy[self.k]))
 
     def _ack(self, m, command: int, result: int, target_component: int) -> None:
         component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID \
