@@ -13,6 +13,7 @@ from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_collision import add_compat_collision_routes
 from benchmark.server.compat_health import add_health_routes
+from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
 from benchmark.server.compat_world import add_compat_world_routes
@@ -143,5 +144,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_routes(app, hub, registry)
     add_compat_list_routes(app, hub)
     add_compat_collision_routes(app, hub)
+    add_compat_history_routes(app, hub)
     add_role_docs(app, hub)
     return app

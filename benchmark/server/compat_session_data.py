@@ -17,6 +17,8 @@ from fastapi import Depends, FastAPI, Query
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat import resolve_session
 from benchmark.server.compat_entities import compat_drone, compat_session_fields, entity_records
+from benchmark.server.compat_histories import session_histories
+from benchmark.server.compat_records import full_record
 from benchmark.server.compat_statistics import (
     agent_progress,
     check_context,
@@ -65,14 +67,20 @@ def session_data(hub: Hub, live: LiveSession, role: Role) -> dict[str, Any]:
     """The reference's flat session export of a live session, for operators and admins."""
     data = live.session.data
     fields = compat_session_fields(live, role, active=hub.current() == live.id)
+    reaches = reach_history(live)
+    reached_by = {target: list(entry["reached_by"])
+                  for target, entry in reaches["target_reaches"]["by_target"].items()}
+    targets = [{**t, "is_reached": t["id"] in reached_by,
+                "reached_by": reached_by.get(t["id"], [])}
+               for t in entity_records(live, "targets").values()]
     return {"id": live.id, "name": live.session.name, **fields,
             "statistics": statistics_block(live),
-            "drones": [compat_drone(live, s) for s in live.gateway.list_drones()],
-            "targets": [dict(t) for t in entity_records(live, "targets").values()],
-            "obstacles": [dict(o) for o in data.get("obstacles", [])],
-            "environment": data.get("environment"),
+            "drones": [compat_drone(live, s, volume=True) for s in live.gateway.list_drones()],
+            "targets": targets,
+            "obstacles": [dict(o) for o in entity_records(live, "obstacles").values()],
+            "environment": full_record("environment", data.get("environment") or {}),
             "tasks": [compat_task(live, k, role) for k in range(len(live.session.tasks))],
-            "history": {**reach_history(live),
+            "history": {**session_histories(live), **reaches,
                         "moving_target_tracking": moving_target_tracking(check_context(live))}}
 
 
