@@ -16,6 +16,7 @@ from benchmark.server.compat_health import add_health_routes
 from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
+from benchmark.server.compat_tasks import add_compat_task_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.link_routes import add_link_routes
@@ -145,5 +146,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_list_routes(app, hub)
     add_compat_collision_routes(app, hub)
     add_compat_history_routes(app, hub)
+    add_compat_task_routes(app, hub)
     add_role_docs(app, hub)
     return app

@@ -45,21 +45,24 @@ def _with_check_prefix(node: Any) -> Any:
 
 
 def compat_task(live: LiveSession, index: int, role: Role) -> dict[str, Any]:
-    """Task `index` of the session in the reference's task shape. `is_done`: the operator
-    has moved the session past it. `is_passed` is false: the server does not judge tasks (the
-    benchmark run and the admin check routes do). The check tree is for admins only; nobody
-    gets `related_apis` (the oracle plan is in another shape)."""
+    """Task `index` of the session in the reference's task shape. `is_done`: as mark-done or
+    mark-pending set it, else whether the operator has moved the session past it.
+    `is_passed`: set once an admin's task check passed (compat_tasks), else false. The check
+    tree is for admins only; nobody gets `related_apis` (the oracle plan is in another
+    shape)."""
     task = live.session.tasks[index]
     raw = next((t for t in live.session.data.get("tasks", [])
                 if isinstance(t, Mapping) and t.get("id") == task.id), {})
     current = next((k for k, t in enumerate(live.session.tasks) if t is live.task), -1)
+    marks = live.task_marks.get(task.id, {})
     checks = _with_check_prefix(raw.get("checks")) if role is Role.ADMIN else None
     return {"id": task.id, "name": task.template or task.id, "content": task.text,
             "content_aliases": list(task.aliases), "description": task.category,
             "creator": "system", "originated_from": raw.get("source", "system"),
             "difficulty": task.difficulty, "related_apis": [],
-            "execution_check_apis": checks, "commands": [], "is_done": index < current,
-            "is_passed": False, "created_at": live.started_wall_s,
+            "execution_check_apis": checks, "commands": [],
+            "is_done": marks.get("is_done", index < current),
+            "is_passed": marks.get("is_passed", False), "created_at": live.started_wall_s,
             "last_updated": live.started_wall_s}
 
 

@@ -47,6 +47,8 @@ class LiveSession:
     tools: AgentTools
     task_start_s: float
     started_wall_s: float = field(default_factory=time.time)  # the compat routes' created_at
+    task_marks: dict[str, dict[str, bool]] = field(default_factory=dict)
+    """The reference's `is_done` / `is_passed` per task id, as its routes set them."""
 
     @property
     def id(self) -> str:
