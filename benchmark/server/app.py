@@ -12,6 +12,7 @@ from benchmark.server.auth import live_session, require
 from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_collision import add_compat_collision_routes
+from benchmark.server.compat_drones_admin import add_compat_drone_admin_routes
 from benchmark.server.compat_health import add_health_routes
 from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
@@ -147,5 +148,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_collision_routes(app, hub)
     add_compat_history_routes(app, hub)
     add_compat_task_routes(app, hub)
+    add_compat_drone_admin_routes(app, hub)
     add_role_docs(app, hub)
     return app
