@@ -16,7 +16,9 @@ from benchmark.server.compat_drones_admin import add_compat_drone_admin_routes
 from benchmark.server.compat_health import add_health_routes
 from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
+from benchmark.server.compat_screenshot import add_compat_screenshot_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
+from benchmark.server.compat_sessions_admin import add_compat_session_admin_routes
 from benchmark.server.compat_tasks import add_compat_task_routes
 from benchmark.server.compat_world import add_compat_world_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
@@ -149,5 +151,7 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_history_routes(app, hub)
     add_compat_task_routes(app, hub)
     add_compat_drone_admin_routes(app, hub)
+    add_compat_session_admin_routes(app, hub)
+    add_compat_screenshot_routes(app, hub)
     add_role_docs(app, hub)
     return app

@@ -40,7 +40,8 @@ _GROUND_M = 0.3
 
 def _calls(live: LiveSession) -> list[dict[str, Any]]:
     raw = live.tools.__dict__.get("calls", [])
-    return [c for c in raw if c["name"] in _COMMAND_TOOLS and c["drone"] is not None]
+    return [c for c in raw if c["name"] in _COMMAND_TOOLS and c["drone"] is not None
+            and c["t0_s"] >= live.task_start_s - 1e-6]  # since the window began (a reset)
 
 
 def command_history(live: LiveSession) -> list[dict[str, Any]]:
