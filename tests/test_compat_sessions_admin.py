@@ -29,7 +29,7 @@ def _free() -> dict[str, Any]:
 def _decode_png(data: bytes) -> np.ndarray:
     """The pixels of an 8-bit RGB PNG whose rows all use filter 0 (as the server writes)."""
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    at, chunks = 8, {}
+    at, chunks = 8, dict[bytes, bytes]()
     while at < len(data):
         (length,) = struct.unpack(">I", data[at:at + 4])
         kind, body = data[at + 4:at + 8], data[at + 8:at + 8 + length]

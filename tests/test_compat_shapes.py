@@ -60,7 +60,8 @@ async def test_records_carry_every_reference_field(tmp_path: Path) -> None:
 
 async def test_group_distance_takes_repeated_drone_ids(tmp_path: Path) -> None:
     async with plat_server(tmp_path) as s:
-        query = [("drone_ids", D1), ("drone_ids", D2), ("max_distance", "45")]
+        query: list[tuple[str, str | int | float | bool | None]] = [
+            ("drone_ids", D1), ("drone_ids", D2), ("max_distance", "45")]
         headers = {"X-API-Key": KEYS["admin"]}
         r = await s.client.get("/check/drone_group_distance", params=query, headers=headers)
         assert r.status_code == 200, r.text
