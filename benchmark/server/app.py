@@ -13,6 +13,7 @@ from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_collision import add_compat_collision_routes
 from benchmark.server.compat_drones_admin import add_compat_drone_admin_routes
+from benchmark.server.compat_environments import add_compat_environment_routes
 from benchmark.server.compat_health import add_health_routes
 from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
@@ -153,5 +154,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_drone_admin_routes(app, hub)
     add_compat_session_admin_routes(app, hub)
     add_compat_screenshot_routes(app, hub)
+    add_compat_environment_routes(app, hub)
     add_role_docs(app, hub)
     return app
