@@ -137,3 +137,19 @@ async def test_operator_flies_only_outside_a_task(tmp_path: Path) -> None:
         assert progress["progress_percentage"] == 0 and progress["is_completed"] is False
         staff = await operator.get("/sessions/current/task-progress")
         assert staff["progress_percentage"] == 0 and staff["is_completed"] is False
+
+
+async def test_waypoint_check_drone(tmp_path: Path) -> None:
+    async with plat_server(tmp_path) as s:
+        agent = PlatClient(s.client)
+        at = await agent.post("/targets/waypoints/a1a1a1a1/check-drone", drone_id=D2)
+        assert at["is_at_waypoint"] is True and at["can_charge"] is True
+        assert at["distance"] == pytest.approx(0, abs=0.5) and at["radius"] == 10
+        away = await agent.post("/targets/waypoints/a1a1a1a1/check-drone", {"drone_id": D1})
+        assert away["is_at_waypoint"] is False and away["distance"] == pytest.approx(30, 0.05)
+        for path, params, status in (
+                ("/targets/waypoints/f1f1f1f1/check-drone", {"drone_id": D1}, 404),
+                ("/targets/waypoints/a1a1a1a1/check-drone", {}, 422),
+                ("/targets/waypoints/a1a1a1a1/check-drone", {"drone_id": "nope"}, 404)):
+            r = await s.client.post(path, params=params)
+            assert r.status_code == status, (path, r.text)
