@@ -23,6 +23,7 @@ from benchmark.server.compat_sessions_admin import add_compat_session_admin_rout
 from benchmark.server.compat_tasks import add_compat_task_routes
 from benchmark.server.compat_waypoints import add_compat_waypoint_routes
 from benchmark.server.compat_world import add_compat_world_routes
+from benchmark.server.compat_world_admin import add_compat_world_admin_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.link_routes import add_link_routes
 from benchmark.server.openapi_roles import add_role_docs
@@ -157,5 +158,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_screenshot_routes(app, hub)
     add_compat_environment_routes(app, hub)
     add_compat_waypoint_routes(app, hub)
+    add_compat_world_admin_routes(app, hub)
     add_role_docs(app, hub)
     return app
