@@ -84,6 +84,14 @@ async def test_sessions_created_from_the_reference_layout_and_reset(tmp_path: Pa
         assert await operator.get(f"/sessions/{first}/command-history") == []
         assert (await operator.get(f"/drones/{D1}"))["position"]["z"] > 4  # entities kept
 
+        r = await s.client.put(f"/sessions/{first}", json={"status": "inactive"},
+                               headers=headers)
+        assert r.status_code == 422 and "status" in r.text
+        renamed = await s.client.put(f"/sessions/{first}", headers=headers,
+                                     json={"name": "Patrol B", "description": "second try"})
+        assert renamed.status_code == 200 and renamed.json()["name"] == "Patrol B"
+        assert (await operator.get("/sessions/current"))["description"] == "second try"
+
         made = await operator.post("/sessions", plat_world())
         assert len(made["id"]) == 8 and made["id"] != first and made["status"] == "active"
         assert s.hub.current() == made["id"] and made["name"] == "Compat Patrol"
@@ -91,3 +99,5 @@ async def test_sessions_created_from_the_reference_layout_and_reset(tmp_path: Pa
         assert named["id"] == "abcd1234" and len(s.hub.sessions) == 3
         r = await s.client.post("/sessions/abcd1234/reset", headers=headers)
         assert r.status_code == 409  # its benchmark task runs
+        r = await s.client.put("/sessions/abcd1234", json={"name": "x"}, headers=headers)
+        assert r.status_code == 409

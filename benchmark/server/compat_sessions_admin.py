@@ -4,6 +4,7 @@
   8-hex id is given, its swarm starts and it becomes current, as `POST /sessions/load` does;
 - `POST /sessions/{id}` (restore with that id): the same under the path's id; a session
   already live under it is not overwritten (409: its swarm runs; reset it or load another);
+- `PUT /sessions/{id}` `{name, description}`: renames or describes a live session;
 - `POST /sessions/current/reset` and `POST /sessions/{id}/reset`: statistics, reaches,
   coverage, tracking and the command, status and path histories start again from now (a new
   window, DECISIONS 9); entities, positions and batteries are untouched. Refused (409) while a
@@ -11,10 +12,12 @@
 
 Bodies go through the same reading as `/sessions/load` (422 naming the field)."""
 
+import dataclasses
 import secrets
 from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query
+from pydantic import BaseModel, ConfigDict, Field
 
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat import resolve_session
@@ -25,10 +28,20 @@ from benchmark.server.session_loading import load_session, session_body
 from benchmark.server.session_runner import session_from_json
 from llm_tools.input_limits import preview
 
-__all__ = ["RESERVED_IDS", "add_compat_session_admin_routes", "reset_window"]
+__all__ = ["RESERVED_IDS", "SessionPatch", "add_compat_session_admin_routes", "reset_window"]
 
 RESERVED_IDS = frozenset({"current", "load"})
 """Path words of the session routes, which cannot be session ids."""
+
+
+class SessionPatch(BaseModel):
+    """What `PUT /sessions/{id}` changes of a live session: its name and description (the
+    world, drones and tasks have their own routes; the task type is the file's)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str | None = Field(None, min_length=1, max_length=200)
+    description: str | None = Field(None, max_length=10_000)
 
 
 def reset_window(live: LiveSession) -> float:
@@ -78,6 +91,18 @@ def add_compat_session_admin_routes(app: FastAPI, hub: Hub) -> None:
         refuse_writes(live, "session resets")
         return {"message": f"session {live.id} reset", "id": live.id,
                 "window_start_s": reset_window(live)}
+
+    @app.put("/sessions/{session_id}", tags=["multiuav-plat"],
+             summary="Rename or describe a session (operator, admin)")
+    def update(session_id: str, body: SessionPatch, caller: Annotated[Caller, Depends(staff)]
+               ) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        refuse_writes(live, "session changes")
+        changes = body.model_dump(exclude_none=True)
+        data = {**live.session.data, **changes}
+        live.session = dataclasses.replace(live.session, data=data,
+                                           name=changes.get("name", live.session.name))
+        return _metadata(hub, live, caller.role, [])
 
     @app.post("/sessions", tags=["multiuav-plat"],
               summary="Create a session from the reference's layout and start it (operator, "
