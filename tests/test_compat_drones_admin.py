@@ -30,17 +30,25 @@ def _free() -> dict[str, Any]:
 
 async def test_agents_never_and_operators_not_during_a_task(tmp_path: Path) -> None:
     async with plat_server(tmp_path) as s:
+        operator = {"X-API-Key": KEYS["operator"]}
         for method, path, body in ROUTES:
             r = await s.client.request(method, path, json=body)
             assert r.status_code == 403, (path, r.text)
             r = await s.client.request(method, path, json=body,
                                        headers={"X-API-Key": KEYS["agent"]})
             assert r.status_code == 403, (path, r.text)
-            r = await s.client.request(method, path, json=body,
-                                       headers={"X-API-Key": KEYS["operator"]})
+            r = await s.client.request(method, path, json=body, headers=operator)
+            if path.endswith("_all"):  # every drone landed and full: a harness's no-op
+                assert r.status_code == 200, (path, r.text)
+                continue
             assert r.status_code == 409 and "running benchmark task" in r.text, (path, r.text)
         levels = {d["battery_level"] for d in await PlatClient(s.client).get("/drones")}
         assert levels == {100.0}  # nothing changed
+        took = await PlatClient(s.client).command(D1, "take_off", altitude=5)
+        assert took["status"] == "success"
+        for path in ("/drones/land_all", "/drones/charge_all"):  # now they would change it
+            r = await s.client.post(path, headers=operator)
+            assert r.status_code == 409, (path, r.text)
 
 
 async def test_operator_resets_in_the_reference_shapes(tmp_path: Path) -> None:

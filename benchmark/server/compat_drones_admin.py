@@ -4,7 +4,9 @@ benchmark task runs (compat_write_guard):
 
 - `POST /drones/land_all`: every airborne drone put on the ground below where it is (an
   operator reset, as between benchmark tasks), unless that spot is inside an obstacle's
-  footprint (`blocked`); `POST /drones/charge_all`: every battery full;
+  footprint (`blocked`); `POST /drones/charge_all`: every battery full. Both answer during a
+  task too when they change nothing (every drone landed, or full), as at a task's start, where
+  the reference's harness calls them;
 - `POST /drones/{id}/battery` `{battery_level}`: the battery set (0-100 %);
 - `PUT /drones/{id}/position` `{x, y, z}`: with z = 0 the drone is placed on the ground there
   (an operator reset; refused inside an obstacle's footprint); with z > 0 it is flown there
@@ -179,17 +181,29 @@ def add_compat_drone_admin_routes(app: FastAPI, hub: Hub) -> None:
         refuse_writes(live, what)
         return live
 
+    def unless_done(caller: Caller, session: str | None, done: Callable[[Any], bool]
+                    ) -> LiveSession:
+        """The session, refused during a task unless every drone is already as the reset
+        would leave it (a harness resetting before a task changes nothing then)."""
+        live = resolve_session(hub, caller, session)
+        if not all(done(ap) for ap in live.swarm.fleet.autopilots):
+            refuse_writes(live, "operator resets")
+        return live
+
     @app.post("/drones/land_all", tags=["multiuav-plat"],
               summary="Put every airborne drone on the ground below it (operator, admin)")
     async def land_all_route(caller: Annotated[Caller, Depends(staff)],
                              session: str | None = pick) -> dict[str, Any]:
-        return await land_all(writable(caller, session, "operator resets"))
+        return await land_all(unless_done(
+            caller, session, lambda ap: not ap.fleet.airborne[ap.k]
+            and float(ap.position_m[2]) <= 0.3))
 
     @app.post("/drones/charge_all", tags=["multiuav-plat"],
               summary="Fill every battery (operator, admin)")
     async def charge_all_route(caller: Annotated[Caller, Depends(staff)],
                                session: str | None = pick) -> dict[str, Any]:
-        return await charge_all(writable(caller, session, "operator resets"))
+        return await charge_all(unless_done(
+            caller, session, lambda ap: float(ap.fleet.bat.pct[ap.k]) >= FULL_PCT))
 
     @app.post("/drones/{drone_id}/battery", tags=["multiuav-plat"],
               summary="Set a drone's battery level (operator, admin)")
