@@ -18,9 +18,9 @@ pytestmark = pytest.mark.mavsdk
 D1, D2 = "d1d1d1d1", "d2d2d2d2"
 
 
-def _leaf_query(parameters: dict[str, Any]) -> list[tuple[str, str]]:
+def _leaf_query(parameters: dict[str, Any]) -> list[tuple[str, str | int | float | bool | None]]:
     """A leaf's parameters as the harness sends them: a list as the key repeated."""
-    query = []
+    query: list[tuple[str, str | int | float | bool | None]] = []
     for key, value in parameters.items():
         for item in value if isinstance(value, list) else [value]:
             query.append((key, str(item)))
