@@ -17,6 +17,7 @@ from benchmark.server.compat_environments import add_compat_environment_routes
 from benchmark.server.compat_health import add_health_routes
 from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
+from benchmark.server.compat_request_history import add_compat_request_history
 from benchmark.server.compat_screenshot import add_compat_screenshot_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
 from benchmark.server.compat_sessions_admin import add_compat_session_admin_routes
@@ -159,5 +160,6 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_environment_routes(app, hub)
     add_compat_waypoint_routes(app, hub)
     add_compat_world_admin_routes(app, hub)
+    add_compat_request_history(app, hub)
     add_role_docs(app, hub)
     return app
