@@ -96,3 +96,24 @@ async def test_operator_resets_in_the_reference_shapes(tmp_path: Path) -> None:
         assert first["action"] == "landed" and first["previous_altitude"] > 7
         state = await operator.get(f"/drones/{D1}")
         assert state["position"]["z"] == pytest.approx(0, abs=0.3) and state["status"] == "idle"
+
+
+async def test_drone_fields_change_at_once(tmp_path: Path) -> None:
+    async with plat_server(tmp_path, _free()) as s:
+        headers = {"X-API-Key": KEYS["operator"]}
+        agent = PlatClient(s.client)
+        assert await agent.get(f"/drones/{D1}/nearby/obstacles") == []
+        for body, field in (({"max_speed": 5}, "max_speed"), ({"perceived_radius": 0},
+                                                              "perceived_radius")):
+            r = await s.client.put(f"/drones/{D1}", json=body, headers=headers)
+            assert r.status_code == 422 and field in r.text, r.text
+        r = await s.client.put(f"/drones/{D1}", headers=headers, json={
+            "name": "Scout", "perceived_radius": 150, "task_radius": 15,
+            "home_position": {"x": 110, "y": 90}})
+        assert r.status_code == 200, r.text
+        drone = r.json()
+        assert (drone["name"], drone["perceived_radius"], drone["task_radius"]) == (
+            "Scout", 150, 15)
+        assert drone["home_position"]["x"] == pytest.approx(110, abs=0.5)
+        seen = await agent.get(f"/drones/{D1}/nearby/obstacles")
+        assert [o["id"] for o in seen] == ["0b0b0b01"]  # 110 m away, now within 150 m

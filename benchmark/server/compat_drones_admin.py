@@ -8,6 +8,9 @@ benchmark task runs (compat_write_guard):
   task too when they change nothing (every drone landed, or full), as at a task's start, where
   the reference's harness calls them;
 - `POST /drones/{id}/battery` `{battery_level}`: the battery set (0-100 %);
+- `PUT /drones/{id}` `{name, model, perceived_radius, task_radius, battery_level,
+  home_position}`: those fields changed at once (perception, checks and records follow);
+  the reference's other fields are 422 by name;
 - `PUT /drones/{id}/position` `{x, y, z}`: with z = 0 the drone is placed on the ground there
   (an operator reset; refused inside an obstacle's footprint); with z > 0 it is flown there
   over MAVLink (taking off first when on the ground), as DECISIONS 1 wants: no teleports in
@@ -16,13 +19,15 @@ benchmark task runs (compat_write_guard):
 Bodies are pydantic models: a bad one is 422 naming the field and changes nothing."""
 
 import asyncio
+import dataclasses
+import math
 import time
 from collections.abc import Callable
 from typing import Annotated, Any
 
 import shapely
 from fastapi import Depends, FastAPI, HTTPException, Query
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from benchmark.server.auth import require
 from benchmark.server.compat import resolve_session
@@ -33,7 +38,7 @@ from emulator.flight.operator import place_on_ground, set_battery
 from llm_tools.input_limits import preview
 from mavlink_gateway import DroneState, Status
 
-__all__ = ["BatteryBody", "PositionBody", "add_compat_drone_admin_routes"]
+__all__ = ["BatteryBody", "DroneUpdate", "PositionBody", "add_compat_drone_admin_routes"]
 
 SETTLE_WALL_S = 5.0
 """How long (wall seconds) a reset waits for the drones' telemetry to show it."""
@@ -48,6 +53,58 @@ class PositionBody(BaseModel):
     x: float
     y: float
     z: float = Field(0.0, ge=0.0, description="altitude above ground, m")
+
+
+class _Home(BaseModel):
+    x: float
+    y: float
+    z: float = Field(0.0, ge=0.0)
+
+
+class DroneUpdate(BaseModel):
+    """What `PUT /drones/{id}` changes on a flying vehicle; the reference's other fields are
+    refused by name (its limits, status and position belong to the autopilot: position has
+    `PUT /drones/{id}/position`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str | None = Field(None, min_length=1, max_length=200)
+    model: str | None = Field(None, min_length=1, max_length=200)
+    perceived_radius: float | None = Field(None, ge=1.0, le=10_000.0, description="m")
+    task_radius: float | None = Field(None, ge=0.1, le=10_000.0, description="m")
+    battery_level: float | None = Field(None, ge=0.0, le=100.0, description="percent")
+    home_position: _Home | None = None
+
+
+async def _update(live: LiveSession, drone_id: str, body: DroneUpdate) -> dict[str, Any]:
+    """The drone's record after `body`: names and radii in the session's vehicle spec (the
+    checks and records read it), radii as the autopilot's SIM_SENS_RAD / SIM_TASK_RAD, the
+    battery and home on the vehicle."""
+    ap = _autopilot(live, drone_id)
+    spec = next(v for v in live.session.scenario.vehicles if v.id == drone_id)
+    spec = dataclasses.replace(
+        spec, name=body.name or spec.name, model=body.model or spec.model,
+        perceived_radius_m=body.perceived_radius or spec.perceived_radius_m,
+        task_radius_m=body.task_radius or spec.task_radius_m)
+    if body.perceived_radius is not None:
+        ap.set_param("SIM_SENS_RAD", body.perceived_radius)
+    if body.task_radius is not None:
+        ap.set_param("SIM_TASK_RAD", body.task_radius)
+    scenario = live.session.scenario
+    vehicles = tuple(spec if v.id == drone_id else v for v in scenario.vehicles)
+    live.session = dataclasses.replace(
+        live.session, scenario=dataclasses.replace(scenario, vehicles=vehicles))
+    if body.home_position is not None:
+        ap.home_m = (body.home_position.x, body.home_position.y, body.home_position.z)
+        ap.listener.on_home_changed()
+    if body.battery_level is not None:
+        set_battery(ap, body.battery_level)
+    live.swarm.send_all_telemetry()
+    level, home = body.battery_level, body.home_position
+    await _settle(live, lambda s: (level is None or abs(s.battery_pct - level) <= 1.0) and (
+        home is None or math.hypot(s.home_x_m - home.x, s.home_y_m - home.y) < 0.5),
+        [drone_id])
+    return compat_drone(live, _state(live, drone_id))
 
 
 def _autopilot(live: LiveSession, drone_id: str) -> Any:
@@ -216,6 +273,13 @@ def add_compat_drone_admin_routes(app: FastAPI, hub: Hub) -> None:
         await _settle(live, lambda s: abs(s.battery_pct - body.battery_level) <= 1.0,
                       [drone_id])
         return compat_drone(live, _state(live, drone_id))
+
+    @app.put("/drones/{drone_id}", tags=["multiuav-plat"],
+             summary="Change a drone's name, model, radii, battery or home (operator, admin)")
+    async def update(drone_id: str, body: DroneUpdate,
+                     caller: Annotated[Caller, Depends(staff)], session: str | None = pick
+                     ) -> dict[str, Any]:
+        return await _update(writable(caller, session, "drone changes"), drone_id, body)
 
     @app.put("/drones/{drone_id}/position", tags=["multiuav-plat"],
              summary="Place a drone on the ground (z = 0) or fly it there (operator, admin)")
