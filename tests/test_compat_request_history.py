@@ -55,3 +55,14 @@ async def test_requests_are_recorded_per_session_and_role(tmp_path: Path) -> Non
         assert cleared.status_code == 200 and cleared.json()["cleared"] >= 7
         after = await operator.get(f"/sessions/{sid}/request-history")
         assert after == []  # the delete itself is not recorded
+
+
+async def test_long_request_fields_are_cut(tmp_path: Path) -> None:
+    async with plat_server(tmp_path) as s:
+        (sid,) = s.hub.sessions
+        await s.client.get("/drones", params={"note": "x" * 5000},
+                           headers={"User-Agent": "y" * 5000})
+        (record,) = await PlatClient(s.client, KEYS["operator"]).get(
+            f"/sessions/{sid}/request-history")
+        assert record["query_params"]["note"] == "x" * 500
+        assert record["user_agent"] == "y" * 500

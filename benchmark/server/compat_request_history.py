@@ -29,6 +29,8 @@ from benchmark.server.hub import Caller, Hub, Role
 __all__ = ["MAX_RECORDS", "RequestLog", "add_compat_request_history"]
 
 MAX_RECORDS = 5000
+MAX_TEXT = 500
+"""Longer paths, query values and user agents are cut to this many characters in a record."""
 AGENT_ID_HEADER = "X-Agent-ID"
 DEFAULT_AGENT_ID = "default_agent"
 
@@ -68,18 +70,19 @@ class RequestLog:
         query: dict[str, Any] = {}
         for key in request.query_params:
             values = request.query_params.getlist(key)
-            query[key] = values if len(values) > 1 else values[0]
+            cut = [v[:MAX_TEXT] for v in values]
+            query[key[:MAX_TEXT]] = cut if len(cut) > 1 else cut[0]
         client = request.client
         agent = caller is not None and caller.role is Role.AGENT
         entry = {
             "request_id": secrets.token_hex(4),
             "timestamp": datetime.now(UTC).isoformat(),
-            "method": request.method, "path": request.url.path,
+            "method": request.method, "path": request.url.path[:MAX_TEXT],
             "client_ip": client.host if client else None,
             "client_port": client.port if client else None,
             "client_privilege": caller.role.value.upper() if caller else None,
             "authentication_status": how, "session_id": session, "query_params": query,
-            "user_agent": request.headers.get("user-agent"),
+            "user_agent": (request.headers.get("user-agent") or "")[:MAX_TEXT] or None,
             "agent_id": (request.headers.get(AGENT_ID_HEADER) or DEFAULT_AGENT_ID)[:128]
             if agent else None,
             "status_code": status, "success": status < 400,
