@@ -6,6 +6,7 @@ import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 from agent_contract import AgentTools
 from benchmark.session_file import Session, TaskSpec
@@ -47,6 +48,10 @@ class LiveSession:
     tools: AgentTools
     task_start_s: float
     started_wall_s: float = field(default_factory=time.time)  # the compat routes' created_at
+    task_marks: dict[str, dict[str, bool]] = field(default_factory=dict)
+    """The reference's `is_done` / `is_passed` per task id, as its routes set them."""
+    environments: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """The reference's environment records by id (compat_environments); empty until used."""
 
     @property
     def id(self) -> str:

@@ -26,7 +26,7 @@ async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
     unusable tasks skipped; HTTP 409 when no usable task follows."""
     tasks = live.session.tasks
     index = next((k for k, t in enumerate(tasks) if t is live.task), -1)
-    following = tasks[index + 1:] if index >= 0 else ()
+    following = tasks[index + 1:] if index >= 0 else tasks  # free flight: the first task
     skipped: list[str] = []
     task: TaskSpec | None = None
     for candidate in following:
