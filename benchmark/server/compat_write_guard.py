@@ -3,14 +3,15 @@ for the session's agent (it would change that task's result), HTTP 409 naming th
 world served without tasks (free flight) takes them. Admins may always fly, as before; the
 entity, battery and session writes of the compatibility routes ask this guard for every role.
 
-This is the same rule the web console's flight commands follow; when
-`benchmark.server.operator_rule.operator_refusal` is on main, `write_refusal` calls it."""
+This is the rule the web console's flight commands, MQTT and link changes follow:
+`write_refusal` is `benchmark.server.operator_rule.operator_refusal`."""
 
 from __future__ import annotations
 
 from fastapi import HTTPException
 
 from benchmark.server.hub import Caller, LiveSession, Role
+from benchmark.server.operator_rule import operator_refusal
 
 __all__ = ["refuse_flight", "refuse_writes", "write_refusal"]
 
@@ -18,11 +19,7 @@ __all__ = ["refuse_flight", "refuse_writes", "write_refusal"]
 def write_refusal(live: LiveSession, what: str) -> str | None:
     """Why `what` ("flight commands from an operator key", "drone creation", ...) may not act
     on `live` now, or None when it may."""
-    if live.task.checks is None:  # a world without tasks, or a task that cannot be judged
-        return None
-    return (f"session {live.id} is running benchmark task {live.task.id} for its agent; "
-            f"{what} are refused while a task runs (they would change its result): serve a "
-            "world without tasks to change it by hand")
+    return operator_refusal(live, what)
 
 
 def refuse_writes(live: LiveSession, what: str) -> None:
