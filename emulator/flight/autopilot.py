@@ -97,6 +97,10 @@ class Autopilot(Vehicle):
             self.set_timer(delay, TimerAction.AUTO_DISARM, busy=True)
         self.refresh_busy()
 
+    def on_velocity_step(self, dt_s: float) -> None:
+        """After every physics step flown by velocity: offboard sets the next one."""
+        self.offboard.on_step(dt_s)
+
     def on_yaw_reached(self) -> None:
         self.refresh_busy()
         self.mission.on_yaw_reached()

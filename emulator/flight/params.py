@@ -53,6 +53,7 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("MPC_ACC_HOR", 3.0, 0.5, 15.0, "horizontal acceleration limit (m/s^2)"),
     _p("MPC_ACC_UP_MAX", 4.0, 0.5, 15.0, "vertical acceleration limit (m/s^2)"),
     _p("MPC_YAWRAUTO_MAX", 45.0, 5.0, 360.0, "yaw rate limit in auto modes (deg/s)"),
+    _p("MC_YAWRATE_MAX", 200.0, 5.0, 1800.0, "offboard yaw-rate set-point limit (deg/s)"),
     _p("NAV_ACC_RAD", 2.0, 0.05, 200.0, "acceptance radius of waypoints and goto (m)"),
     _p("RTL_RETURN_ALT", 30.0, 0.0, 150.0, "minimum altitude for the return leg of RTL (m)"),
     _p("COM_DISARM_LAND", 2.0, -1.0, 20.0, "auto-disarm delay after landing (s, -1 off)"),

@@ -172,7 +172,7 @@ class FleetTelemetry:
 
     def _local_position_ned(self, ks: np.ndarray) -> Sequence[object]:
         dyn = self.fleet.dyn
-        p = dyn.position_m[ks]
+        p = dyn.position_m[ks] - self.fleet.local_origin_m[ks]
         v = dyn.velocity_m_s[ks]
         return (self._time_boot_ms(), p[:, 1], p[:, 0], -p[:, 2], v[:, 1], v[:, 0], -v[:, 2])
 
