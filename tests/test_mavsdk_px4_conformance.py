@@ -1,5 +1,5 @@
 """PX4 conformance through the real MAVSDK client (native binding) over UDP: the official
-examples' offboard velocity-body circle and multi-vehicle local frames, checked
+examples' offboard velocity-body circle, orbit, and multi-vehicle local frames, checked
 against the ground truth."""
 
 from __future__ import annotations
@@ -8,12 +8,14 @@ import math
 
 import numpy as np
 import pytest
+from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+from mavsdk.plugins.action import OrbitYawBehavior
 from mavsdk.plugins.offboard import PositionNedYaw, VelocityBodyYawspeed
 from mavsdk.plugins.telemetry import FlightMode
 
-from tests.mavsdk_helpers import eventually, first, take_off, truth_pos
+from tests.mavsdk_helpers import eventually, first, geodetic, take_off, truth_pos
 
 pytestmark = pytest.mark.mavsdk
 
@@ -44,6 +46,32 @@ async def test_velocity_body_with_yawspeed_flies_a_circle(swarm_factory, mavsdk_
         assert r.mean() == pytest.approx(5.0 / math.radians(30.0), rel=0.05)
         assert np.ptp(r) < 0.5
         await offboard.stop()
+
+
+async def test_do_orbit_is_a_circle_of_the_asked_radius(swarm_factory, mavsdk_client) -> None:
+    swarm = await swarm_factory(1, speed=5.0)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        system = systems[0]
+        action, telemetry = ActionAsync(system), TelemetryAsync(system)
+        await take_off(swarm, system, 1, 10.0)
+        cx, cy = 20.0, 10.0
+        lat, lon, alt = geodetic(swarm, cx, cy, 12.0)
+        await action.do_orbit(15.0, 3.0, OrbitYawBehavior.HOLD_FRONT_TO_CIRCLE_CENTER,
+                              lat, lon, alt)
+        await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.POSCTL, 3.0,
+                    "orbit (POSCTL/ORBIT) mode")
+        t0 = swarm.fleet.now_s
+        await eventually(lambda: swarm.fleet.now_s > t0 + 45.0, 20.0, "45 s orbiting")
+        rows = _rows_since(swarm, 1, t0 + 15.0)
+        r = np.hypot(rows[:, 1] - cx, rows[:, 2] - cy)
+        assert r.min() > 14.7 and r.max() < 15.3
+        assert rows[:, 3] == pytest.approx(np.full(r.shape, 12.0), abs=0.2)
+        angle = np.unwrap(np.arctan2(rows[:, 2] - cy, rows[:, 1] - cx))
+        assert (angle[0] - angle[-1]) / (rows[-1, 0] - rows[0, 0]) == pytest.approx(
+            3.0 / 15.0, rel=0.03)  # clockwise at 3 m/s
+        await action.hold()
+        await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.HOLD, 3.0,
+                    "HOLD after the orbit")
 
 
 async def test_each_vehicle_flies_its_own_local_frame(swarm_factory, mavsdk_client) -> None:

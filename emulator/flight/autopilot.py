@@ -23,6 +23,7 @@ from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
+from emulator.flight.orbit import OrbitControl
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle import Vehicle
 from emulator.flight.vehicle_state import MISSION_PHASES, Phase, TimerAction
@@ -41,6 +42,7 @@ class Autopilot(Vehicle):
         super().__init__(k, spec, fleet)
         self.mission = MissionRunner(self)
         self.offboard = OffboardControl(self)
+        self.orbit = OrbitControl(self)
         self.failures = VehicleFailures(self)
 
     def pause_mission(self) -> None:
@@ -98,8 +100,11 @@ class Autopilot(Vehicle):
         self.refresh_busy()
 
     def on_velocity_step(self, dt_s: float) -> None:
-        """After every physics step flown by velocity: offboard sets the next one."""
-        self.offboard.on_step(dt_s)
+        """After every physics step flown by velocity: orbit or offboard set the next one."""
+        if self.state.mode is FlightMode.ORBIT:
+            self.orbit.on_step()
+        else:
+            self.offboard.on_step(dt_s)
 
     def on_yaw_reached(self) -> None:
         self.refresh_busy()

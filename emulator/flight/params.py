@@ -54,6 +54,8 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("MPC_ACC_UP_MAX", 4.0, 0.5, 15.0, "vertical acceleration limit (m/s^2)"),
     _p("MPC_YAWRAUTO_MAX", 45.0, 5.0, 360.0, "yaw rate limit in auto modes (deg/s)"),
     _p("MC_YAWRATE_MAX", 200.0, 5.0, 1800.0, "offboard yaw-rate set-point limit (deg/s)"),
+    _p("MC_ORBIT_RAD_MAX", 1000.0, 1.0, 10000.0, "largest orbit radius (m)"),
+    _p("MC_ORBIT_YAW_MOD", 0, 0, 4, "orbit yaw behaviour when none is given", is_int=True),
     _p("NAV_ACC_RAD", 2.0, 0.05, 200.0, "acceptance radius of waypoints and goto (m)"),
     _p("RTL_RETURN_ALT", 30.0, 0.0, 150.0, "minimum altitude for the return leg of RTL (m)"),
     _p("COM_DISARM_LAND", 2.0, -1.0, 20.0, "auto-disarm delay after landing (s, -1 off)"),
