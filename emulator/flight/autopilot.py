@@ -19,6 +19,7 @@ from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY
 from emulator.flight.camera import ImageCapture, capture_image
 from emulator.flight.failures import VehicleFailures
 from emulator.flight.fleet_view import FleetView
+from emulator.flight.geofence_plans import GeofencePlans
 from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw_rate
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode, LandedState
@@ -43,10 +44,19 @@ class Autopilot(Vehicle):
         self.mission = MissionRunner(self)
         self.offboard = OffboardControl(self)
         self.orbit = OrbitControl(self)
+        self.geofence = GeofencePlans(self)
         self.failures = VehicleFailures(self)
 
     def pause_mission(self) -> None:
         self.mission.pause()
+
+    def check_target(self, target_m: Vec3, what: str) -> None:
+        """Refuse a destination outside the geofence (parameters and fence plan)."""
+        super().check_target(target_m, what)
+        self.geofence.check_target(target_m, what)
+
+    def rtl_destination_m(self) -> Vec3:
+        return self.geofence.rtl_destination_m()
 
     # --------------------------------------------------------- physics events
     def on_arrived(self) -> None:
@@ -143,6 +153,7 @@ class Autopilot(Vehicle):
         if self.armed:
             return
         self.failures.check_arming()
+        self.geofence.check_arming()
         if self.fleet.bat.level[self.k] >= BATTERY_CRITICAL:
             raise CommandRefused(f"Arming denied: battery {self.battery_pct:.0f}% too low")
         self.fleet.armed[self.k] = True

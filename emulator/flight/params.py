@@ -63,6 +63,8 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("COM_OF_LOSS_T", 1.0, 0.1, 60.0, "offboard setpoint loss timeout (wall s)"),
     _p("CP_DIST", 2.0, 0.0, 15.0, "collision prevention: stop distance before obstacles (m)"),
     _p("GF_MAX_VER_DIST", 120.0, 1.0, 10000.0, "altitude ceiling above home (m)"),
+    _p("GF_ACTION", 2, 0, 5, "geofence breach action: 0 none, 1 warn, 2 hold, 3 return, "
+       "4 terminate, 5 land", is_int=True),
     _p("GF_MAX_HOR_DIST", 10000.0, 10.0, 100000.0, "maximum horizontal distance from home (m)"),
     _p("BAT_LOW_THR", 0.15, 0.12, 0.5, "low battery warning threshold (fraction)"),
     _p("BAT_CRIT_THR", 0.07, 0.05, 0.5, "critical battery threshold: return home (fraction)"),
