@@ -92,3 +92,14 @@ async def test_each_vehicle_flies_its_own_local_frame(swarm_factory, mavsdk_clie
                          and math.dist(truth_pos(swarm, 3), (10.0, 12.0, 8.0)) < 0.5, 10.0,
                          "each vehicle 12 m north of its own start")
         assert aps[1].mode.name == aps[2].mode.name == "OFFBOARD"
+
+
+async def test_imu_rate_set_through_mavsdk(swarm_factory, mavsdk_client) -> None:
+    swarm = await swarm_factory(1)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        telemetry = TelemetryAsync(systems[0])
+        await telemetry.set_rate_imu(50.0)  # SET_MESSAGE_INTERVAL(HIGHRES_IMU)
+        imu = await first(telemetry.subscribe_imu(), lambda m: True, 3.0, "an IMU reading")
+        assert imu.acceleration_frd.down_m_s2 == pytest.approx(-9.80665, abs=1e-3)
+        assert imu.magnetic_field_frd.forward_gauss == pytest.approx(0.21, abs=1e-3)
+        assert swarm.streams.interval_s(0, 105) == pytest.approx(0.02)

@@ -22,6 +22,7 @@ from emulator.mavlink.codec import Encoder, mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
+from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import Complaint, apply_global_setpoint, apply_local_setpoint
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
@@ -54,13 +55,6 @@ _OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
                            MessageId.GLOBAL_POSITION_INT, MessageId.LOCAL_POSITION_NED,
                            MessageId.HOME_POSITION)
 # what a vehicle sends on request (MAV_CMD_REQUEST_MESSAGE), besides the camera's messages
-_ONE_SHOT = frozenset({
-    MessageId.HEARTBEAT, MessageId.SYS_STATUS, MessageId.GPS_RAW_INT, MessageId.ATTITUDE,
-    MessageId.LOCAL_POSITION_NED, MessageId.GLOBAL_POSITION_INT, MessageId.MISSION_CURRENT,
-    MessageId.VFR_HUD, MessageId.BATTERY_STATUS, MessageId.AUTOPILOT_VERSION,
-    MessageId.HOME_POSITION, MessageId.EXTENDED_SYS_STATE,
-})
-
 
 class VehicleLink:
     """MAVLink side of vehicle `ap` (system id k + 1)."""
@@ -117,7 +111,7 @@ class VehicleLink:
             self.send(message)
 
     def can_send_once(self, msg_id: int) -> bool:
-        return msg_id in CAMERA_MESSAGES or msg_id in _ONE_SHOT
+        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS  # each can be sent once
 
     def send_once(self, msg_id: int) -> None:
         if msg_id in CAMERA_MESSAGES:
@@ -372,6 +366,7 @@ _BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
     MessageId.BATTERY_STATUS: lambda v: msgs.battery_status(v.ap),
     MessageId.HOME_POSITION: lambda v: msgs.home_position(v.ap, v.time_boot_ms() * 1000),
     MessageId.AUTOPILOT_VERSION: lambda v: msgs.autopilot_version(v.ap),
+    MessageId.HIGHRES_IMU: lambda v: highres_imu(v.ap.fleet, v.k),
 }
 
 _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None]] = {
