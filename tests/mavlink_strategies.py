@@ -105,6 +105,8 @@ def field(type_name: str, name: str, ftype: str, length: int) -> st.SearchStrate
         return st.sampled_from((0, 0, 0, 1, 2, 255))
     if name in ("frame", "coordinate_frame"):
         return st.one_of(st.integers(0, 12), integers(ftype))
+    if name == "type_mask" and ftype == "uint8_t":  # SET_ATTITUDE_TARGET's
+        return st.one_of(st.sampled_from((0, 7, 64, 128, 0xFF)), integers(ftype))
     if name == "type_mask":
         return st.one_of(st.sampled_from((0x9F8, 0xDC7, 0xDFF, 0, 0xFFFF)), integers(ftype))
     if name == "param_value":
@@ -191,7 +193,7 @@ def offboard_episode(draw: st.DrawFn) -> list:
     """A set-point (local or global), then OFFBOARD and arm."""
     target = draw(st.sampled_from(SYSTEMS))
     kind = draw(st.sampled_from(("SET_POSITION_TARGET_LOCAL_NED",
-                                 "SET_POSITION_TARGET_GLOBAL_INT")))
+                                 "SET_POSITION_TARGET_GLOBAL_INT", "SET_ATTITUDE_TARGET")))
     setpoint = draw(message(kind, target_system=target, target_component=1))
     return [setpoint, draw(_command(target, 176, 1.0, 6.0, 0.0)),
             draw(_command(target, 400, 1.0)), setpoint]

@@ -12,7 +12,7 @@ from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from mavsdk.plugins.action import OrbitYawBehavior
-from mavsdk.plugins.offboard import PositionNedYaw, VelocityBodyYawspeed
+from mavsdk.plugins.offboard import Attitude, PositionNedYaw, VelocityBodyYawspeed
 from mavsdk.plugins.telemetry import FlightMode
 
 from tests.mavsdk_helpers import eventually, first, geodetic, take_off, truth_pos
@@ -103,3 +103,23 @@ async def test_imu_rate_set_through_mavsdk(swarm_factory, mavsdk_client) -> None
         assert imu.acceleration_frd.down_m_s2 == pytest.approx(-9.80665, abs=1e-3)
         assert imu.magnetic_field_frd.forward_gauss == pytest.approx(0.21, abs=1e-3)
         assert swarm.streams.interval_s(0, 105) == pytest.approx(0.02)
+
+
+async def test_offboard_attitude_example_flies(swarm_factory, mavsdk_client) -> None:
+    swarm = await swarm_factory(1, speed=5.0)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        system = systems[0]
+        action, offboard = ActionAsync(system), OffboardAsync(system)
+        telemetry = TelemetryAsync(system)
+        await action.arm()
+        await offboard.set_attitude(Attitude(0.0, 0.0, 0.0, 0.0))
+        await offboard.start()
+        await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.OFFBOARD, 3.0,
+                    "OFFBOARD mode")
+        await offboard.set_attitude(Attitude(0.0, 0.0, 0.0, 0.7))  # climb
+        await eventually(lambda: truth_pos(swarm, 1)[2] > 5.0, 10.0, "climbed 5 m")
+        x0 = truth_pos(swarm, 1)[0]
+        await offboard.set_attitude(Attitude(30.0, 0.0, 0.0, 0.5))  # roll right: east
+        await eventually(lambda: truth_pos(swarm, 1)[0] > x0 + 10.0, 10.0, "10 m east")
+        assert abs(truth_pos(swarm, 1)[1]) < 1.0
+        await offboard.stop()

@@ -19,31 +19,26 @@ import math
 from typing import NamedTuple
 
 from emulator.flight import dynamics as dy
+from emulator.flight.attitude_control import attitude_acceleration_enu
 from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode, LandedState
+from emulator.flight.offboard_frames import body_to_enu
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
 
-__all__ = ["OffboardControl", "Setpoint", "body_to_enu"]
+__all__ = ["OffboardControl", "Setpoint"]
 
 Vec3 = tuple[float, float, float]
 GROUND_SETPOINT_M = 0.0  # a position set-point this high (or lower) is on the ground
 
 
 class Setpoint(NamedTuple):
-    kind: str  # "position" (ENU m) or "velocity" (ENU m/s, or body forward/right/up m/s)
+    kind: str  # "position" (ENU m), "velocity" (ENU m/s, or body forward/right/up m/s) or
+    # "attitude" (roll deg, pitch deg, normalised thrust)
     vector: Vec3
     yaw_deg: float  # NaN: none
     yaw_rate_deg_s: float = math.nan  # NaN: none; positive turns clockwise seen from above
     body: bool = False  # a velocity in the body frame: (forward, right, up)
-
-
-def body_to_enu(yaw_deg: float, forward: float, right: float) -> tuple[float, float]:
-    """Body forward/right -> (east, north) for a vehicle heading yaw_deg (0 north, 90 east)."""
-    yaw = math.radians(yaw_deg)
-    north = forward * math.cos(yaw) - right * math.sin(yaw)
-    east = forward * math.sin(yaw) + right * math.cos(yaw)
-    return east, north
 
 
 class OffboardControl:
@@ -94,7 +89,10 @@ class OffboardControl:
         self._applied = sp
         dyn, k = ap.fleet.dyn, ap.k
         vec = sp.vector
-        rising = vec[2] > 0.5 if sp.kind == "position" else vec[2] > 0.1
+        if sp.kind == "attitude":
+            rising = vec[2] > ap.params["MPC_THR_HOVER"]
+        else:
+            rising = vec[2] > 0.5 if sp.kind == "position" else vec[2] > 0.1
         if not ap.in_air:
             if not rising:
                 return
@@ -111,7 +109,10 @@ class OffboardControl:
             return
         ap.drop_goal()
         dyn.control[k] = dy.CONTROL_VELOCITY
-        dyn.velocity_sp_m_s[k] = self._velocity_enu(sp)
+        if sp.kind == "attitude":  # from the velocity it has, changed by the attitude's
+            dyn.velocity_sp_m_s[k] = dyn.velocity_m_s[k]
+        else:
+            dyn.velocity_sp_m_s[k] = self._velocity_enu(sp)
         dyn.tracking[k] = dy.TRACK_NONE
         dyn.goal_yaw_deg[k] = sp.yaw_deg
         ap.refresh_busy()
@@ -120,16 +121,33 @@ class OffboardControl:
         """Every physics step while flying by velocity: the yaw rate, the body frame turned
         with the heading, then the geofence."""
         sp = self._applied
-        if sp is not None and sp.kind == "velocity":
+        if sp is not None and sp.kind != "position":
             dyn, k = self.ap.fleet.dyn, self.ap.k
             if math.isfinite(sp.yaw_rate_deg_s):
                 limit = self.ap.params["MC_YAWRATE_MAX"]
                 rate = min(max(sp.yaw_rate_deg_s, -limit), limit)
                 dyn.yaw_rate_deg_s[k] = max(abs(rate), self.ap.params["MPC_YAWRAUTO_MAX"])
                 dyn.goal_yaw_deg[k] = (float(dyn.yaw_deg[k]) + rate * dt_s) % 360.0
-            if sp.body:
+            if sp.kind == "attitude":
+                self._fly_attitude(sp, dt_s)
+            elif sp.body:
                 dyn.velocity_sp_m_s[k] = self._velocity_enu(sp)
         self.check_fence()
+
+    def _fly_attitude(self, sp: Setpoint, dt_s: float) -> None:
+        ap = self.ap
+        dyn, k, p = ap.fleet.dyn, ap.k, ap.params
+        roll_deg, pitch_deg, thrust = sp.vector
+        yaw_deg = sp.yaw_deg if math.isfinite(sp.yaw_deg) else float(dyn.yaw_deg[k])
+        a = attitude_acceleration_enu(roll_deg, pitch_deg, yaw_deg, thrust, p["MPC_THR_HOVER"])
+        vx, vy, vz = (float(v) + ai * dt_s for v, ai in zip(dyn.velocity_sp_m_s[k], a,
+                                                              strict=True))
+        limit = p["MPC_XY_VEL_MAX"]
+        speed = math.hypot(vx, vy)
+        if speed > limit:
+            vx, vy = vx * limit / speed, vy * limit / speed
+        vz = min(max(vz, -p["MPC_Z_VEL_MAX_DN"]), p["MPC_Z_VEL_MAX_UP"])
+        dyn.velocity_sp_m_s[k] = (vx, vy, vz)
 
     def check_fence(self) -> None:
         """Geofence for velocity set-points: hold once beyond the ceiling or the fence radius

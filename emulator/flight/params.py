@@ -50,6 +50,7 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("MPC_TKO_SPEED", 1.5, 0.5, 5.0, "takeoff climb rate (m/s)"),
     _p("MPC_LAND_SPEED", 0.7, 0.2, 2.0, "final landing descent rate (m/s)"),
     _p("MPC_LAND_ALT2", 5.0, 0.0, 50.0, "altitude below which landing slows to MPC_LAND_SPEED (m)"),
+    _p("MPC_THR_HOVER", 0.5, 0.1, 0.8, "hover thrust (normalised) of attitude set-points"),
     _p("MPC_ACC_HOR", 3.0, 0.5, 15.0, "horizontal acceleration limit (m/s^2)"),
     _p("MPC_ACC_UP_MAX", 4.0, 0.5, 15.0, "vertical acceleration limit (m/s^2)"),
     _p("MPC_YAWRAUTO_MAX", 45.0, 5.0, 360.0, "yaw rate limit in auto modes (deg/s)"),

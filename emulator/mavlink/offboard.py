@@ -15,12 +15,13 @@ import math
 from typing import NamedTuple
 
 from emulator.flight.autopilot import Autopilot
-from emulator.flight.offboard import body_to_enu
+from emulator.flight.offboard_frames import body_to_enu
 from emulator.flight.refusal import CommandRefused
-from mavlink_vocabulary import MavFrame
+from mavlink_vocabulary import MavFrame, MessageId
 from mavlink_vocabulary import PositionTargetTypemask as Mask
 
-__all__ = ["Complaint", "apply_global_setpoint", "apply_local_setpoint"]
+__all__ = ["SETPOINT_APPLIERS", "Complaint", "apply_attitude_target", "apply_global_setpoint",
+           "apply_local_setpoint"]
 
 # plain ints: masks are tested for every set-point
 _IGNORE_POSITION = int(Mask.X_IGNORE | Mask.Y_IGNORE | Mask.Z_IGNORE)
@@ -114,3 +115,49 @@ def apply_global_setpoint(ap: Autopilot, m, wall_now_s: float) -> Complaint | No
                              yaw_rate_deg_s=_yaw_rate_deg_s(m))
         return None
     return _MASK
+
+
+# SET_ATTITUDE_TARGET.type_mask bits
+_IGNORE_BODY_YAW_RATE = 4
+_IGNORE_THRUST = 64
+_IGNORE_ATTITUDE = 128
+
+
+def _euler_deg(q: list[float]) -> tuple[float, float, float]:
+    """Roll, pitch, yaw (deg, yaw 0..360 from north) of a quaternion w, x, y, z (NED)."""
+    w, x, y, z = q
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return math.degrees(roll), math.degrees(pitch), math.degrees(yaw) % 360.0
+
+
+def apply_attitude_target(ap: Autopilot, m, wall_now_s: float) -> Complaint | None:
+    """SET_ATTITUDE_TARGET: attitude (quaternion) and thrust; without an attitude, level
+    flight turning at the body yaw rate."""
+    mask = m.type_mask
+    thrust = ap.params["MPC_THR_HOVER"] if mask & _IGNORE_THRUST else m.thrust
+    if not math.isfinite(thrust):
+        return _NAN
+    yaw_rate = math.nan
+    if mask & _IGNORE_ATTITUDE:
+        roll = pitch = 0.0
+        yaw = math.nan
+        if not mask & _IGNORE_BODY_YAW_RATE and math.isfinite(m.body_yaw_rate):
+            yaw_rate = math.degrees(m.body_yaw_rate)
+    else:
+        q = [float(v) for v in m.q]
+        norm = math.sqrt(sum(v * v for v in q))
+        if not (math.isfinite(norm) and norm > 1e-6):
+            return Complaint("quaternion", "Offboard: attitude quaternion invalid")
+        roll, pitch, yaw = _euler_deg([v / norm for v in q])
+    ap.offboard.setpoint("attitude", (roll, pitch, min(max(thrust, 0.0), 1.0)), yaw,
+                         wall_now_s, yaw_rate_deg_s=yaw_rate)
+    return None
+
+
+SETPOINT_APPLIERS = {
+    MessageId.SET_POSITION_TARGET_LOCAL_NED: apply_local_setpoint,
+    MessageId.SET_POSITION_TARGET_GLOBAL_INT: apply_global_setpoint,
+    MessageId.SET_ATTITUDE_TARGET: apply_attitude_target,
+}

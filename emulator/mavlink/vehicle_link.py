@@ -24,7 +24,7 @@ from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, comm
 from emulator.mavlink.commands import execute_command
 from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.mission_transfer import MissionTransfer
-from emulator.mavlink.offboard import Complaint, apply_global_setpoint, apply_local_setpoint
+from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
@@ -317,11 +317,8 @@ class VehicleLink:
             self.warned.add(complaint.key)
             self.statustext(Severity.WARNING, complaint.text)
 
-    def _set_position_target_local_ned(self, m) -> None:
-        self._complain(apply_local_setpoint(self.ap, m, self.wall_now_s))
-
-    def _set_position_target_global_int(self, m) -> None:
-        self._complain(apply_global_setpoint(self.ap, m, self.wall_now_s))
+    def _offboard_setpoint(self, m) -> None:
+        self._complain(SETPOINT_APPLIERS[m.get_msgId()](self.ap, m, self.wall_now_s))
 
     def _ping(self, m) -> None:
         if m.target_system == self.system_id:  # broadcast pings are not answered
@@ -383,8 +380,7 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.MISSION_REQUEST: VehicleLink._mission_request,
     MessageId.MISSION_CLEAR_ALL: VehicleLink._mission_clear_all,
     MessageId.MISSION_SET_CURRENT: VehicleLink._mission_set_current,
-    MessageId.SET_POSITION_TARGET_LOCAL_NED: VehicleLink._set_position_target_local_ned,
-    MessageId.SET_POSITION_TARGET_GLOBAL_INT: VehicleLink._set_position_target_global_int,
+    **{msg_id: VehicleLink._offboard_setpoint for msg_id in SETPOINT_APPLIERS},
     MessageId.PING: VehicleLink._ping,
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
