@@ -227,6 +227,7 @@ NEAR_LAT, NEAR_LON = LAT0 + 0.0002, LON0 + 0.0003
 BASELINES: dict[int, tuple[float, ...]] = {
     20: (), 21: (math.nan,) * 4 + (NEAR_LAT, NEAR_LON), 22: (),
     34: (10.0, 2.0, 0.0, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 12.0),
+    241: (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
     115: (90.0, 10.0, 1.0, 0.0), 176: (1.0, 4.0, 3.0), 178: (1.0, 5.0, -1.0),
     179: (0.0, math.nan, math.nan, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 1.0),
     192: (math.nan, 1.0, math.nan, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 12.0),

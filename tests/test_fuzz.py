@@ -80,7 +80,7 @@ FAULT_PARAMS = ("COM_DL_LOSS_T", "NAV_DLL_ACT", "SYS_FAILURE_EN")
 # The same for what PX4 conformance added later (offboard yaw rates, orbit, geofence):
 # the storm of tests/test_hardening_mavlink.py covers them.
 LATER_PARAMS = ("MC_YAWRATE_MAX", "MC_ORBIT_RAD_MAX", "MC_ORBIT_YAW_MOD", "GF_ACTION")
-LATER_COMMANDS = (34,)  # MAV_CMD_DO_ORBIT
+LATER_COMMANDS = (34, 241)  # MAV_CMD_DO_ORBIT, MAV_CMD_PREFLIGHT_CALIBRATION
 PARAM_NAMES = [d.name.encode() for d in PARAM_DEFINITIONS
                if d.name != "SIM_HOVER_ENDUR" and d.name not in FAULT_PARAMS + LATER_PARAMS]
 COMMANDS = [*sorted(c for c in HANDLERS if c != 420 and c not in LATER_COMMANDS),

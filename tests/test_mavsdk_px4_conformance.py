@@ -9,9 +9,11 @@ import math
 import numpy as np
 import pytest
 from mavsdk.asyncio.plugins.action import ActionAsync
+from mavsdk.asyncio.plugins.calibration import CalibrationAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from mavsdk.plugins.action import OrbitYawBehavior
+from mavsdk.plugins.calibration import CalibrationResult
 from mavsdk.plugins.offboard import Attitude, PositionNedYaw, VelocityBodyYawspeed
 from mavsdk.plugins.telemetry import FlightMode
 
@@ -123,3 +125,18 @@ async def test_offboard_attitude_example_flies(swarm_factory, mavsdk_client) -> 
         await eventually(lambda: truth_pos(swarm, 1)[0] > x0 + 10.0, 10.0, "10 m east")
         assert abs(truth_pos(swarm, 1)[1]) < 1.0
         await offboard.stop()
+
+
+async def test_calibration_example_runs_to_the_end(swarm_factory, mavsdk_client) -> None:
+    swarm = await swarm_factory(1)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        calibration = CalibrationAsync(systems[0])
+        for calibrate in (calibration.calibrate_gyro, calibration.calibrate_accelerometer,
+                          calibration.calibrate_magnetometer,
+                          calibration.calibrate_level_horizon):
+            updates = [u async for u in calibrate()]  # (result, progress data) until SUCCESS
+            assert updates[-1][0] == CalibrationResult.SUCCESS, calibrate.__name__
+            progress = [data.progress for _, data in updates if data.has_progress]
+            assert progress and progress[-1] == pytest.approx(1.0), calibrate.__name__
+        sensors = [e.data["sensor"] for e in swarm.recorder.events("d1", kinds="calibration")]
+        assert sensors == ["gyro", "accel", "mag", "level"]

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from emulator.flight.mission import FRAMES_AMSL, FRAMES_RELATIVE
 from emulator.flight.modes import decode_px4_mode
 from emulator.flight.refusal import CommandRefused
+from emulator.mavlink.calibration import preflight_calibration
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.reply import Action, Reply, SendOnce
 from emulator.mavlink.vehicle import Vehicle
@@ -251,6 +252,7 @@ HANDLERS: dict[MavCmd, Handler] = {
     MavCmd.DO_SET_MODE: _set_mode,
     MavCmd.DO_REPOSITION: _reposition,
     MavCmd.DO_ORBIT: _orbit,
+    MavCmd.PREFLIGHT_CALIBRATION: preflight_calibration,
     MavCmd.DO_SET_HOME: _set_home,
     MavCmd.DO_CHANGE_SPEED: _change_speed,
     MavCmd.CONDITION_YAW: _yaw,
