@@ -10,12 +10,15 @@ import numpy as np
 import pytest
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.calibration import CalibrationAsync
+from mavsdk.asyncio.plugins.log_files import LogFilesAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from mavsdk.plugins.action import OrbitYawBehavior
 from mavsdk.plugins.calibration import CalibrationResult
+from mavsdk.plugins.log_files import LogFilesResult
 from mavsdk.plugins.offboard import Attitude, PositionNedYaw, VelocityBodyYawspeed
 from mavsdk.plugins.telemetry import FlightMode
+from pyulog import ULog
 
 from tests.mavsdk_helpers import eventually, first, geodetic, take_off, truth_pos
 
@@ -140,3 +143,23 @@ async def test_calibration_example_runs_to_the_end(swarm_factory, mavsdk_client)
             assert progress and progress[-1] == pytest.approx(1.0), calibrate.__name__
         sensors = [e.data["sensor"] for e in swarm.recorder.events("d1", kinds="calibration")]
         assert sensors == ["gyro", "accel", "mag", "level"]
+
+
+async def test_logfile_download_example(swarm_factory, mavsdk_client, tmp_path) -> None:
+    swarm = await swarm_factory(1, speed=10.0)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        system = systems[0]
+        action, telemetry = ActionAsync(system), TelemetryAsync(system)
+        await take_off(swarm, system, 1, 5.0)
+        await action.land()
+        await first(telemetry.subscribe_armed(), lambda armed: not armed, 20.0, "disarmed")
+        log_files = LogFilesAsync(system)
+        entries = await log_files.get_entries()
+        assert len(entries) == 1 and entries[0].size_bytes > 0
+        path = tmp_path / "flight.ulg"
+        updates = [u async for u in log_files.download_log_file(entries[0], str(path))]
+        result, progress = updates[-1]  # (result, progress) until SUCCESS
+        assert result == LogFilesResult.SUCCESS and progress.progress == pytest.approx(1.0)
+        ulog = ULog(str(path))
+        heights = -ulog.get_dataset("vehicle_local_position").data["z"]
+        assert heights.max() == pytest.approx(5.0, abs=0.3)

@@ -23,6 +23,7 @@ from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
 from emulator.mavlink.imu import highres_imu
+from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
@@ -72,6 +73,7 @@ class VehicleLink:
         }
         self.camera = CameraComponent()
         self.missions = MissionTransfer(ap)
+        self.logs = LogTransfer(ap)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
@@ -330,6 +332,9 @@ class VehicleLink:
             now_ns = int(self.ap.now_s * 1e9)
             self.send(mavlink.MAVLink_timesync_message(now_ns, m.ts1))
 
+    def _log_request(self, m) -> None:
+        self.send_all(self.logs.handle(m))
+
     def _file_transfer(self, m) -> None:
         payload = bytes(m.payload)
         if len(payload) < FTP_HEADER_BYTES:
@@ -384,6 +389,7 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.PING: VehicleLink._ping,
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
+    **{msg_id: VehicleLink._log_request for msg_id in LOG_MESSAGES},
 }
 
 # the names of the messages a vehicle acts on or answers
