@@ -4,12 +4,14 @@ against the ground truth."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 from mavsdk.asyncio.plugins.action import ActionAsync
 from mavsdk.asyncio.plugins.calibration import CalibrationAsync
+from mavsdk.asyncio.plugins.ftp import FtpAsync
 from mavsdk.asyncio.plugins.log_files import LogFilesAsync
 from mavsdk.asyncio.plugins.offboard import OffboardAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
@@ -163,3 +165,21 @@ async def test_logfile_download_example(swarm_factory, mavsdk_client, tmp_path) 
         ulog = ULog(str(path))
         heights = -ulog.get_dataset("vehicle_local_position").data["z"]
         assert heights.max() == pytest.approx(5.0, abs=0.3)
+
+
+async def test_ftp_lists_and_downloads(swarm_factory, mavsdk_client, tmp_path) -> None:
+    swarm = await swarm_factory(1)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        ftp = FtpAsync(systems[0])
+        listing = await ftp.list_directory("/metadata")
+        sizes = {e.name: e.size_bytes for e in listing.entries}
+        assert set(sizes) == {"component_general.json", "parameters.json"}
+        for use_burst in (False, True):
+            local = tmp_path / ("burst" if use_burst else "plain")
+            local.mkdir()
+            updates = [u async for u in ftp.download("/metadata/parameters.json", str(local),
+                                                     use_burst)]
+            assert updates, use_burst
+            assert (local / "parameters.json").stat().st_size == sizes["parameters.json"]
+            parameters = json.loads((local / "parameters.json").read_text())
+            assert len(parameters["parameters"]) == len(swarm.fleet.autopilots[0].params)

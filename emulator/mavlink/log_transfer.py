@@ -43,6 +43,10 @@ class LogTransfer:
         self._logs = logs
         return logs
 
+    def files(self) -> list[bytes]:
+        """The flight logs' contents, oldest first (served over FTP too)."""
+        return [log.data for log in self._refresh()]
+
     def handle(self, m) -> Messages:
         msg_id = m.get_msgId()
         if msg_id == MessageId.LOG_REQUEST_LIST:

@@ -22,6 +22,7 @@ from emulator.mavlink.codec import Encoder, mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
+from emulator.mavlink.ftp import FtpServer
 from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
@@ -38,10 +39,6 @@ AUTOPILOT_COMPONENT_ID = MavComponent.AUTOPILOT1
 CAMERA_COMPONENT_ID = MavComponent.CAMERA
 MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
 # MAVLink FTP is not offered: every request gets a NAK(UnknownCommand) so clients fall back
-FTP_OPCODE_NAK = 129
-FTP_ERR_UNKNOWN_COMMAND = 7
-FTP_PAYLOAD_BYTES = 251
-FTP_HEADER_BYTES = 12
 
 
 def _bytewise_int(value: float) -> int:
@@ -74,6 +71,7 @@ class VehicleLink:
         self.camera = CameraComponent()
         self.missions = MissionTransfer(ap)
         self.logs = LogTransfer(ap)
+        self.ftp = FtpServer(self.logs.files)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
@@ -336,21 +334,10 @@ class VehicleLink:
         self.send_all(self.logs.handle(m))
 
     def _file_transfer(self, m) -> None:
-        payload = bytes(m.payload)
-        if len(payload) < FTP_HEADER_BYTES:
-            return
-        seq = (int.from_bytes(payload[0:2], "little") + 1) & 0xFFFF
-        reply = bytearray(FTP_PAYLOAD_BYTES)
-        reply[0:2] = seq.to_bytes(2, "little")
-        reply[2] = payload[2]  # session
-        reply[3] = FTP_OPCODE_NAK
-        reply[4] = 1  # payload size: one error byte
-        reply[5] = payload[3]  # the request's opcode
-        reply[12] = FTP_ERR_UNKNOWN_COMMAND
         src_system, src_component = self._peer(m)
-        self.send(mavlink.MAVLink_file_transfer_protocol_message(
-            0, src_system, src_component, list(reply)
-        ))
+        for reply in self.ftp.handle(bytes(m.payload)):
+            self.send(mavlink.MAVLink_file_transfer_protocol_message(
+                0, src_system, src_component, list(reply)))
 
 
 _COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
