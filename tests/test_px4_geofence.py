@@ -175,3 +175,21 @@ def test_rtl_goes_to_the_closest_rally_point() -> None:
     assert ap.position_m[:2] == pytest.approx((100.0, 100.0), abs=0.5)
     landed = link.fleet.recorder.events("d1", kinds="landed")[-1]
     assert landed.data["position_m"][:2] == pytest.approx([100.0, 100.0], abs=0.5)
+
+
+def test_a_mission_crossing_the_fence_is_refused_at_upload() -> None:
+    link = MemoryLink(1, telemetry=False)
+    assert _upload(link, _fence(link), MavMissionType.FENCE).type == MavMissionResult.ACCEPTED
+    origin = link.fleet.world.origin
+    inside = [link.mission_item(1, 0, MavCmd.NAV_WAYPOINT,
+                                *origin.to_geodetic(0.0, -30.0, 0.0)[:2], 10.0)]
+    assert link.upload_mission(1, inside).type == MavMissionResult.ACCEPTED
+    outside = [link.mission_item(1, 0, MavCmd.NAV_WAYPOINT,
+                                 *origin.to_geodetic(0.0, -30.0, 0.0)[:2], 10.0),
+               link.mission_item(1, 1, MavCmd.NAV_WAYPOINT,
+                                 *origin.to_geodetic(0.0, 30.0, 0.0)[:2], 10.0)]  # excluded
+    since = len(link.received)
+    assert link.upload_mission(1, outside).type == MavMissionResult.INVALID
+    assert any("Mission item 1 outside the geofence" in m.text
+               for m in link.messages("STATUSTEXT", since=since))
+    assert link.fleet.autopilots[0].mission.total == 1  # the old mission kept

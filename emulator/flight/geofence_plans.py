@@ -51,6 +51,19 @@ class GeofencePlans:
         if self.fenced and not self.fence.contains(target_m[0], target_m[1]):
             raise CommandRefused(f"{what} refused: outside the geofence")
 
+    def check_mission(self, items: list[MissionItem]) -> None:
+        """Refuse a mission with a position item outside the fence plan (PX4's feasibility
+        check at upload)."""
+        if not self.fenced:
+            return
+        ap = self.ap
+        origin, home = ap.fleet.world.origin, ap.state.home_m
+        for item in items:
+            if item.is_nav and not item.uses_current_position:
+                x, y, _ = item.local_target_m(origin, home, home)
+                if not self.fence.contains(x, y):
+                    raise CommandRefused(f"Mission item {item.seq} outside the geofence")
+
     def check_arming(self) -> None:
         ap = self.ap
         x, y, _ = ap.position_m

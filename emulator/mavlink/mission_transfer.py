@@ -152,6 +152,7 @@ class MissionTransfer:
             elif mission_type == MavMissionType.RALLY:
                 ap.geofence.set_rally(items)
             else:
+                ap.geofence.check_mission(items)
                 ap.mission.replace(items)
         except CommandRefused as refusal:
             return MissionResult.INVALID, str(refusal)
