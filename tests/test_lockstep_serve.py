@@ -66,7 +66,9 @@ def _truth_digest(live_swarm: Any, t0_s: float, t1_s: float) -> str:
 def _fingerprint(swarm: Any, tools: LoggedTools, t0_s: float, now_s: float,
                  results: list[Any]) -> dict[str, Any]:
     """What must not depend on the surface or the think time: every result the agent got,
-    the call log with simulated times, the truth digest and where the clock stands."""
+    the call log with simulated times, the truth digest and where the clock stands. Every
+    outcome is checked against the ground truth first."""
+    _agrees_with_truth(swarm, tools.call_log())
     return {"results": json.loads(json.dumps(results)), "calls": tools.call_log(),
             "truth": _truth_digest(swarm, t0_s, now_s), "window_s": [t0_s, now_s]}
 
@@ -195,3 +197,59 @@ async def test_external_agents_over_rest_and_mcp_match_in_process(tmp_path: Path
             "mcp, thinking": await _over_mcp(tmp_path, data, 4, MAX_THINK_S)}
     for name, run in runs.items():
         assert run == baseline, name
+
+
+@pytest.mark.slow
+async def test_think_times_up_to_two_seconds_change_nothing(tmp_path: Path) -> None:
+    data = _session_data()
+    baseline = await _in_process(data)
+    assert await _over_rest(tmp_path, data, 5, max(MAX_THINK_S, 2.0)) == baseline
+    assert await _over_mcp(tmp_path, data, 6, max(MAX_THINK_S, 2.0)) == baseline
+
+
+def _agrees_with_truth(live_swarm: Any, calls: list[dict[str, Any]]) -> None:
+    """Every flight's outcome is what the ground truth shows at its end: a take-off ok at its
+    altitude, a landing ok on the ground, a move ok where it was sent; none refused."""
+    recorder = live_swarm.recorder
+    assert all(c["status"] != "rejected" for c in calls), calls
+    for call in calls:
+        args, at = call["args"], call["t1_s"]
+        if call["status"] == "error":
+            continue
+        assert call["status"] == "ok", call
+        if call["name"] == "take_off":
+            z = recorder.position_at(args["drone_id"], at)[2]
+            assert z == pytest.approx(args["altitude_m"], abs=1.0), call
+        elif call["name"] == "land":
+            assert recorder.position_at(args["drone_id"], at)[2] < 0.3, call
+        elif call["name"] == "move_towards":
+            start = np.array(recorder.position_at(args["drone_id"], call["t0_s"])[:2])
+            end = np.array(recorder.position_at(args["drone_id"], at)[:2])
+            assert np.linalg.norm(end - start) == pytest.approx(args["distance_m"], abs=2.0)
+
+
+async def test_on_a_lossy_link_every_outcome_agrees_with_the_truth(tmp_path: Path) -> None:
+    """A fifth of the datagrams lost both ways: every call's outcome agrees with the ground
+    truth (checked in `_fingerprint`: take-offs at their altitude, landings on the ground,
+    moves their distance), none is refused, and every call ends with the same status at the
+    same simulated time over REST, over MCP and in-process. The drone states that reads return
+    are the telemetry that got through by then, so they are not compared here."""
+    data = _session_data(LOSSY)
+    baseline = await _in_process(data)
+    served = await _over_rest(tmp_path, data, 7, MAX_THINK_S)
+    over_mcp = await _over_mcp(tmp_path, data, 8, MAX_THINK_S)
+    for run in (baseline, served, over_mcp):
+        _check_outcomes(run)
+    for run in (served, over_mcp):
+        assert _statuses(run["results"]) == _statuses(baseline["results"])
+        assert _timeline(run["calls"]) == _timeline(baseline["calls"])
+        assert run["window_s"] == baseline["window_s"]
+
+
+def _timeline(calls: list[dict[str, Any]]) -> list[tuple[Any, ...]]:
+    return [(c["name"], c["drone"], c["t0_s"], c["t1_s"], c["status"]) for c in calls]
+
+
+def _statuses(results: list[Any]) -> list[Any]:
+    return [[r["status"] for r in step] if isinstance(step, list) else step["status"]
+            for step in results]
