@@ -35,7 +35,7 @@ from benchmark.tool_log import LoggedTools
 from llm_tools.registry import served_registry
 from mavlink_gateway.pacing import Thinker, run_as
 from tests.cli_fixtures import ROOT
-from tests.external_agent import STEPS, batch_arguments
+from tests.external_agent import STEPS
 
 pytestmark = [pytest.mark.mavsdk]
 

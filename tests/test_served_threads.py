@@ -23,6 +23,7 @@ import pytest
 from agent_contract import AgentTools
 from benchmark.server.hub import Hub, LiveSession
 from benchmark.server.serve import parse_api_key, serve_rest
+from benchmark.tool_log import LoggedTools
 from llm_tools.batch import MAX_BATCH_CALLS
 from llm_tools.mcp_server import mcp_tools
 from llm_tools.registry import OUTPUT_SCHEMA, default_registry, served_registry
@@ -139,6 +140,7 @@ async def test_one_key_is_one_thread_on_every_route(tmp_path: Path) -> None:
         compat = (await client.post("/drones/d2/command/take_off", params={"altitude": 5},
                                     headers={"X-API-Key": "k"})).json()
         assert compat["status"] == "success", compat
+        assert isinstance(live.tools, LoggedTools)
         log = live.tools.call_log()
         assert [c["name"] for c in log] == ["take_off", "take_off"]
         assert log[1]["t0_s"] == log[0]["t1_s"] == round(end_s, 3)
@@ -186,5 +188,6 @@ async def test_per_drone_keys_are_threads_of_their_own(tmp_path: Path) -> None:
         assert not live.tools.finished
         assert (await _call(client, "k2", "finish", summary="heard"))["status"] == "ok"
         assert live.tools.finished and live.tools.summary == "d1: up; d2: heard"
+        assert isinstance(live.tools, LoggedTools)
         log = {(c["name"], c["drone"]): c for c in live.tools.call_log()}
         assert log[("wait", "d2")]["t1_s"] > round(told_s, 3)

@@ -123,9 +123,11 @@ def generated_keys(session_ids: Sequence[str],
                    drones: Mapping[str, Sequence[str]] | None = None) -> list[ApiKey]:
     """Fresh random keys: one agent key per session (per drone of each session in `drones`),
     one operator key, one admin key."""
-    keys = [ApiKey(Role.AGENT, secrets.token_urlsafe(18), sid, drone)
-            for sid in session_ids
-            for drone in (list((drones or {}).get(sid, ())) or [None])]
+    owners: list[tuple[str, str | None]] = []
+    for sid in session_ids:
+        per_drone = list((drones or {}).get(sid, ()))
+        owners += [(sid, d) for d in per_drone] if per_drone else [(sid, None)]
+    keys = [ApiKey(Role.AGENT, secrets.token_urlsafe(18), sid, drone) for sid, drone in owners]
     keys.append(ApiKey(Role.OPERATOR, secrets.token_urlsafe(18)))
     keys.append(ApiKey(Role.ADMIN, secrets.token_urlsafe(18)))
     return keys
