@@ -191,3 +191,41 @@ async def test_per_drone_keys_are_threads_of_their_own(tmp_path: Path) -> None:
         assert isinstance(live.tools, LoggedTools)
         log = {(c["name"], c["drone"]): c for c in live.tools.call_log()}
         assert log[("wait", "d2")]["t1_s"] > round(told_s, 3)
+
+
+def test_serve_and_mcp_default_to_the_lockstep_clock_and_take_stepped() -> None:
+    import argparse
+
+    from benchmark.server.serve import add_parsers, generated_keys
+    from benchmark.server.session_runner import SessionRunner
+
+    parser = argparse.ArgumentParser()
+    add_parsers(parser.add_subparsers())
+    serve = parser.parse_args(["serve", "--sessions", "s.json"])
+    assert (serve.clock, serve.keys_per_drone) == ("lockstep", False)
+    assert parser.parse_args(["mcp", "s.json"]).clock == "lockstep"
+    assert parser.parse_args(["mcp", "s.json", "--clock", "stepped"]).clock == "stepped"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["serve", "--sessions", "s.json", "--clock", "wall"])
+    with pytest.raises(ValueError, match="clock: expected one of lockstep, stepped"):
+        SessionRunner(clock="wall")
+    keys = generated_keys(["s1", "s2"], {"s1": ["d1", "d2"]})
+    agents = [(k.session_id, k.drone_id) for k in keys if k.role.value == "agent"]
+    assert agents == [("s1", "d1"), ("s1", "d2"), ("s2", None)]
+
+
+@pytest.mark.mavsdk
+async def test_a_session_has_drone_agents_or_one_agent_not_both(tmp_path: Path) -> None:
+    from benchmark.server.serve import _add_keys, live_hub
+
+    data = json.loads(SESSION.read_text())
+    data["tasks"] = data["tasks"][:1]
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(data))
+    async with live_hub([path]) as hub:
+        both = [parse_api_key(f"agent:{SID}/d1=k1"), parse_api_key("agent=k")]
+        with pytest.raises(ValueError, match="either one per drone or one for all"):
+            _add_keys(hub, both)
+    async with live_hub([path]) as hub:
+        with pytest.raises(ValueError, match="'d9' is not a drone of session"):
+            _add_keys(hub, [parse_api_key(f"agent:{SID}/d9=k9")])
