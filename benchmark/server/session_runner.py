@@ -46,7 +46,9 @@ def task_tools(gateway: Gateway, session_id: str, task: TaskSpec, *,
                drones: Sequence[str] = ()) -> ServedTools:
     """The agent's tools for `task` under its budget, with its threads (`drones`: one per
     drone, else one for the whole agent); under a lockstep clock a task with checks is held
-    while they think, free flight is not."""
+    while they think, free flight is not. Whoever ends the task (an operator's next task, a
+    play-out before the checks) closes them first (`await tools.close()`), or they go on
+    holding the clock."""
     assert task.budget is not None
     return ServedTools(gateway, AgentTask(session_id, task.id, task.text, task.budget),
                        pins=gateway.services.lockstep and task.checks is not None,
