@@ -171,6 +171,8 @@ def leave(swarm: Swarm, drone_id: str) -> None:
     link = swarm.links[k]
     swarm.network_of[k].links.pop(link.system_id, None)
     swarm.left.add(k)
+    if swarm.clock.stepped:  # a client waiting on it goes on now (the clock may be at rest)
+        swarm.watches.check()
     swarm.wake()
 
 

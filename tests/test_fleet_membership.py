@@ -10,6 +10,7 @@ import time
 import pytest
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
+from emulator.clock import ClockConfig
 from emulator.fleet_membership import join, leave, present_ids
 from emulator.services import SwarmServices
 from tests.mavlink_client import running_swarm
@@ -99,3 +100,27 @@ async def test_perception_sees_a_joined_vehicle_and_not_a_left_one(swarm_factory
     assert {v.id for v in services.sense("d1").vehicles} == {"d3"}
     with pytest.raises(KeyError):
         services.sense("d2")
+
+
+async def test_a_lockstep_watch_on_a_leaving_vehicle_halts(swarm_factory) -> None:
+    swarm = await swarm_factory(
+        scenario=tiny_scenario([vehicle(1), vehicle(2, 10.0, 0.0, 5.0)]),
+        clock=ClockConfig(stepped=True, lockstep=True))
+    join(swarm, vehicle(3, 0.0, 10.0, 5.0))
+    swarm.fleet.autopilots[1].reposition((300.0, 0.0, 5.0))
+    swarm.fleet.autopilots[2].reposition((0.0, 300.0, 5.0))
+    watch = swarm.watch("d2")
+    assert not watch.halted_now() and swarm.fleet.busy[1]
+    leave(swarm, "d2")  # before the scheduler stepped: d2 is on its way
+    left_s = swarm.fleet.now_s
+    halted_s = await asyncio.wait_for(watch.halted(), 2.0)
+    assert halted_s == pytest.approx(left_s)
+    assert swarm.fleet.dyn.position_m[1][0] < 100.0
+    watch.close()
+    # the joined vehicle flies on under the lockstep clock; d2 stays where it left
+    at = swarm.fleet.dyn.position_m[1].copy()
+    arrived = swarm.watch("d3")
+    await asyncio.wait_for(arrived.halted(), 10.0)
+    assert swarm.fleet.dyn.position_m[2][1] == pytest.approx(300.0, abs=2.0)
+    assert (swarm.fleet.dyn.position_m[1] == at).all()
+    arrived.close()
