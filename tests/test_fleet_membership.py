@@ -14,7 +14,7 @@ from emulator.clock import ClockConfig
 from emulator.fleet_membership import join, leave, present_ids
 from emulator.services import SwarmServices
 from tests.mavlink_client import running_swarm
-from tests.mavsdk_helpers import first, kinds, take_off
+from tests.mavsdk_helpers import eventually, first, kinds, take_off
 from tests.scenario_fixtures import tiny_scenario, vehicle
 
 pytestmark = pytest.mark.mavsdk
@@ -47,6 +47,14 @@ async def test_mavsdk_discovers_and_flies_a_joined_vehicle(swarm_factory, mavsdk
         assert tuple(rows[0, 1:4]) == pytest.approx((20.0, 5.0, 0.0))
         assert rows[:, 3].max() > 7.0
         assert [e.kind for e in swarm.recorder.events("d3")][:1] == ["joined"]
+        # MAVSDK sees a left vehicle go (no heartbeat) while the others stay connected
+        leave(swarm, "d3")
+
+        async def gone() -> bool:
+            return not await joined.is_connected()
+
+        await eventually(gone, 10.0, "MAVSDK to lose d3")
+        assert await systems[0].is_connected() and await systems[1].is_connected()
 
 
 async def test_a_left_vehicle_stops_speaking_and_ids_are_not_reused() -> None:
