@@ -8,6 +8,7 @@ refused with a REJECTED outcome and is not counted.
 from __future__ import annotations
 
 import asyncio
+import json
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -15,7 +16,13 @@ from agent_contract.protocol import AgentTask, BudgetExhausted
 from mavlink_gateway import Gateway, Outcome, Status
 from mavlink_gateway.pacing import run_concurrently
 
-__all__ = ["BudgetedTools"]
+__all__ = ["TRANSCRIPT_MAX_CHARS", "TRANSCRIPT_MAX_ENTRIES", "TRANSCRIPT_MAX_TEXT",
+           "TRANSCRIPT_ROLES", "BudgetedTools"]
+
+TRANSCRIPT_ROLES = ("system", "user", "assistant", "tool")
+TRANSCRIPT_MAX_TEXT = 20_000  # characters kept of one content or one call's arguments
+TRANSCRIPT_MAX_ENTRIES = 2_000  # messages kept of one task's transcript
+TRANSCRIPT_MAX_CHARS = 1_000_000  # characters kept of one task's transcript in all
 
 
 class BudgetedTools:
@@ -33,6 +40,9 @@ class BudgetedTools:
         self.completion_tokens = 0
         self.cost_usd = 0.0
         self.spent: BudgetExhausted | None = None
+        self.transcript: list[dict[str, Any]] = []
+        self.transcript_dropped = 0
+        self._transcript_chars = 0
 
     @property
     def tool_calls(self) -> int:
@@ -56,6 +66,40 @@ class BudgetedTools:
         self.prompt_tokens += int(prompt)
         self.completion_tokens += int(completion)
         self.cost_usd += float(cost_usd)
+
+    def add_transcript(self, role: str, content: str, *,
+                       tool_calls: list[dict[str, Any]] | None = None,
+                       tokens: dict[str, int] | None = None,
+                       tool_call_id: str | None = None) -> None:
+        """Record one message of the agent's model conversation, at the simulated time now:
+        its role (system, user, assistant or tool), its text, the tool calls an assistant
+        message makes (each {"id", "name", "arguments"}: the arguments as the model wrote them,
+        in full) and the tokens of the model turn that answered ({"prompt", "completion"}).
+        The benchmark stores it beside the task's replay. Bounded: a text or arguments longer
+        than TRANSCRIPT_MAX_TEXT characters is cut (marked "..."); past TRANSCRIPT_MAX_ENTRIES
+        messages or TRANSCRIPT_MAX_CHARS characters, messages are counted in
+        `transcript_dropped` and not kept. A role not in TRANSCRIPT_ROLES raises ValueError."""
+        if role not in TRANSCRIPT_ROLES:
+            raise ValueError(f"transcript role must be one of {', '.join(TRANSCRIPT_ROLES)}; "
+                             f"got {role!r}")
+        entry: dict[str, Any] = {"t_s": round(self.clock_s, 3), "role": role,
+                                 "content": _cut(str(content or ""))}
+        if tool_calls:
+            entry["tool_calls"] = [{"id": str(c.get("id", "")), "name": str(c.get("name", "")),
+                                    "arguments": _cut(c.get("arguments"))} for c in tool_calls]
+        if tool_call_id is not None:
+            entry["tool_call_id"] = str(tool_call_id)
+        if tokens is not None:
+            entry["tokens"] = {"prompt": int(tokens.get("prompt", 0)),
+                               "completion": int(tokens.get("completion", 0))}
+        size = len(entry["content"]) + sum(len(c["arguments"])
+                                           for c in entry.get("tool_calls", []))
+        if (len(self.transcript) >= TRANSCRIPT_MAX_ENTRIES
+                or self._transcript_chars + size > TRANSCRIPT_MAX_CHARS):
+            self.transcript_dropped += 1
+            return
+        self._transcript_chars += size
+        self.transcript.append(entry)
 
     def _charge(self, name: str) -> Outcome | None:
         if self.finished:
@@ -103,3 +147,11 @@ class BudgetedTools:
         if pending:
             await asyncio.gather(*pending, return_exceptions=True)
         self._in_flight.clear()
+
+
+def _cut(value: Any) -> str:
+    """A transcript text (arguments given as an object are JSON-encoded), bounded."""
+    if value is None:
+        return ""
+    text = value if isinstance(value, str) else json.dumps(value, default=str)
+    return text if len(text) <= TRANSCRIPT_MAX_TEXT else text[:TRANSCRIPT_MAX_TEXT] + "..."

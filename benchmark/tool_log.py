@@ -74,6 +74,15 @@ class LoggedTools(AgentTools):
                        key=lambda c: (c["t0_s"], str(c["drone"] or ""), c["i"]))
         return [{**c, "i": k} for k, c in enumerate(calls)]
 
+    def transcript_json(self) -> dict[str, Any]:
+        """The agent's model transcript for the task's replay file (`add_transcript`: bounded
+        there), with how many messages the bounds dropped; empty when the agent recorded
+        none."""
+        if not self.transcript and not self.transcript_dropped:
+            return {}
+        return {"transcript": [dict(e) for e in self.transcript],
+                "transcript_dropped": self.transcript_dropped}
+
     def activity(self) -> dict[str, dict[str, Any]]:
         """Per drone: the tool it is executing now (or None) and how its last call ended."""
         running, last = self.__dict__.get("_running", {}), self.__dict__.get("_last", {})
