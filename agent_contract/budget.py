@@ -70,7 +70,7 @@ class BudgetedTools:
     def add_transcript(self, role: str, content: str, *,
                        tool_calls: list[dict[str, Any]] | None = None,
                        tokens: dict[str, int] | None = None,
-                       tool_call_id: str | None = None) -> None:
+                       tool_call_id: str | None = None, agent: str | None = None) -> None:
         """Record one message of the agent's model conversation, at the simulated time now:
         its role (system, user, assistant or tool), its text, the tool calls an assistant
         message makes (each {"id", "name", "arguments"}: the arguments as the model wrote them,
@@ -87,6 +87,8 @@ class BudgetedTools:
         if tool_calls:
             entry["tool_calls"] = [{"id": str(c.get("id", "")), "name": str(c.get("name", "")),
                                     "arguments": _cut(c.get("arguments"))} for c in tool_calls]
+        if agent is not None:
+            entry["agent"] = str(agent)
         if tool_call_id is not None:
             entry["tool_call_id"] = str(tool_call_id)
         if tokens is not None:

@@ -77,10 +77,13 @@ class LoggedTools(AgentTools):
     def transcript_json(self) -> dict[str, Any]:
         """The agent's model transcript for the task's replay file (`add_transcript`: bounded
         there), with how many messages the bounds dropped; empty when the agent recorded
-        none."""
+        none. Ordered by simulated time, then agent (a per-drone team's), each agent's own
+        messages in the order it said them: the same whatever order the agents' thinking let
+        them through."""
         if not self.transcript and not self.transcript_dropped:
             return {}
-        return {"transcript": [dict(e) for e in self.transcript],
+        ordered = sorted(self.transcript, key=lambda e: (e["t_s"], e.get("agent", "")))
+        return {"transcript": [dict(e) for e in ordered],
                 "transcript_dropped": self.transcript_dropped}
 
     def activity(self) -> dict[str, dict[str, Any]]:

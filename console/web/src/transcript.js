@@ -20,6 +20,7 @@ function entryNode(e, k, t0, onPick) {
   const head = el("div", { class: "entry-head" },
     el("span", { class: "entry-t" }, `${(e.t_s - t0).toFixed(1)} s`),
     el("b", { class: "entry-role" }, e.role),
+    e.agent ? el("span", { class: "entry-agent" }, `agent ${e.agent}`) : null,
     e.tool_call_id ? el("span", { class: "muted" }, `answers ${e.tool_call_id}`) : null,
     e.tokens ? el("span", { class: "entry-tokens" }, tokensText(e.tokens)) : null);
   const content = e.content ? el("div", { class: "entry-content" }, e.role === "tool" ? pretty(e.content) : e.content) : null;
