@@ -334,7 +334,9 @@ class WorkflowAgent:
                 messages.append({"role": "tool", "tool_call_id": call.id,
                                  "content": json.dumps(result, separators=(",", ":"))})
             if tools.finished or self._out_of_budget(tools):
-                return
+                break
+        # The last turn's tool results, which no further question carries into the transcript.
+        record_messages(tools, messages, unrecorded_from(messages))
 
 
 def _joins(batch: list[PlanStep], step: PlanStep) -> bool:
