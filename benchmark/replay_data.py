@@ -11,7 +11,7 @@ An LLM agent's transcript (`AgentTools.add_transcript`: its messages, tool calls
 arguments in full, tokens per model turn, each at its simulated time) is kept in the task's
 file under `transcript` (with `transcript_dropped`), not in results.jsonl. It is bounded where
 it is recorded: 20,000 characters a text, 2,000 messages and 1,000,000 characters a task (see
-`agent_contract.budget`), so at most about 1 MB before gzip.
+`agent_contract.budget`), so at most about 1.2 MB of JSON (text and keys) before gzip.
 
 Layout under a results folder::
 

@@ -24,7 +24,7 @@ from agent_contract.budget import (
 from agent_contract.protocol import AgentTask, TaskBudget
 from benchmark.replay_data import read_json_gz, replay_path
 from tests.bench_fixtures import small_session, write_json
-from tests.browser_fixtures import open_page, shot
+from tests.browser_fixtures import ARTIFACTS, open_page, shot
 from tests.cli_fixtures import MAVSWARM, ROOT, read_until
 from tests.ports import unused_tcp_port
 from tests.scripted_llm import call, scripted_llm
@@ -163,6 +163,14 @@ def test_the_inspector_shows_the_transcript_on_the_timeline(
         nav = page.locator("header nav a").all_text_contents()
         assert nav == ["runs", "compare", "leaderboard", "editor"]
         shot(page, "inspector-transcript")
+        page.screenshot(path=str(ARTIFACTS / "inspector-transcript-page.png"), full_page=True)
+        page.click("header nav a:text-is('leaderboard')")
+        page.wait_for_selector("body[data-ready='1']")
+        assert page.text_content("h1") == "Leaderboard"
+        assert record["agent"] in (page.text_content("table") or "")
+    with open_page(browser, f"{react_run['url']}/runs") as page:
+        assert page.locator("header nav a").all_text_contents() == nav
+        assert page.get_attribute("header nav a.current", "href", timeout=2000) is not None
 
 
 @pytest.mark.mavsdk
