@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
 from agent_contract.protocol import AgentTask, BudgetExhausted
@@ -78,22 +78,21 @@ class BudgetedTools:
         The benchmark stores it beside the task's replay. Bounded: a text or arguments longer
         than TRANSCRIPT_MAX_TEXT characters is cut (marked "..."); past TRANSCRIPT_MAX_ENTRIES
         messages or TRANSCRIPT_MAX_CHARS characters, messages are counted in
-        `transcript_dropped` and not kept. A role not in TRANSCRIPT_ROLES raises ValueError."""
+        `transcript_dropped` and not kept. A role not in TRANSCRIPT_ROLES, a tool call that is
+        not an object, or tokens that are not counts raise ValueError (nothing is recorded)."""
         if role not in TRANSCRIPT_ROLES:
             raise ValueError(f"transcript role must be one of {', '.join(TRANSCRIPT_ROLES)}; "
                              f"got {role!r}")
         entry: dict[str, Any] = {"t_s": round(self.clock_s, 3), "role": role,
                                  "content": _cut(str(content or ""))}
         if tool_calls:
-            entry["tool_calls"] = [{"id": str(c.get("id", "")), "name": str(c.get("name", "")),
-                                    "arguments": _cut(c.get("arguments"))} for c in tool_calls]
+            entry["tool_calls"] = [_transcript_call(c) for c in tool_calls]
         if agent is not None:
             entry["agent"] = str(agent)
         if tool_call_id is not None:
             entry["tool_call_id"] = str(tool_call_id)
         if tokens is not None:
-            entry["tokens"] = {"prompt": int(tokens.get("prompt", 0)),
-                               "completion": int(tokens.get("completion", 0))}
+            entry["tokens"] = _transcript_tokens(tokens)
         size = len(entry["content"]) + sum(len(c["arguments"])
                                            for c in entry.get("tool_calls", []))
         if (len(self.transcript) >= TRANSCRIPT_MAX_ENTRIES
@@ -157,3 +156,22 @@ def _cut(value: Any) -> str:
         return ""
     text = value if isinstance(value, str) else json.dumps(value, default=str)
     return text if len(text) <= TRANSCRIPT_MAX_TEXT else text[:TRANSCRIPT_MAX_TEXT] + "..."
+
+
+def _transcript_call(call: Any) -> dict[str, str]:
+    if not isinstance(call, Mapping):
+        raise ValueError('each transcript tool call must be an object {"id", "name", '
+                         f'"arguments"}}; got {str(call)[:80]!r}')
+    return {"id": _cut(call.get("id")), "name": _cut(call.get("name")),
+            "arguments": _cut(call.get("arguments"))}
+
+
+def _transcript_tokens(tokens: Any) -> dict[str, int]:
+    counts = {}
+    for key in ("prompt", "completion"):
+        value = tokens.get(key, 0) if isinstance(tokens, Mapping) else None
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ValueError('transcript tokens must be {"prompt": N, "completion": N} with '
+                             f"counts of 0 or more; got {str(tokens)[:80]!r}")
+        counts[key] = value
+    return counts

@@ -59,6 +59,12 @@ def test_add_transcript_records_the_time_and_is_bounded() -> None:
                                  "tokens": {"prompt": 7, "completion": 3}}]
     with pytest.raises(ValueError, match="transcript role must be one of"):
         tools.add_transcript("robot", "hi")
+    with pytest.raises(ValueError, match="each transcript tool call must be an object"):
+        tools.add_transcript("assistant", "x", tool_calls=["take_off(d1)"])  # type: ignore[list-item]
+    with pytest.raises(ValueError, match="transcript tokens must be"):
+        tools.add_transcript("assistant", "x", tokens={"prompt": -1, "completion": 2})
+    with pytest.raises(ValueError, match="transcript tokens must be"):
+        tools.add_transcript("assistant", "x", tokens={"prompt": "many"})  # type: ignore[dict-item]
     assert len(tools.transcript) == 1
     tools.add_transcript("tool", "y" * (TRANSCRIPT_MAX_TEXT + 50), tool_call_id="c1")
     assert tools.transcript[1]["content"] == "y" * TRANSCRIPT_MAX_TEXT + "..."
