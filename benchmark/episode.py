@@ -367,6 +367,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
             truth(context)
         end_state = services.operator_snapshot()
         replay = encode_window(swarm.recorder, t0_s, t1_s, tools.call_log())
+        replay.update(tools.transcript_json())
         replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),
                           "budget": {"tool_calls": task.budget.tool_calls,
                                      "sim_time_s": task.budget.sim_time_s}}
