@@ -267,13 +267,24 @@ def _finish(it: Intentions, f: _Flight) -> None:
             f.emit({"op": "altitude", "altitude_m": d.min_final_alt})
         if d.final_heading is not None:
             f.emit({"op": "rotate", "heading_deg": d.final_heading})
+    _land_enough(f)
 
 
-def _count_landings(d: DroneIntent, f: _Flight) -> int:
-    """Landings the rest of the plan will make (actions, charging, the end)."""
-    n = sum(1 for op in d.actions if op["op"] in ("land", "home", "charge"))
-    charges = d.charge_path is not None or d.end_station is not None
-    return n + int(charges) + int(d.final_ground)
+def _land_enough(f: _Flight) -> None:
+    """Land (and take off again) until the plan makes the landings the checks count; a
+    drone that must end in the air climbs back to where it was."""
+    missing = f.d.min_landings - f.landings
+    if missing <= 0:
+        return
+    was_air, z = f.air, f.z
+    for _ in range(missing):
+        if not f.air:
+            f.emit({"op": "takeoff", "altitude_m": f.cruise_m})
+        f.emit({"op": "land"})
+    if was_air:
+        f.emit({"op": "takeoff", "altitude_m": z})
+        if f.d.final_heading is not None:
+            f.emit({"op": "rotate", "heading_deg": f.d.final_heading})
 
 
 def assemble(it: Intentions) -> list[list[Op]]:
@@ -293,9 +304,6 @@ def assemble(it: Intentions) -> list[list[Op]]:
         takeoff = _takeoff_m(d, f.cruise_m)
         if takeoff is not None:
             f.emit({"op": "takeoff", "altitude_m": takeoff})
-        for _ in range(d.min_landings - f.landings - _count_landings(d, f)):
-            f.emit({"op": "takeoff", "altitude_m": takeoff or f.cruise_m})
-            f.emit({"op": "land"})
         for op in d.actions:
             f.emit(op)
         for _ in range(d.min_photos - f.photos):

@@ -67,7 +67,11 @@ def _all_on_ground(it: Intentions, path: str, p: Params, expect: bool) -> None:
 
 
 def _hovering(it: Intentions, path: str, p: Params, expect: bool) -> None:
-    _drone(it, path, p).must_air = True
+    d = _drone(it, path, p)
+    if expect:
+        d.must_air = True
+    else:  # not hovering: on the ground is the still way
+        d.final_ground = True
 
 
 def _all_hovering(it: Intentions, path: str, p: Params, expect: bool) -> None:
@@ -197,10 +201,12 @@ def _hovered(it: Intentions, path: str, p: Params, expect: bool) -> None:
 def _photo(it: Intentions, path: str, p: Params, expect: bool) -> None:
     d = _drone(it, path, p)
     at = p.get("at_position")
-    if at is not None:
-        d.visit(float(at["x"]), float(at["y"]), None if at.get("z") is None else float(at["z"]))
+    if at is None:
+        d.min_photos = max(d.min_photos, int(p["min_count"]))
+        return
+    d.visit(float(at["x"]), float(at["y"]), None if at.get("z") is None else float(at["z"]))
+    for _ in range(int(p["min_count"])):  # every photo counted must be taken there
         d.act({"op": "photo"})
-    d.min_photos = max(d.min_photos, int(p["min_count"]) - (1 if at is not None else 0))
 
 
 def _photo_of(it: Intentions, path: str, p: Params, expect: bool) -> None:
@@ -315,6 +321,10 @@ PASSIVE_WHEN_NEGATED = frozenset(name for name in HANDLERS if name.startswith((
     "all_drones_have", "task_")))
 
 
+# A negated leaf of these has a plan of its own (the handler reads expect).
+NEGATABLE = frozenset({"drone_on_ground", "drone_hovering"})
+
+
 def plannable_endpoints() -> list[str]:
     """Every endpoint the planner has a rule for."""
     return sorted(HANDLERS)
@@ -378,7 +388,7 @@ def derive_plan(checks: Node, scenario: Scenario, drones: Mapping[str, Mapping[s
         if not holds:
             if leaf.endpoint in PASSIVE_WHEN_NEGATED:
                 continue
-            if leaf.endpoint != "drone_on_ground":
+            if leaf.endpoint not in NEGATABLE:
                 raise Unplannable(path, leaf.endpoint, "cannot plan for this check to fail")
         handler(it, path, leaf.parameters, holds)
     return it.plan()
