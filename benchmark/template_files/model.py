@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 __all__ = ["FORMAT", "Budget", "EntityGroup", "TemplateFile", "ValueSpec", "json_schema"]
 
@@ -111,23 +111,29 @@ class TemplateFile(_Strict):
         default=None, description="optional hand plan (phases of oracle operations)")
     budget: Budget = Field(default_factory=Budget)
 
-    @model_validator(mode="after")
-    def _known(self) -> TemplateFile:
-        if self.category not in CATEGORIES:
-            raise ValueError(f"category {self.category!r} is not one of {', '.join(CATEGORIES)}")
-        for name in self.families:
-            if name not in FAMILIES:
-                raise ValueError(f"family {name!r} is not one of {', '.join(FAMILIES)}")
-        for name in self.levels:
-            if name not in LEVELS:
-                raise ValueError(f"level {name!r} is not one of {', '.join(LEVELS)}")
-        groups = [g.group for g in self.entities]
-        if len(set(groups)) != len(groups):
-            raise ValueError("two entity groups share a name")
-        names = [v.name for v in self.values]
+    @field_validator("category")
+    @classmethod
+    def _category(cls, value: str) -> str:
+        if value not in CATEGORIES:
+            raise ValueError(f"{value!r} is not one of {', '.join(CATEGORIES)}")
+        return value
+
+    @field_validator("families", "levels")
+    @classmethod
+    def _names(cls, value: list[str], info: ValidationInfo) -> list[str]:
+        known = FAMILIES if info.field_name == "families" else LEVELS
+        for name in value:
+            if name not in known:
+                raise ValueError(f"{name!r} is not one of {', '.join(known)}")
+        return value
+
+    @field_validator("entities", "values")
+    @classmethod
+    def _unique(cls, value: list[Any], info: ValidationInfo) -> list[Any]:
+        names = [getattr(v, "group", None) or getattr(v, "name", None) for v in value]
         if len(set(names)) != len(names):
-            raise ValueError("two values share a name")
-        return self
+            raise ValueError(f"two {info.field_name} share a name")
+        return value
 
 
 def json_schema() -> dict[str, Any]:
