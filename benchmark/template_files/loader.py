@@ -167,11 +167,9 @@ def _value(spec: ValueSpec, view: SessionView, rng: random.Random) -> Any:
 
 def template_of(model: TemplateFile) -> Template:
     """The catalogue entry of a template file."""
-    from benchmark.templates.base import TaskDraft, Template, TemplateUnfit
+    from benchmark.templates.base import TaskDraft, Template
 
     def build(view: SessionView, rng: random.Random) -> TaskDraft:
-        if model.levels and getattr(view, "level", None) not in (None, *model.levels):
-            raise TemplateUnfit(f"template {model.id} does not suit this level")
         entities = _entities(model, view, rng)
         values = {v.name: _value(v, view, rng) for v in model.values}
         filler = Filler(rng, view, entities, values)
@@ -190,4 +188,4 @@ def template_of(model: TemplateFile) -> Template:
                     drones=count("drone") if model.distinct else min(count("drone"), 1),
                     area_targets=count("area_target"), point_targets=count("point_target"),
                     stations=count("station"), families=tuple(model.families),
-                    moving_targets=count("moving_target"))
+                    moving_targets=count("moving_target"), levels=tuple(model.levels))
