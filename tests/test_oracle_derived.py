@@ -161,6 +161,8 @@ def test_targets_photos_and_coverage(world: dict[str, Any]) -> None:
         _leaf("target_within_drone_perceived_radius", drone_id="d3", target_id="t1"),
         _leaf("drone_in_target", drone_id="d1", target_id="t2"),
         _leaf("obstacle_within_drone_perceived_radius", drone_id="d2", obstacle_id="o1"),
+        _leaf("obstacle_within_drone_distance", drone_id="d2", obstacle_id="o1",
+              max_distance=10.0),
     ]
     _passed(_fly(world, checks))
 
