@@ -127,10 +127,16 @@ def test_a_file_template_builds_tasks_that_session_files_accept(tmp_path: Path) 
 
 
 # ------------------------------------------------------------------ built-ins as files
-def test_the_basic_templates_are_the_files_in_the_catalogue() -> None:
+def test_the_shipped_files_are_in_the_catalogue() -> None:
     keys = [t.key for t in CATALOGUE if t.category == "basic_operations"]
     assert keys == list(basic.KEYS)
-    assert {p.stem for p in FILES} == set(basic.KEYS)
+    by_key = {t.key: t for t in CATALOGUE}
+    for template in load_templates(basic.FILES):
+        entry = by_key[template.key]
+        assert (entry.category, entry.difficulty, entry.drones, entry.families) == (
+            template.category, template.difficulty, template.drones, template.families)
+    assert {p.stem for p in FILES} >= set(basic.KEYS) | {
+        "checkpoint", "precision_landing", "photo_at_point", "relay_report"}
 
 
 # ------------------------------------------------------------------ placeholders

@@ -81,6 +81,8 @@ def _neutral(data: Any) -> Any:
 
 
 def _sample(key: str, value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _sample(k, v) for k, v in value.items()}
     if not (isinstance(value, str) and value.startswith("{") and value.endswith("}")):
         return value
     if key.endswith("_ids"):
@@ -155,9 +157,11 @@ def _entities(model: TemplateFile, view: SessionView, rng: random.Random) -> dic
 
 
 def _value(spec: ValueSpec, view: SessionView, rng: random.Random) -> Any:
+    if spec.kind == "choice":
+        return rng.choice(spec.options)
     if spec.kind == "point":
-        return view.free_point(rng, clearance_m=spec.clearance_m, region=view.region(
-            *spec.region))
+        region = None if spec.region is None else view.region(*spec.region)
+        return view.free_point(rng, clearance_m=spec.clearance_m, region=region)
     assert spec.min is not None and spec.max is not None
     if spec.kind == "int":
         lo, hi = round(spec.min), round(spec.max)
@@ -178,8 +182,11 @@ def template_of(model: TemplateFile) -> Template:
         checks = filler.structure(model.checks, plan=False)
         b = model.budget
         flight_m = b.flight_m + b.flight_diagonals * math.hypot(view.map_w_m, view.map_h_m)
+        hover_s = b.hover_s
+        if isinstance(hover_s, str):
+            hover_s = float(filler.structure(hover_s, plan=False))
         return TaskDraft(phrasings=phrasings, checks=checks, oracle=plan,  # type: ignore[arg-type]
-                         flight_m=flight_m, hover_s=b.hover_s, steps=b.steps)
+                         flight_m=flight_m, hover_s=hover_s, steps=b.steps)
 
     def count(kind: str) -> int:
         return sum(1 for g in model.entities if g.kind == kind)

@@ -54,22 +54,27 @@ class ValueSpec(_Strict):
     """A named random value drawn once per task (sticky): ``{name}`` everywhere."""
 
     name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
-    kind: Literal["int", "float", "point"] = Field(
+    kind: Literal["int", "float", "point", "choice"] = Field(
         description="int: randint(min, max) (with step: randrange(min, max + 1, step)); float: "
-                    "uniform rounded to decimals; point: a free spot (x, y) in region")
+                    "uniform rounded to decimals; point: a free spot (x, y) in region; choice: "
+                    "one of options")
+    options: list[str | int | float] = Field(default_factory=list,
+                                             description="choice: the values drawn from")
     min: float | None = None
     max: float | None = None
     step: int | None = Field(default=None, ge=1)
     decimals: int = Field(default=1, ge=0, le=6)
-    region: tuple[float, float, float, float] = Field(
-        default=(0.0, 0.0, 1.0, 1.0),
-        description="point: the region as fractions of the map (x0, y0, x1, y1)")
+    region: tuple[float, float, float, float] | None = Field(
+        default=None, description="point: the region as fractions of the map (x0, y0, x1, "
+                                  "y1); default the map less a 30 m margin")
     clearance_m: float = Field(default=15.0, ge=0.0,
                                description="point: least distance to every obstacle")
 
     @model_validator(mode="after")
     def _range(self) -> ValueSpec:
-        if self.kind != "point":
+        if self.kind == "choice" and not self.options:
+            raise ValueError(f"value {self.name!r}: a choice needs options")
+        if self.kind in ("int", "float"):
             if self.min is None or self.max is None:
                 raise ValueError(f"value {self.name!r}: an {self.kind} needs min and max")
             if self.max < self.min:
@@ -84,7 +89,8 @@ class Budget(_Strict):
     flight_m: float = Field(default=0.0, ge=0.0, description="rough flight distance")
     flight_diagonals: float = Field(default=0.0, ge=0.0,
                                     description="flight distance in map diagonals (added)")
-    hover_s: float = Field(default=0.0, ge=0.0)
+    hover_s: float | str = Field(default=0.0, description="seconds, or a value's placeholder "
+                                                          "such as {hover}")
 
 
 class TemplateFile(_Strict):

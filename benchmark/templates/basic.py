@@ -6,13 +6,11 @@ shipped suite is unchanged."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from benchmark.template_files.loader import load_template
+from benchmark.templates.common import FILES
 
 __all__ = ["FILES", "TEMPLATES"]
 
-FILES = Path(__file__).resolve().parent / "files"
 KEYS = ("takeoff_hold", "climb_and_face", "altitude_change", "round_trip_home", "new_home")
 
 TEMPLATES = tuple(load_template(FILES / f"{key}.json") for key in KEYS)

@@ -7,6 +7,7 @@ import math
 import random
 from collections.abc import Sequence
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -18,6 +19,7 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import inspectable as _inspectable
 from benchmark.templates.common import names as _names
@@ -53,30 +55,6 @@ def _spread_points(view: SessionView, rng: random.Random, count: int,
 
 
 # ------------------------------------------------------------------ photos and hovering
-def _photo_at_point(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    x, y = view.free_point(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {fmt_xy(x, y)} at an altitude of {alt} m and take a photo there.",
-            f"Send {d.name} up to {alt} metres over the point {fmt_xy(x, y)} and capture an "
-            f"image once it has arrived.",
-            f"{d.name} should photograph the spot {fmt_xy(x, y)} from {alt} m above it.",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=x, y=y, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_taken_photo", drone_id=d.id, min_count=1,
-                 at_position={"x": x, "y": y}, tolerance=5.0),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": x, "y": y, "z": alt},
-                 {"op": "photo", "drone": d.id}]],
-        flight_m=_diagonal_m(view),
-        steps=3,
-    )
-
-
 def _inspect_target(view: SessionView, rng: random.Random) -> TaskDraft:
     (d,) = pick(rng, view.drones, 1)
     (t,) = pick(rng, _inspectable(view, 1), 1)
@@ -350,7 +328,7 @@ def _sweep_with_photos(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES = (
-    Template("photo_at_point", "search", "easy", _photo_at_point),
+    load_template(FILES / "photo_at_point.json"),
     Template("inspect_target", "search", "medium", _inspect_target),
     Template("inspect_two_targets", "search", "hard", _inspect_two_targets),
     Template("observe_and_hover", "search", "medium", _observe_and_hover),
