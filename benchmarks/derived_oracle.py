@@ -2,7 +2,7 @@
 (hand-written plans off: MAVSWARM_ORACLE=derived).
 
     python benchmarks/derived_oracle.py                 # stratified: 1 session per family x level
-    python benchmarks/derived_oracle.py --index 2       # another stratum draw
+    python benchmarks/derived_oracle.py --index 2 4     # other strata
     python benchmarks/derived_oracle.py --full          # all 125 sessions (slow)
 
 Prints the pass rate overall, per category and per template, and every failed task with its
@@ -25,24 +25,24 @@ ROOT = Path(__file__).resolve().parent.parent
 SESSIONS = ROOT / "benchmark" / "sessions"
 
 
-def _files(full: bool, index: int) -> list[Path]:
+def _files(full: bool, indices: list[int]) -> list[Path]:
     files = sorted(SESSIONS.glob("*.json"))
     if full:
         return files
-    return [f for f in files if f.stem.rsplit("-", 1)[1] == str(index)]
+    return [f for f in files if int(f.stem.rsplit("-", 1)[1]) in indices]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--full", action="store_true", help="every session of the suite")
-    parser.add_argument("--index", type=int, default=1,
-                        help="stratified sample: the session of this index in every "
+    parser.add_argument("--index", type=int, nargs="+", default=[1],
+                        help="stratified sample: the sessions of these indices in every "
                              "family x level cell (1-5)")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--mode", choices=("derived", "hand"), default="derived")
     args = parser.parse_args()
-    files = _files(args.full, args.index)
+    files = _files(args.full, sorted(set(args.index)))
     env = {**os.environ, "MAVSWARM_ORACLE": args.mode,
            "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT),
                                                        os.environ.get("PYTHONPATH", "")]))}
@@ -61,7 +61,8 @@ def main() -> None:
         by_cat[r["category"]].append(r["passed"])
         by_tpl[r["template"]].append(r["passed"])
     passed = sum(r["passed"] for r in records)
-    scope = "full suite" if args.full else f"stratified sample (index {args.index})"
+    scope = "full suite" if args.full else (
+        f"stratified sample (index {', '.join(map(str, sorted(set(args.index))))})")
     print(f"oracle ({args.mode} plans), {scope}: {len(files)} sessions, {len(records)} tasks, "
           f"{wall_s:.0f} s wall")
     print(f"passed {passed}/{len(records)} = {100.0 * passed / max(len(records), 1):.1f} %")
