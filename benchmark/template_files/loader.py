@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import random
@@ -135,10 +136,13 @@ def _pool(view: SessionView, kind: str) -> list[Any]:
     return list(view.scenario.world.obstacles)
 
 
-def _entities(model: TemplateFile, view: SessionView, rng: random.Random) -> dict[str, str]:
-    """Groups of one kind are drawn together, in the order their kind first appears."""
+def _entities(model: TemplateFile, view: SessionView, rng: random.Random
+              ) -> tuple[dict[str, str], dict[str, Any]]:
+    """Placeholders and objects of the entity groups: groups of one kind are drawn together,
+    in the order their kind first appears."""
     from benchmark.templates.base import TemplateUnfit
     out: dict[str, str] = {}
+    objects: dict[str, Any] = {}
     kinds = list(dict.fromkeys(g.kind for g in model.entities))
     for kind in kinds:
         groups = [g for g in model.entities if g.kind == kind]
@@ -153,7 +157,28 @@ def _entities(model: TemplateFile, view: SessionView, rng: random.Random) -> dic
             chosen = [rng.choice(pool) for _ in groups]
         for group, entity in zip(groups, chosen, strict=True):
             out[f"{group.group}_id"], out[f"{group.group}_name"] = entity.id, entity.name
-    return out
+            objects[group.group] = entity
+    return out, objects
+
+
+def _hook(call: str) -> Any:
+    module, _, name = call.partition(":")
+    try:
+        return getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as error:
+        raise TemplateFileError(f"hook {call!r} cannot be loaded: {error}") from None
+
+
+def _values(model: TemplateFile, view: SessionView, rng: random.Random,
+            objects: dict[str, Any]) -> dict[str, Any]:
+    values: dict[str, Any] = {}
+    for spec in model.values:
+        if spec.kind == "hook":
+            assert spec.call is not None
+            values.update(_hook(spec.call)(view, rng, dict(values), objects))
+        else:
+            values[spec.name] = _value(spec, view, rng)
+    return values
 
 
 def _value(spec: ValueSpec, view: SessionView, rng: random.Random) -> Any:
@@ -174,17 +199,16 @@ def template_of(model: TemplateFile) -> Template:
     from benchmark.templates.base import TaskDraft, Template
 
     def build(view: SessionView, rng: random.Random) -> TaskDraft:
-        entities = _entities(model, view, rng)
-        values = {v.name: _value(v, view, rng) for v in model.values}
+        entities, objects = _entities(model, view, rng)
+        values = _values(model, view, rng, objects)
         filler = Filler(rng, view, entities, values)
         phrasings = [filler.text(p) for p in model.phrasings]
         plan = None if model.plan is None else filler.structure(model.plan, plan=True)
         checks = filler.structure(model.checks, plan=False)
         b = model.budget
-        flight_m = b.flight_m + b.flight_diagonals * math.hypot(view.map_w_m, view.map_h_m)
-        hover_s = b.hover_s
-        if isinstance(hover_s, str):
-            hover_s = float(filler.structure(hover_s, plan=False))
+        flight_m, hover_s = (float(filler.structure(v, plan=False)) if isinstance(v, str)
+                             else v for v in (b.flight_m, b.hover_s))
+        flight_m += b.flight_diagonals * math.hypot(view.map_w_m, view.map_h_m)
         return TaskDraft(phrasings=phrasings, checks=checks, oracle=plan,  # type: ignore[arg-type]
                          flight_m=flight_m, hover_s=hover_s, steps=b.steps)
 

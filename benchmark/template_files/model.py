@@ -43,8 +43,10 @@ class _Strict(BaseModel):
 class EntityGroup(_Strict):
     """A group of the session's entities: ``{<group>_id}`` and ``{<group>_name}`` name it."""
 
-    group: str = Field(pattern=r"^(drone|target|obstacle)(_[0-9]+)?$",
-                       description="placeholder stem, e.g. drone_1 (gives {drone_1_id})")
+    group: str = Field(pattern=r"^[a-z][a-z0-9]*(_[0-9]+)?$",
+                       description="placeholder stem, e.g. drone_1 (gives {drone_1_id} and "
+                                   "{drone_1_name}); the reference names drone, target, "
+                                   "obstacle and drone_1 ... target_6")
     kind: Literal["drone", "area_target", "point_target", "moving_target", "station",
                   "target", "obstacle"] = Field(
         description="which entities it is drawn from (target: any target)")
@@ -54,10 +56,14 @@ class ValueSpec(_Strict):
     """A named random value drawn once per task (sticky): ``{name}`` everywhere."""
 
     name: str = Field(pattern=r"^[a-z][a-z0-9_]*$")
-    kind: Literal["int", "float", "point", "choice"] = Field(
+    kind: Literal["int", "float", "point", "choice", "hook"] = Field(
         description="int: randint(min, max) (with step: randrange(min, max + 1, step)); float: "
                     "uniform rounded to decimals; point: a free spot (x, y) in region; choice: "
-                    "one of options")
+                    "one of options; hook: what a named Python function returns")
+    call: str | None = Field(
+        default=None, pattern=r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$",
+        description="hook: module:function called as function(view, rng, values, entities); "
+                    "it returns a dict of named values (merged), for what a file cannot say")
     options: list[str | int | float] = Field(default_factory=list,
                                              description="choice: the values drawn from")
     min: float | None = None
@@ -72,6 +78,8 @@ class ValueSpec(_Strict):
 
     @model_validator(mode="after")
     def _range(self) -> ValueSpec:
+        if self.kind == "hook" and self.call is None:
+            raise ValueError(f"value {self.name!r}: a hook needs call (module:function)")
         if self.kind == "choice" and not self.options:
             raise ValueError(f"value {self.name!r}: a choice needs options")
         if self.kind in ("int", "float"):
@@ -86,7 +94,8 @@ class Budget(_Strict):
     """What the budget (tool calls, simulated seconds) is computed from, as for built-ins."""
 
     steps: int = Field(default=4, ge=1, description="primitive calls of a plan")
-    flight_m: float = Field(default=0.0, ge=0.0, description="rough flight distance")
+    flight_m: float | str = Field(default=0.0, description="rough flight distance (m), or a "
+                                                           "value's placeholder")
     flight_diagonals: float = Field(default=0.0, ge=0.0,
                                     description="flight distance in map diagonals (added)")
     hover_s: float | str = Field(default=0.0, description="seconds, or a value's placeholder "

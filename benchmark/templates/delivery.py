@@ -12,6 +12,7 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -23,10 +24,10 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES, spread_points
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import nearest_first as _nearest_first
-from benchmark.templates.common import spread_points
 
 __all__ = ["AREA_SIDE_M", "TEMPLATES"]
 
@@ -61,30 +62,13 @@ def _ends(drone_id: str, point: Point, landings: int) -> list[Node]:
             leaf("drone_on_ground", drone_id=drone_id, tolerance=0.5)]
 
 
-def _parcel_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
+def parcel_spots(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of parcel_delivery.json: pickup and drop spots 150 m apart or more, and the
+    distance between them (for the budget)."""
     pickup, drop = _spots(view, rng, 2, 150.0)
-    p, q = fmt_xy(*pickup), fmt_xy(*drop)
-    return TaskDraft(
-        phrasings=[
-            f"Deliver a parcel with {d.name}: fly at {alt} m to the pickup point {p} and land "
-            f"there to collect it, then take off again, fly to the drop-off point {q} and land "
-            f"there.",
-            f"{d.name} picks up a package at {p} (land on the spot) and brings it to {q}, "
-            f"where it lands again. Cruise at {alt} metres between the stops.",
-            f"Parcel run for {d.name}: touch down at {p} for the pickup, then carry the parcel "
-            f"at {alt} m altitude to {q} and finish on the ground there.",
-        ],
-        checks=all_of(
-            _landed_at(d.id, pickup),
-            _landed_at(d.id, drop),
-            *_ends(d.id, drop, 2),
-        ),
-        oracle=[_land_ops(d.id, [pickup, drop], alt)],
-        flight_m=math.dist(pickup, drop) + _diagonal_m(view),
-        steps=6,
-    )
+    return {"pickup": pickup, "drop": drop, "flight": math.dist(pickup, drop)}
+
 
 
 def _multi_drop(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -151,7 +135,7 @@ def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES = (
-    Template("parcel_delivery", "delivery", "medium", _parcel_delivery),
+    load_template(FILES / "parcel_delivery.json"),
     Template("multi_drop", "delivery", "medium", _multi_drop),
     Template("team_delivery", "delivery", "hard", _team_delivery, drones=2),
 )

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import math
 import random
+from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -21,6 +23,7 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
 from benchmark.validators.targets import TRACKING_WINDOW_S
@@ -119,24 +122,11 @@ def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _photo(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Photograph the moving target {_where(target)} with {drone.name}'s camera, "
-            f"flying at {alt} m.",
-            f"Take a picture of {target.name} with {drone.name}: it does not stand still, it "
-            f"moves around {fmt_xy(*_middle(target))}. Use {alt} m altitude.",
-            f"{drone.name}: catch up with {target.name} (around {fmt_xy(*_middle(target))}) "
-            f"at {alt} m and take a photo with it in view.",
-        ],
-        checks=leaf("target_in_photo_taken_by_drone", drone_id=drone.id, target_id=target.id),
-        oracle=[[{"op": "photo_target", "drone": drone.id, "target": target.id,
-                  "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=60.0, steps=8,
-    )
+def track_middle(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of photograph_moving_target.json: the middle of the moving target's track."""
+    return {"mid": _middle(entities["target_1"])}
+
 
 
 # ------------------------------------------------------------------ teams
@@ -204,8 +194,7 @@ TEMPLATES: tuple[Template, ...] = (
              families=_FAMILY),
     Template("intercept_in_zone", _CATEGORY, "medium", _intercept, moving_targets=1,
              families=_FAMILY),
-    Template("photograph_moving_target", _CATEGORY, "easy", _photo, moving_targets=1,
-             families=_FAMILY),
+    load_template(FILES / "photograph_moving_target.json"),
     Template("track_every_moving_target", _CATEGORY, "hard", _all_tracked, drones=2,
              moving_targets=2, families=_FAMILY),
     Template("hand_over_target", _CATEGORY, "hard", _handover, drones=2, moving_targets=1,
