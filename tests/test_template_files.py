@@ -22,6 +22,7 @@ from benchmark.template_files import (
     TemplateFileError,
     dump_template,
     json_schema,
+    load_template,
     load_templates,
     read_template,
     schema_text,
@@ -137,6 +138,8 @@ def test_the_shipped_files_are_in_the_catalogue() -> None:
             template.category, template.difficulty, template.drones, template.families)
     assert {p.stem for p in FILES} >= set(basic.KEYS) | {
         "checkpoint", "precision_landing", "photo_at_point", "relay_report"}
+    files = {t.key for t in load_templates(basic.FILES)}
+    assert {t.category for t in CATALOGUE if t.key in files} == set(CATEGORIES)
 
 
 # ------------------------------------------------------------------ placeholders
@@ -251,3 +254,27 @@ def test_file_templates_fit_the_families_they_name(family: str) -> None:
             assert template.fits(v), template.key
         if template.families:
             assert template.fits(v) == (family in template.families), template.key
+
+
+def test_hooks_entity_positions_faults_and_keys_are_filled(tmp_path: Path) -> None:
+    data = _minimal(
+        entities=[{"group": "drone_1", "kind": "drone"}, {"group": "spot", "kind": "inspectable"}],
+        values=[{"name": "alt", "kind": "int", "min": 10, "max": 20},
+                {"name": "extra", "kind": "hook",
+                 "call": "benchmark.templates.resilience:lossy_delivery"}],
+        phrasings=["{drone_1_name} from {drone_1_xy} to {spot_name} at {spot_xy}, then {drop}."],
+        faults={"link": {"seed": "{link_seed}", "vehicles": {"{drone_1_id}": {
+            "uplink": {"loss": 0.1}}}}})
+    template = template_of(read_template(_write(tmp_path, data)))
+    task = build_task(template, view(), random.Random(5), "t01")
+    vehicles = task["faults"]["link"]["vehicles"]
+    drone = next(iter(vehicles))
+    assert drone in {d.id for d in view().drones}
+    assert isinstance(task["faults"]["link"]["seed"], int)
+    assert re.fullmatch(r"Drone \d+ from \(\d+, \d+\) to .+ at \(\d+, \d+\), then "
+                        r"\(\d+, \d+\)\.", task["text"]), task["text"]
+    bad = _minimal(values=[{"name": "x", "kind": "hook", "call": "nowhere.at_all:f"}])
+    path = _write(tmp_path, bad, "bad_hook.json")
+    with pytest.raises(TemplateFileError, match=r"bad_hook\.json: values\[0\]\.call: hook "
+                                                r"'nowhere.at_all:f' cannot be loaded"):
+        load_template(path)

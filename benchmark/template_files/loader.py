@@ -94,8 +94,16 @@ def _sample(key: str, value: Any) -> Any:
 
 
 def load_template(path: str | Path) -> Template:
-    """The `Template` of one file (raises TemplateFileError)."""
-    return template_of(read_template(path))
+    """The `Template` of one file (raises TemplateFileError; a hook that cannot be loaded is
+    named with the file)."""
+    model = read_template(path)
+    for k, spec in enumerate(model.values):
+        if spec.call is not None:
+            try:
+                _hook(spec.call)
+            except TemplateFileError as error:
+                raise TemplateFileError(f"{path}: values[{k}].call: {error}") from None
+    return template_of(model)
 
 
 def load_templates(folder: str | Path) -> list[Template]:
@@ -131,6 +139,8 @@ _POOLS = {"drone": "drones", "area_target": "areas", "point_target": "points",
 def _pool(view: SessionView, kind: str) -> list[Any]:
     if kind in _POOLS:
         return list(getattr(view, _POOLS[kind]))
+    if kind == "inspectable":
+        return [t for t in view.points if t.kind == "fixed"] + list(view.areas)
     if kind == "target":
         return list(view.scenario.world.targets)
     return list(view.scenario.world.obstacles)
@@ -157,6 +167,9 @@ def _entities(model: TemplateFile, view: SessionView, rng: random.Random
             chosen = [rng.choice(pool) for _ in groups]
         for group, entity in zip(groups, chosen, strict=True):
             out[f"{group.group}_id"], out[f"{group.group}_name"] = entity.id, entity.name
+            where = getattr(entity, "position_m", None) or getattr(entity, "center_m", None)
+            if where is not None:
+                out[f"{group.group}_xy"] = f"({where[0]:.0f}, {where[1]:.0f})"
             objects[group.group] = entity
     return out, objects
 
@@ -209,8 +222,9 @@ def template_of(model: TemplateFile) -> Template:
         flight_m, hover_s = (float(filler.structure(v, plan=False)) if isinstance(v, str)
                              else v for v in (b.flight_m, b.hover_s))
         flight_m += b.flight_diagonals * math.hypot(view.map_w_m, view.map_h_m)
+        faults = None if model.faults is None else filler.structure(model.faults, plan=True)
         return TaskDraft(phrasings=phrasings, checks=checks, oracle=plan,  # type: ignore[arg-type]
-                         flight_m=flight_m, hover_s=hover_s, steps=b.steps)
+                         flight_m=flight_m, hover_s=hover_s, steps=b.steps, faults=faults)
 
     def count(kind: str) -> int:
         return sum(1 for g in model.entities if g.kind == kind)

@@ -29,8 +29,8 @@ FORMAT: Literal["mavswarm.template/1"] = "mavswarm.template/1"
 CATEGORIES = ("basic_operations", "navigation", "search", "multi_drone_coordination",
               "delivery", "communication", "battery_management", "target_tracking",
               "resilience")  # benchmark.templates.base.CATEGORIES (a test keeps them equal)
-ENTITY_KINDS = ("drone", "area_target", "point_target", "moving_target", "station", "target",
-                "obstacle")
+ENTITY_KINDS = ("drone", "area_target", "point_target", "moving_target", "station",
+                "inspectable", "target", "obstacle")
 FAMILIES = ("area_search", "area_assignment_and_patrol", "target_assignment",
             "target_tracking", "resilience")
 LEVELS = ("easy", "moderate", "intermediate", "hard", "extreme")
@@ -48,8 +48,9 @@ class EntityGroup(_Strict):
                                    "{drone_1_name}); the reference names drone, target, "
                                    "obstacle and drone_1 ... target_6")
     kind: Literal["drone", "area_target", "point_target", "moving_target", "station",
-                  "target", "obstacle"] = Field(
-        description="which entities it is drawn from (target: any target)")
+                  "inspectable", "target", "obstacle"] = Field(
+        description="which entities it is drawn from (inspectable: fixed point targets, then "
+                    "area targets; target: any target)")
 
 
 class ValueSpec(_Strict):
@@ -125,6 +126,9 @@ class TemplateFile(_Strict):
     plan: list[list[dict[str, Any]]] | None = Field(
         default=None, description="optional hand plan (phases of oracle operations)")
     budget: Budget = Field(default_factory=Budget)
+    faults: dict[str, Any] | None = Field(
+        default=None, description="hidden faults (benchmark.task_faults), placeholders in "
+                                  "strings and keys")
 
     @field_validator("category")
     @classmethod

@@ -77,7 +77,7 @@ class Filler:
     def structure(self, data: Any, *, plan: bool) -> Any:
         """Checks (plan=False) or a plan with every placeholder filled."""
         if isinstance(data, Mapping):
-            out = {str(k): self.structure(v, plan=plan) for k, v in data.items()}
+            out = {self.text(str(k)): self.structure(v, plan=plan) for k, v in data.items()}
             if "expect" in out and isinstance(out["expect"], str):
                 word = out["expect"].strip().lower()
                 if word in ("true", "false"):

@@ -8,6 +8,7 @@ import random
 
 import shapely
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -18,6 +19,7 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
 from benchmark.templates.common import target_xy as _xy
@@ -205,38 +207,6 @@ def _sweep_line(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ shared targets
-def _double_check_target(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    (t,) = pick(rng, _inspectable(view, 1), 1)
-    alt = rng.randint(14, 24)
-    return TaskDraft(
-        phrasings=[
-            f"Double-check {t.name} at {_xy(t)}: take off both {a.name} and {b.name} to {alt} m "
-            f"and fly each of them over the target at that altitude, so that two drones have "
-            f"reached it.",
-            f"Both {a.name} and {b.name} must reach {t.name} (around {_xy(t)}). Launch each to "
-            f"exactly {alt} metres and keep that altitude on the way.",
-            f"Send two drones, {a.name} and {b.name}, to {t.name} near {_xy(t)}, both taking "
-            f"off to {alt} m; the target counts as confirmed once both have flown over it.",
-        ],
-        checks=all_of(
-            leaf("drone_has_taken_off", drone_id=a.id, min_altitude=float(alt),
-                 max_altitude=float(alt), tolerance=1.5),
-            leaf("drone_has_taken_off", drone_id=b.id, min_altitude=float(alt),
-                 max_altitude=float(alt), tolerance=1.5),
-            leaf("target_reached_drone_number", target_id=t.id, expected_count=2),
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=b.id),
-        ),
-        oracle=[[{"op": "takeoff", "drone": a.id, "altitude_m": alt},
-                 {"op": "takeoff", "drone": b.id, "altitude_m": alt}],
-                [{"op": "reach", "drone": a.id, "target": t.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": t.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view),
-        steps=4,
-    )
-
-
 def _cross_check_targets(view: SessionView, rng: random.Random) -> TaskDraft:
     a, b = pick(rng, view.drones, 2)
     first, second = pick(rng, _inspectable(view, 2), 2)
@@ -271,6 +241,6 @@ TEMPLATES = (
     Template("rendezvous", _CATEGORY, "medium", _rendezvous, drones=3),
     Template("fleet_launch", _CATEGORY, "easy", _fleet_launch),
     Template("sweep_line", _CATEGORY, "hard", _sweep_line, drones=3),
-    Template("double_check_target", _CATEGORY, "medium", _double_check_target, drones=2),
+    load_template(FILES / "double_check_target.json"),
     Template("cross_check_targets", _CATEGORY, "hard", _cross_check_targets, drones=2),
 )
