@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import random
+from typing import Any
 
 import shapely
 
@@ -22,7 +23,6 @@ from benchmark.templates.base import (
 from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
-from benchmark.templates.common import target_xy as _xy
 from emulator.world import Target
 
 __all__ = ["TEMPLATES"]
@@ -207,33 +207,12 @@ def _sweep_line(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ shared targets
-def _cross_check_targets(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    first, second = pick(rng, _inspectable(view, 2), 2)
-    alt = view.cruise_altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Cross-check two targets with {a.name} and {b.name}: each drone has to fly over "
-            f"both {first.name} at {_xy(first)} and {second.name} at {_xy(second)}.",
-            f"{a.name} and {b.name} must both reach {first.name} at {_xy(first)} as well as "
-            f"{second.name} at {_xy(second)}; the order is up to you.",
-            f"Have every one of {a.name} and {b.name} pass over {first.name} near {_xy(first)} "
-            f"and over {second.name} near {_xy(second)}, so both targets are confirmed by two "
-            f"drones.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=first.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=second.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=first.id, drone_id=b.id),
-            leaf("target_is_reached_by_drone", target_id=second.id, drone_id=b.id),
-        ),
-        oracle=[[{"op": "reach", "drone": a.id, "target": first.id, "altitude_m": alt},
-                 {"op": "reach", "drone": a.id, "target": second.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": second.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": first.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view) + math.dist(first.position_m[:2], second.position_m[:2]),
-        steps=6,
-    )
+def targets_apart(view: SessionView, rng: random.Random, values: dict[str, Any],
+                  entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of cross_check_targets.json: the distance between the two targets (budget)."""
+    first, second = entities["target_1"], entities["target_2"]
+    return {"flight": math.dist(first.position_m[:2], second.position_m[:2])}
+
 
 
 TEMPLATES = (
@@ -242,5 +221,5 @@ TEMPLATES = (
     Template("fleet_launch", _CATEGORY, "easy", _fleet_launch),
     Template("sweep_line", _CATEGORY, "hard", _sweep_line, drones=3),
     load_template(FILES / "double_check_target.json"),
-    Template("cross_check_targets", _CATEGORY, "hard", _cross_check_targets, drones=2),
+    load_template(FILES / "cross_check_targets.json"),
 )
