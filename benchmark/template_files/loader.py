@@ -132,6 +132,9 @@ def dump_template(model: TemplateFile) -> str:
 
 
 # ------------------------------------------------------------------ building
+_WORDS = {"drone": "drone", "area_target": "area target", "point_target": "fixed target",
+          "moving_target": "moving target", "station": "charging station",
+          "inspectable": "point or area target", "target": "target", "obstacle": "obstacle"}
 _POOLS = {"drone": "drones", "area_target": "areas", "point_target": "points",
           "moving_target": "movers", "station": "stations"}
 
@@ -158,11 +161,12 @@ def _entities(model: TemplateFile, view: SessionView, rng: random.Random
         groups = [g for g in model.entities if g.kind == kind]
         pool = _pool(view, kind)
         if not pool:
-            raise TemplateUnfit(f"the session has no {kind}")
+            raise TemplateUnfit(f"the session has no {_WORDS[kind]}")
         if model.distinct and len(pool) >= len(groups):
             chosen = rng.sample(pool, len(groups))
         elif model.distinct:
-            raise TemplateUnfit(f"{len(groups)} distinct {kind}s wanted, {len(pool)} here")
+            raise TemplateUnfit(f"{len(groups)} distinct {_WORDS[kind]}s wanted, "
+                                f"{len(pool)} here")
         else:
             chosen = [rng.choice(pool) for _ in groups]
         for group, entity in zip(groups, chosen, strict=True):
@@ -222,9 +226,11 @@ def template_of(model: TemplateFile) -> Template:
         flight_m, hover_s = (float(filler.structure(v, plan=False)) if isinstance(v, str)
                              else v for v in (b.flight_m, b.hover_s))
         flight_m += b.flight_diagonals * math.hypot(view.map_w_m, view.map_h_m)
+        steps = b.steps if isinstance(b.steps, int) else int(filler.structure(b.steps,
+                                                                               plan=True))
         faults = None if model.faults is None else filler.structure(model.faults, plan=True)
         return TaskDraft(phrasings=phrasings, checks=checks, oracle=plan,  # type: ignore[arg-type]
-                         flight_m=flight_m, hover_s=hover_s, steps=b.steps, faults=faults)
+                         flight_m=flight_m, hover_s=hover_s, steps=steps, faults=faults)
 
     def count(kind: str) -> int:
         return sum(1 for g in model.entities if g.kind == kind)

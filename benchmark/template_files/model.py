@@ -94,7 +94,8 @@ class ValueSpec(_Strict):
 class Budget(_Strict):
     """What the budget (tool calls, simulated seconds) is computed from, as for built-ins."""
 
-    steps: int = Field(default=4, ge=1, description="primitive calls of a plan")
+    steps: int | str = Field(default=4, description="primitive calls of a plan, or a value's "
+                                                    "placeholder")
     flight_m: float | str = Field(default=0.0, description="rough flight distance (m), or a "
                                                            "value's placeholder")
     flight_diagonals: float = Field(default=0.0, ge=0.0,

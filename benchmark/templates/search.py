@@ -123,27 +123,11 @@ def _photo_series(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ area coverage
-def _area_sweep(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    (t,) = pick(rng, view.areas, 1)
-    alt = view.cruise_altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Use {d.name} to search {t.name} (centred near {_xy(t)}) completely: fly over it "
-            f"in a pattern that covers at least 95 % of its surface.",
-            f"{d.name} alone must sweep the whole of {t.name} around {_xy(t)}, leaving no more "
-            f"than 5 % of the area unsearched (95 % coverage or better).",
-            f"Cover {t.name}, located around {_xy(t)}, with {d.name}: at least 95 % of the "
-            f"area has to be flown over and searched.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=d.id),
-            leaf("target_is_fully_searched", target_id=t.id, coverage_threshold=0.95),
-        ),
-        oracle=[[{"op": "sweep", "drones": [d.id], "target": t.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view) + _sweep_m(t, d.task_radius_m),
-        steps=3,
-    )
+def sweep_length(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of area_sweep.json: the rough length of a sweep of the area (budget)."""
+    return {"flight": _sweep_m(entities["area_1"], entities["drone_1"].task_radius_m)}
+
 
 
 def _team_area_sweep(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -290,8 +274,7 @@ TEMPLATES = (
     Template("inspect_two_targets", "search", "hard", _inspect_two_targets),
     load_template(FILES / "observe_and_hover.json"),
     Template("photo_series", "search", "medium", _photo_series),
-    Template("area_sweep", "search", "hard", _area_sweep, area_targets=1,
-             families=_AREA_FAMILIES),
+    load_template(FILES / "area_sweep.json"),
     Template("team_area_sweep", "search", "hard", _team_area_sweep, drones=2, area_targets=1,
              families=_AREA_FAMILIES),
     Template("two_area_search", "search", "hard", _two_area_search, drones=2, area_targets=2,

@@ -68,27 +68,14 @@ def _altitude(rng: random.Random) -> int:
 
 
 # ------------------------------------------------------------------ one drone, one target
-def _follow(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
-    seconds = rng.choice((20, 30, 40, 60))
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Find {_where(target)} with {drone.name} and follow it for at least {seconds} s, "
-            f"flying at {alt} m and staying within your task radius of it.",
-            f"{drone.name} must track the moving target {target.name} for {seconds} seconds "
-            f"without losing it. It moves around {fmt_xy(*_middle(target))}; fly at {alt} m.",
-            f"Tracking job: keep {target.name}, which moves around "
-            f"{fmt_xy(*_middle(target))}, within {drone.name}'s task radius for {seconds} s "
-            f"(altitude {alt} m).",
-        ],
-        checks=leaf("moving_target_tracked", target_id=target.id, drone_id=drone.id,
-                    min_duration=float(seconds + TRACKING_WINDOW_S)),
-        oracle=[[{"op": "track", "drone": drone.id, "target": target.id,
-                  "duration_s": seconds, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=seconds + 30.0, steps=_follow_steps(seconds),
-    )
+def follow_terms(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of follow_moving_target.json: where the target moves, the tracked time the check
+    asks for, and the budget of following it."""
+    seconds = values["seconds"]
+    return {"mid": _middle(entities["target_1"]), "tracked_s": seconds + TRACKING_WINDOW_S,
+            "hold_s": seconds + 30.0, "steps": _follow_steps(seconds)}
+
 
 
 def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -190,8 +177,7 @@ def _handover(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES: tuple[Template, ...] = (
-    Template("follow_moving_target", _CATEGORY, "medium", _follow, moving_targets=1,
-             families=_FAMILY),
+    load_template(FILES / "follow_moving_target.json"),
     Template("intercept_in_zone", _CATEGORY, "medium", _intercept, moving_targets=1,
              families=_FAMILY),
     load_template(FILES / "photograph_moving_target.json"),
