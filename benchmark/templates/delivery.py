@@ -71,28 +71,15 @@ def parcel_spots(view: SessionView, rng: random.Random, values: dict[str, Any],
 
 
 
-def _multi_drop(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    drops = _nearest_first(_home_xy(view, view.drones.index(d)), _spots(view, rng, 3, 100.0))
-    listed = ", ".join(fmt_xy(*p) for p in drops)
-    return TaskDraft(
-        phrasings=[
-            f"{d.name} has three parcels to drop off. Flying at {alt} m, land at each of these "
-            f"points in this order: {listed}. It stays on the ground at the last one.",
-            f"Make three delivery stops with {d.name} at cruise altitude {alt} metres: land at "
-            f"{listed}, one after another, and remain landed at the final stop.",
-            f"Drop-off round for {d.name}: touch down in turn at {listed} (travel at {alt} m "
-            f"between stops) and end the round on the ground at the third point.",
-        ],
-        checks=all_of(
-            *(_landed_at(d.id, p) for p in drops),
-            *_ends(d.id, drops[-1], 3),
-        ),
-        oracle=[_land_ops(d.id, drops, alt)],
-        flight_m=tour_length(drops) + _diagonal_m(view),
-        steps=9,
-    )
+def drop_round(view: SessionView, rng: random.Random, values: dict[str, Any],
+               entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of multi_drop.json: three drop spots, nearest first from the drone's home, as
+    listed in the text, and the round's length (budget)."""
+    drone = entities["drone_1"]
+    drops = _nearest_first(_home_xy(view, view.drones.index(drone)), _spots(view, rng, 3, 100.0))
+    return {"drop1": drops[0], "drop2": drops[1], "drop3": drops[2],
+            "listed": ", ".join(fmt_xy(*p) for p in drops), "flight": tour_length(drops)}
+
 
 
 def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -136,6 +123,6 @@ def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
 
 TEMPLATES = (
     load_template(FILES / "parcel_delivery.json"),
-    Template("multi_drop", "delivery", "medium", _multi_drop),
+    load_template(FILES / "multi_drop.json"),
     Template("team_delivery", "delivery", "hard", _team_delivery, drones=2),
 )

@@ -78,9 +78,11 @@ def follow_terms(view: SessionView, rng: random.Random, values: dict[str, Any],
 
 
 
-def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
+def intercept_zone(view: SessionView, rng: random.Random, values: dict[str, Any],
+                   entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of intercept_in_zone.json: a zone on the moving target's track (and its radius),
+    and where the target moves."""
+    target = entities["target_1"]
     points = track_points(target)
     if len(points) < 2:
         raise TemplateUnfit(f"{target.id} does not move")
@@ -89,24 +91,9 @@ def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
     (ax, ay), (bx, by) = points[k], points[k + 1]
     zx, zy = float(round(ax + f * (bx - ax))), float(round(ay + f * (by - ay)))
     radius = float(rng.randint(10, 15))
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Intercept {_where(target)} with {drone.name} while the target is inside the "
-            f"zone of {radius:.0f} m around {fmt_xy(zx, zy)}: it passes through the zone and "
-            f"leaves it again. Fly at {alt} m.",
-            f"{drone.name} has to reach the moving target {target.name} at a moment when it "
-            f"is within {radius:.0f} m of {fmt_xy(zx, zy)} (it moves around "
-            f"{fmt_xy(*_middle(target))}); altitude {alt} m.",
-            f"Catch {target.name} inside the {radius:.0f} m zone centred on {fmt_xy(zx, zy)} "
-            f"using {drone.name} at {alt} metres, before it moves out of the zone.",
-        ],
-        checks=leaf("moving_target_reached_in_zone", target_id=target.id, drone_id=drone.id,
-                    x=zx, y=zy, radius=radius),
-        oracle=[[{"op": "intercept", "drone": drone.id, "target": target.id,
-                  "zone": [zx, zy, radius], "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=90.0, steps=8,
-    )
+    return {"zone": (zx, zy), "radius": radius, "radius_m": f"{radius:.0f}",
+            "mid": _middle(target)}
+
 
 
 def track_middle(view: SessionView, rng: random.Random, values: dict[str, Any],
@@ -178,8 +165,7 @@ def _handover(view: SessionView, rng: random.Random) -> TaskDraft:
 
 TEMPLATES: tuple[Template, ...] = (
     load_template(FILES / "follow_moving_target.json"),
-    Template("intercept_in_zone", _CATEGORY, "medium", _intercept, moving_targets=1,
-             families=_FAMILY),
+    load_template(FILES / "intercept_in_zone.json"),
     load_template(FILES / "photograph_moving_target.json"),
     Template("track_every_moving_target", _CATEGORY, "hard", _all_tracked, drones=2,
              moving_targets=2, families=_FAMILY),
