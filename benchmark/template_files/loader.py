@@ -88,8 +88,10 @@ def _sample(key: str, value: Any) -> Any:
         return value
     if key.endswith("_ids"):
         return ["d1"]
-    if key.endswith("_id") or key in ("content", "mode", "expected_status"):
-        return {"mode": "all_pairs", "expected_status": "hovering"}.get(key, "x1")
+    if key in ("mode", "expected_status"):
+        return {"mode": "all_pairs", "expected_status": "hovering"}[key]
+    if key.endswith("_id") or key == "content":
+        return value  # distinct placeholders stand for distinct entities
     return 1.0
 
 

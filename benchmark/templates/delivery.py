@@ -15,17 +15,12 @@ from typing import Any
 from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
-    TaskDraft,
-    Template,
     TemplateUnfit,
-    all_of,
     fmt_xy,
     leaf,
-    pick,
     tour_length,
 )
 from benchmark.templates.common import FILES, spread_points
-from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import nearest_first as _nearest_first
 
@@ -82,47 +77,23 @@ def drop_round(view: SessionView, rng: random.Random, values: dict[str, Any],
 
 
 
-def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    alt = rng.randint(15, 30)
+def two_rounds(view: SessionView, rng: random.Random, values: dict[str, Any],
+               entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of team_delivery.json: a pickup and a drop spot per drone, the drops 100 m apart
+    or more, and the longer leg (budget)."""
     for _ in range(_TRIES):
         pick_a, drop_a, pick_b, drop_b = _spots(view, rng, 4, 60.0)
         if math.dist(drop_a, drop_b) >= 100.0:
             break
     else:
         raise TemplateUnfit("no two drop points 100 m apart")
-    plans = ((a, pick_a, drop_a), (b, pick_b, drop_b))
-    checks: list[Node] = []
-    ops: list[Node] = []
-    for drone, pickup, drop in plans:
-        checks.extend([_landed_at(drone.id, pickup), _landed_at(drone.id, drop),
-                       *_ends(drone.id, drop, 2)])
-        ops.extend(_land_ops(drone.id, [pickup, drop], alt))
-    checks.append(leaf("two_drones_distance", drone_1_id=a.id, drone_2_id=b.id,
-                       min_distance=30.0))
-    pa, qa, pb, qb = (fmt_xy(*p) for p in (pick_a, drop_a, pick_b, drop_b))
-    return TaskDraft(
-        phrasings=[
-            f"Two deliveries at once, both flown at {alt} m. {a.name} lands at {pa} to pick up "
-            f"its parcel and then lands at {qa} to drop it; {b.name} lands at {pb} to pick up "
-            f"and then at {qb} to drop. Both end on the ground at their drop points, at least "
-            f"30 m from each other.",
-            f"Team delivery at {alt} metres: {a.name} goes {pa} -> {qa} and {b.name} goes "
-            f"{pb} -> {qb}, landing at every stop. They finish landed at their drop-off "
-            f"points, no closer than 30 m to each other.",
-            f"Have {a.name} collect a parcel by landing at {pa} and deliver it by landing at "
-            f"{qa}, while {b.name} does the same from {pb} to {qb}; cruise at {alt} m. Both "
-            f"stay on the ground at their drop points, 30 m or more apart.",
-        ],
-        checks=all_of(*checks),
-        oracle=[ops],
-        flight_m=max(math.dist(pick_a, drop_a), math.dist(pick_b, drop_b)) + _diagonal_m(view),
-        steps=12,
-    )
+    return {"pick_a": pick_a, "drop_a": drop_a, "pick_b": pick_b, "drop_b": drop_b,
+            "flight": max(math.dist(pick_a, drop_a), math.dist(pick_b, drop_b))}
+
 
 
 TEMPLATES = (
     load_template(FILES / "parcel_delivery.json"),
     load_template(FILES / "multi_drop.json"),
-    Template("team_delivery", "delivery", "hard", _team_delivery, drones=2),
+    load_template(FILES / "team_delivery.json"),
 )

@@ -241,31 +241,13 @@ def _search_progress(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _sweep_with_photos(view: SessionView, rng: random.Random) -> TaskDraft:
-    team = pick(rng, view.drones, 3)
-    (t,) = pick(rng, view.areas, 1)
-    alt = view.cruise_altitude(rng)
+def team_sweep_length(view: SessionView, rng: random.Random, values: dict[str, Any],
+                      entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of sweep_with_photos.json: each drone's share of the sweep (budget)."""
+    team = [entities[f"drone_{k}"] for k in (1, 2, 3)]
     radius = min(d.task_radius_m for d in team)
-    return TaskDraft(
-        phrasings=[
-            f"Sweep {t.name} (centred near {_xy(t)}) with {_names(team)} until at least 85 % of "
-            f"it is searched, and have each of the three drones take at least one photo while "
-            f"over the area.",
-            f"{_names(team)} must jointly search {t.name} around {_xy(t)} to 85 % coverage or "
-            f"more; every one of them also takes a photo above the area.",
-            f"Coordinated sweep: cover no less than 85 % of {t.name} near {_xy(t)} using "
-            f"{_names(team)}, each drone photographing the area at least once from above.",
-        ],
-        checks=all_of(
-            leaf("target_searched_area_percentage", target_id=t.id, expected_percentage=0.85),
-            *(leaf("drone_has_taken_photo", drone_id=d.id, min_count=1) for d in team),
-        ),
-        oracle=[[{"op": "sweep", "drones": [d.id for d in team], "target": t.id,
-                  "altitude_m": alt}],
-                [{"op": "photo", "drone": d.id} for d in team]],
-        flight_m=_diagonal_m(view) + 1.2 * _sweep_m(t, radius) / len(team),
-        steps=12,
-    )
+    return {"flight": 1.2 * _sweep_m(entities["area_1"], radius) / len(team)}
+
 
 
 TEMPLATES = (
@@ -281,6 +263,5 @@ TEMPLATES = (
              families=_AREA_FAMILIES),
     Template("search_progress", "search", "hard", _search_progress, area_targets=1,
              families=_AREA_FAMILIES),
-    Template("sweep_with_photos", "search", "hard", _sweep_with_photos, drones=3,
-             area_targets=1, families=_AREA_FAMILIES),
+    load_template(FILES / "sweep_with_photos.json"),
 )
