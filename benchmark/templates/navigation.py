@@ -180,9 +180,11 @@ def _patrol_loop(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _compass_legs(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
+def compass_start(view: SessionView, rng: random.Random, values: dict[str, Any],
+                  entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of compass_legs.json: leg lengths and a start whose north-then-east legs are
+    clear at the altitude, the checks' 90 % of each, and the flight (budget)."""
+    alt = values["alt"]
     for _ in range(_TRIES):
         north, east = rng.randint(60, 150), rng.randint(60, 150)
         sx, sy = view.free_point(rng, region=(30.0, 30.0, view.map_w_m - 30.0 - east,
@@ -193,31 +195,10 @@ def _compass_legs(view: SessionView, rng: random.Random) -> TaskDraft:
             break
     else:
         raise TemplateUnfit("no clear north-then-east legs")
-    start = fmt_xy(sx, sy)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {start} at {alt} m. From there, fly straight north for {north} m, "
-            f"then straight east for {east} m.",
-            f"{d.name}: go to the start point {start} ({alt} metres up), then move {north} m "
-            f"due north in a straight line and after that {east} m due east.",
-            f"Starting over {start} at {alt} m altitude, {d.name} should fly a straight leg of "
-            f"{north} m heading north (0 degrees), then a straight leg of {east} m heading east "
-            f"(90 degrees).",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=sx, y=sy, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_moved_directed_distance", drone_id=d.id,
-                 min_distance=float(round(0.9 * north, 1)), heading=0.0, tolerance=5.0),
-            leaf("drone_has_moved_directed_distance", drone_id=d.id,
-                 min_distance=float(round(0.9 * east, 1)), heading=90.0, tolerance=5.0),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": sx, "y": sy, "z": alt},
-                 {"op": "towards", "drone": d.id, "heading_deg": 0.0, "distance_m": north},
-                 {"op": "towards", "drone": d.id, "heading_deg": 90.0, "distance_m": east}]],
-        flight_m=north + east + _diagonal_m(view),
-        steps=4,
-    )
+    return {"start": (sx, sy), "north": north, "east": east,
+            "north_min": round(0.9 * north, 1), "east_min": round(0.9 * east, 1),
+            "flight": north + east}
+
 
 
 def _long_survey(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -291,7 +272,7 @@ TEMPLATES = (
     load_template(FILES / "checkpoint.json"),
     Template("waypoint_tour", "navigation", "medium", _waypoint_tour),
     Template("patrol_loop", "navigation", "medium", _patrol_loop),
-    Template("compass_legs", "navigation", "medium", _compass_legs),
+    load_template(FILES / "compass_legs.json"),
     load_template(FILES / "precision_landing.json"),
     Template("long_survey", "navigation", "hard", _long_survey),
     Template("dual_survey", "navigation", "hard", _dual_survey, drones=2),
