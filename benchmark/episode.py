@@ -184,17 +184,20 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
 
 
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
-                category: str, agent: str, trial: int) -> dict[str, Any]:
-    """The fields that name a task's record."""
+                category: str, agent: str, trial: int, fingerprint: str | None = None
+                ) -> dict[str, Any]:
+    """The fields that name a task's record; fingerprint: its session file's
+    (benchmark.fingerprint), None when the session could not be read."""
     return {"key": record_key(session_id, task_id, agent, trial), "session": session_id,
             "family": family, "level": level, "task": task_id, "template": template,
-            "category": category, "agent": agent, "trial": trial}
+            "category": category, "agent": agent, "trial": trial, "fingerprint": fingerprint}
 
 
 def _base_record(session: Session, task: TaskSpec, agent: str, trial: int) -> dict[str, Any]:
+    from benchmark.fingerprint import session_fingerprint
     return base_record(session_id=session.id, family=session.family, level=session.level,
                        task_id=task.id, template=task.template, category=task.category,
-                       agent=agent, trial=trial)
+                       agent=agent, trial=trial, fingerprint=session_fingerprint(session))
 
 
 def error_record(base: Mapping[str, Any], error: str) -> dict[str, Any]:
