@@ -22,6 +22,7 @@ from emulator.flight.fleet_view import FleetView
 from emulator.flight.geofence_plans import GeofencePlans
 from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw_rate
 from emulator.flight.listener import AutopilotListener
+from emulator.flight.manual_control import MANUAL_MODES, ManualControl
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
 from emulator.flight.orbit import OrbitControl
@@ -44,6 +45,7 @@ class Autopilot(Vehicle):
         self.mission = MissionRunner(self)
         self.offboard = OffboardControl(self)
         self.orbit = OrbitControl(self)
+        self.manual = ManualControl(self)
         self.geofence = GeofencePlans(self)
         self.failures = VehicleFailures(self)
 
@@ -111,8 +113,12 @@ class Autopilot(Vehicle):
 
     def on_velocity_step(self, dt_s: float) -> None:
         """After every physics step flown by velocity: orbit or offboard set the next one."""
-        if self.state.mode is FlightMode.ORBIT:
+        mode = self.state.mode
+        if mode is FlightMode.ORBIT:
             self.orbit.on_step()
+        elif mode in MANUAL_MODES:
+            self.manual.on_step(dt_s)
+            self.offboard.check_fence()
         else:
             self.offboard.on_step(dt_s)
 
@@ -167,6 +173,8 @@ class Autopilot(Vehicle):
             self.mission.start_or_resume()
         elif self.mode is FlightMode.OFFBOARD:
             self.offboard.apply()
+        elif self.mode in MANUAL_MODES:
+            self.manual.apply()
 
     def disarm(self, *, force: bool = False) -> None:
         if not self.armed:
@@ -308,8 +316,10 @@ class Autopilot(Vehicle):
             self.takeoff(None)
         elif mode is FlightMode.OFFBOARD:
             self.offboard.enter(wall_now_s)
+        elif mode in MANUAL_MODES:
+            self.manual.enter(mode, wall_now_s)
         else:
-            raise CommandRefused(f"Mode {mode.label} refused: no manual control input")
+            raise CommandRefused(f"Mode {mode.label} refused: only posctl/altctl flown")
 
     # ------------------------------------------------------------------ camera
     def take_photo(self) -> ImageCapture:

@@ -86,7 +86,16 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("CAL_ACC0_ID", 1310988, 0, 2**31 - 1, "accelerometer calibration id", is_int=True),
     _p("CAL_GYRO0_ID", 1310988, 0, 2**31 - 1, "gyro calibration id", is_int=True),
     _p("CAL_MAG0_ID", 197388, 0, 2**31 - 1, "magnetometer calibration id", is_int=True),
-    _p("COM_RC_IN_MODE", 4, 0, 4, "RC input mode (4 = none needed)", is_int=True),
+    _p("COM_RC_IN_MODE", 3, 0, 4, "manual control source: 0 RC only, 1 joystick (MAVLink) "
+       "only, 2 RC and joystick, 3 RC or joystick keep first, 4 stick input disabled",
+       is_int=True),
+    _p("COM_RC_LOSS_T", 0.5, 0.0, 35.0, "manual control loss timeout (wall s)"),
+    _p("NAV_RCL_ACT", 2, 0, 3, "manual control loss action in POSCTL/ALTCTL: 0 centre the "
+       "sticks, 1 hold, 2 return, 3 land", is_int=True),
+    _p("MPC_VEL_MANUAL", 10.0, 1.0, 20.0, "POSCTL horizontal speed at full stick (m/s)"),
+    _p("MPC_MAN_TILT_MAX", 35.0, 1.0, 60.0, "ALTCTL tilt at full stick (deg)"),
+    _p("MPC_MAN_Y_MAX", 150.0, 0.0, 400.0, "yaw rate at full stick (deg/s)"),
+    _p("MPC_HOLD_DZ", 0.1, 0.0, 0.9, "stick deadzone around the centre (fraction)"),
     _p("COM_DL_LOSS_T", 10.0, 5.0, 300.0, "data link loss time-out (simulated s)"),
     _p("NAV_DLL_ACT", 0, 0, 3, "data link loss action: 0 none, 1 hold, 2 return, 3 land",
        is_int=True),

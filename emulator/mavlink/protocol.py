@@ -42,6 +42,8 @@ MAX_BATCH_BYTES = 1200  # stays below any loopback or Ethernet MTU
 Address = tuple[str, int]
 # broadcasts of these are for a ground station, never for a vehicle
 _NOT_FOR_VEHICLES = frozenset({MessageId.PING, MessageId.REQUEST_DATA_STREAM})
+# messages whose target system is not in a field named target_system
+_TARGET_FIELDS = {MessageId.MANUAL_CONTROL: "target"}
 log = logging.getLogger("mavswarm.protocol")
 
 
@@ -100,7 +102,7 @@ class NetworkProtocol:
             self._refresh_targets()
         links = self.links
         for m in self.decoder.decode(data):
-            target = getattr(m, "target_system", None)
+            target = getattr(m, _TARGET_FIELDS.get(m.get_msgId(), "target_system"), None)
             if target is None:
                 continue
             if target == 0:

@@ -14,6 +14,8 @@ import struct
 from collections.abc import Callable, Iterable
 
 from emulator.flight.autopilot import Autopilot, ImageCapture
+from emulator.flight.manual_control import MANUAL_MODES
+from emulator.flight.modes import FlightMode
 from emulator.flight.params import ParamError, ParamStore
 from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
@@ -27,6 +29,7 @@ from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
+from emulator.mavlink.pilot_input import apply_manual_control
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
@@ -173,10 +176,16 @@ class VehicleLink:
         if handler is not None:
             handler(self, m)
 
+    @property
+    def needs_tick(self) -> bool:
+        """Whether `tick` has a wall-clock duty now (an upload, a set-point or stick link)."""
+        return self.missions.uploading or self.ap.mode in _LINK_WATCHED_MODES
+
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
         self.send_all(self.missions.tick(wall_now_s))
         self.ap.offboard.check_link(wall_now_s)
+        self.ap.manual.check_link(wall_now_s)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
@@ -315,8 +324,8 @@ class VehicleLink:
             self.warned.add(complaint.key)
             self.statustext(Severity.WARNING, complaint.text)
 
-    def _offboard_setpoint(self, m) -> None:
-        self._complain(SETPOINT_APPLIERS[m.get_msgId()](self.ap, m, self.wall_now_s))
+    def _streamed_input(self, m) -> None:
+        self._complain(_STREAMED_INPUT[m.get_msgId()](self.ap, m, self.wall_now_s))
 
     def _ping(self, m) -> None:
         if m.target_system == self.system_id:  # broadcast pings are not answered
@@ -338,6 +347,10 @@ class VehicleLink:
                 0, src_system, src_component, list(reply)))
 
 
+# modes whose input a link watches (its loss is a failsafe)
+_LINK_WATCHED_MODES = frozenset({FlightMode.OFFBOARD, *MANUAL_MODES})
+# set-points and stick input: streamed, never answered (a problem is reported once)
+_STREAMED_INPUT = {**SETPOINT_APPLIERS, MessageId.MANUAL_CONTROL: apply_manual_control}
 _COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
 
 _BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
@@ -370,7 +383,7 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.MISSION_REQUEST: VehicleLink._mission_request,
     MessageId.MISSION_CLEAR_ALL: VehicleLink._mission_clear_all,
     MessageId.MISSION_SET_CURRENT: VehicleLink._mission_set_current,
-    **{msg_id: VehicleLink._offboard_setpoint for msg_id in SETPOINT_APPLIERS},
+    **{msg_id: VehicleLink._streamed_input for msg_id in _STREAMED_INPUT},
     MessageId.PING: VehicleLink._ping,
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
