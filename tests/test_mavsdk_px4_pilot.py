@@ -1,6 +1,6 @@
 """PX4 conformance through the real MAVSDK client (native binding) over UDP: the official
-manual_control example's joystick input (POSCTL and ALTCTL), checked against the ground
-truth."""
+manual_control example's joystick input (POSCTL and ALTCTL) and the follow_me example's
+target, checked against the ground truth."""
 
 from __future__ import annotations
 
@@ -9,12 +9,15 @@ import contextlib
 import math
 from collections.abc import AsyncIterator
 
+import numpy as np
 import pytest
+from mavsdk.asyncio.plugins.follow_me import FollowMeAsync
 from mavsdk.asyncio.plugins.manual_control import ManualControlAsync
 from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
+from mavsdk.plugins.follow_me import Config, TargetLocation
 from mavsdk.plugins.telemetry import FlightMode
 
-from tests.mavsdk_helpers import eventually, first, take_off, truth_pos
+from tests.mavsdk_helpers import eventually, first, geodetic, take_off, truth_pos
 
 pytestmark = pytest.mark.mavsdk
 
@@ -86,3 +89,53 @@ async def test_manual_control_example_flies_posctl_and_altctl(swarm_factory,
                     5.0, "RTL after the joystick was lost")
         failsafes = swarm.recorder.events("d1", kinds="failsafe")
         assert [e.data["reason"] for e in failsafes] == ["manual_control_lost"]
+
+
+async def test_follow_me_example_follows_the_target_at_the_configured_distance(
+        swarm_factory, mavsdk_client) -> None:
+    swarm = await swarm_factory(1, speed=5.0)
+    async with mavsdk_client(swarm.ports.api_port, 1) as systems:
+        system = systems[0]
+        follow_me, telemetry = FollowMeAsync(system), TelemetryAsync(system)
+        await take_off(swarm, system, 1, 10.0)
+        # 12 m to the target's left (-90 deg), 15 m above home
+        await follow_me.set_config(Config(15.0, 12.0, 0.1, Config.FollowAltitudeMode.CONSTANT,
+                                          5.0, -90.0))
+        ap = swarm.fleet.autopilots[0]
+        assert (ap.params["FLW_TGT_HT"], ap.params["FLW_TGT_DST"],
+                ap.params["FLW_TGT_FA"]) == (15.0, 12.0, -90.0)
+        await follow_me.start()
+        await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.FOLLOW_ME,
+                    3.0, "FOLLOW_ME mode")
+        t0 = swarm.fleet.now_s
+
+        def target_at(t_s):  # walking north-east at 2 m/s from (20, 0)
+            d = 2.0 / math.sqrt(2.0) * (t_s - t0)
+            return 20.0 + d, d
+
+        async def report() -> None:  # a phone's position, 5 times a second
+            while True:
+                x, y = target_at(swarm.fleet.now_s)
+                lat, lon, alt = geodetic(swarm, x, y, 0.0)
+                v = 2.0 / math.sqrt(2.0)
+                await follow_me.set_target_location(TargetLocation(lat, lon, alt, v, v, 0.0))
+                await asyncio.sleep(0.2)
+
+        task = asyncio.create_task(report())
+        try:
+            await eventually(lambda: swarm.fleet.now_s > t0 + 50.0, 20.0, "50 s followed")
+        finally:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+        rows = swarm.recorder.trajectory("d1")
+        rows = rows[rows[:, 0] >= t0 + 30.0]
+        tx, ty = target_at(rows[:, 0])
+        dx, dy = rows[:, 1] - tx, rows[:, 2] - ty
+        # left of a north-east walker: north-west of it, 12 m off, at 15 m
+        left = np.array([-1.0, 1.0]) / math.sqrt(2.0) * 12.0
+        assert np.abs(dx - left[0]).max() < 0.5 and np.abs(dy - left[1]).max() < 0.5
+        assert np.abs(rows[:, 3] - 15.0).max() < 0.1
+        await follow_me.stop()
+        await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.HOLD, 3.0,
+                    "HOLD after follow-me")

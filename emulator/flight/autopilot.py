@@ -19,6 +19,7 @@ from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY
 from emulator.flight.camera import ImageCapture, capture_image
 from emulator.flight.failures import VehicleFailures
 from emulator.flight.fleet_view import FleetView
+from emulator.flight.follow_target import FollowTarget
 from emulator.flight.geofence_plans import GeofencePlans
 from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw_rate
 from emulator.flight.listener import AutopilotListener
@@ -46,6 +47,7 @@ class Autopilot(Vehicle):
         self.offboard = OffboardControl(self)
         self.orbit = OrbitControl(self)
         self.manual = ManualControl(self)
+        self.follow = FollowTarget(self)
         self.geofence = GeofencePlans(self)
         self.failures = VehicleFailures(self)
 
@@ -112,12 +114,15 @@ class Autopilot(Vehicle):
         self.refresh_busy()
 
     def on_velocity_step(self, dt_s: float) -> None:
-        """After every physics step flown by velocity: orbit or offboard set the next one."""
+        """After every physics step flown by velocity: the mode sets the next one."""
         mode = self.state.mode
         if mode is FlightMode.ORBIT:
             self.orbit.on_step()
         elif mode in MANUAL_MODES:
             self.manual.on_step(dt_s)
+            self.offboard.check_fence()
+        elif mode is FlightMode.FOLLOW_TARGET:
+            self.follow.on_step(dt_s)
             self.offboard.check_fence()
         else:
             self.offboard.on_step(dt_s)
@@ -318,6 +323,8 @@ class Autopilot(Vehicle):
             self.offboard.enter(wall_now_s)
         elif mode in MANUAL_MODES:
             self.manual.enter(mode, wall_now_s)
+        elif mode is FlightMode.FOLLOW_TARGET:
+            self.follow.enter()
         else:
             raise CommandRefused(f"Mode {mode.label} refused: only posctl/altctl flown")
 

@@ -11,7 +11,7 @@ import math
 from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.mavlink.codec import mavlink
 from emulator.mavlink.command_args import CommandArgs
-from emulator.mavlink.messages import MAVLINK_VERSION
+from emulator.mavlink.messages import component_heartbeat
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from mavlink_vocabulary import (
     CameraCapFlags,
@@ -19,7 +19,6 @@ from mavlink_vocabulary import (
     MavCmd,
     MavComponent,
     MavResult,
-    MavState,
     MavType,
     MessageId,
 )
@@ -65,9 +64,8 @@ class CameraComponent:
         self._last_captured: mavlink.MAVLink_message | None = None
 
     @staticmethod
-    def heartbeat() -> mavlink.MAVLink_message:
-        return mavlink.MAVLink_heartbeat_message(
-            MavType.CAMERA, MavAutopilot.INVALID, 0, 0, MavState.ACTIVE, MAVLINK_VERSION)
+    def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:
+        return component_heartbeat(ap, MavType.CAMERA)
 
     @staticmethod
     def build(ap: Autopilot, msg_id: int) -> mavlink.MAVLink_message | None:

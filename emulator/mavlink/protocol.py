@@ -44,6 +44,8 @@ Address = tuple[str, int]
 _NOT_FOR_VEHICLES = frozenset({MessageId.PING, MessageId.REQUEST_DATA_STREAM})
 # messages whose target system is not in a field named target_system
 _TARGET_FIELDS = {MessageId.MANUAL_CONTROL: "target"}
+# messages with no target system that every vehicle behind the socket hears
+_FOR_EVERY_VEHICLE = frozenset({MessageId.FOLLOW_TARGET})
 log = logging.getLogger("mavswarm.protocol")
 
 
@@ -102,11 +104,14 @@ class NetworkProtocol:
             self._refresh_targets()
         links = self.links
         for m in self.decoder.decode(data):
-            target = getattr(m, _TARGET_FIELDS.get(m.get_msgId(), "target_system"), None)
+            msg_id = m.get_msgId()
+            target = getattr(m, _TARGET_FIELDS.get(msg_id, "target_system"), None)
             if target is None:
-                continue
+                if msg_id not in _FOR_EVERY_VEHICLE:
+                    continue
+                target = 0
             if target == 0:
-                if m.get_msgId() in _NOT_FOR_VEHICLES:
+                if msg_id in _NOT_FOR_VEHICLES:
                     continue
                 for link in links.values():
                     self._deliver(link, m, now)

@@ -29,7 +29,7 @@ from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
-from emulator.mavlink.pilot_input import apply_manual_control
+from emulator.mavlink.pilot_input import apply_follow_target, apply_manual_control
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
@@ -107,7 +107,7 @@ class VehicleLink:
 
     def send_stream(self, msg_id: int) -> None:
         if msg_id == CAMERA_HEARTBEAT:
-            self.send(self.camera.heartbeat(), CAMERA_COMPONENT_ID)
+            self.send(self.camera.heartbeat(self.ap), CAMERA_COMPONENT_ID)
             return
         message = self.build(msg_id)
         if message is not None:
@@ -186,6 +186,7 @@ class VehicleLink:
         self.send_all(self.missions.tick(wall_now_s))
         self.ap.offboard.check_link(wall_now_s)
         self.ap.manual.check_link(wall_now_s)
+        self.ap.follow.check_link(wall_now_s)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
@@ -348,9 +349,10 @@ class VehicleLink:
 
 
 # modes whose input a link watches (its loss is a failsafe)
-_LINK_WATCHED_MODES = frozenset({FlightMode.OFFBOARD, *MANUAL_MODES})
+_LINK_WATCHED_MODES = frozenset({FlightMode.OFFBOARD, FlightMode.FOLLOW_TARGET, *MANUAL_MODES})
 # set-points and stick input: streamed, never answered (a problem is reported once)
-_STREAMED_INPUT = {**SETPOINT_APPLIERS, MessageId.MANUAL_CONTROL: apply_manual_control}
+_STREAMED_INPUT = {**SETPOINT_APPLIERS, MessageId.MANUAL_CONTROL: apply_manual_control,
+                   MessageId.FOLLOW_TARGET: apply_follow_target}
 _COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
 
 _BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
