@@ -9,16 +9,14 @@ touches a socket. Messages are dispatched by their `MessageId`.
 
 from __future__ import annotations
 
-import math
-import struct
 from collections.abc import Callable, Iterable
 
 from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.flight.manual_control import MANUAL_MODES
 from emulator.flight.modes import FlightMode
-from emulator.flight.params import ParamError, ParamStore
 from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
+from emulator.mavlink import param_protocol
 from emulator.mavlink.camera import CAMERA_COMMANDS, CAMERA_MESSAGES, CameraComponent
 from emulator.mavlink.codec import Encoder, mavlink
 from emulator.mavlink.command_args import CommandArgs
@@ -32,30 +30,17 @@ from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
 from emulator.mavlink.pilot_input import apply_follow_target, apply_manual_control
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
-from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
+from mavlink_vocabulary import MavComponent, MavResult, MessageId
 
 __all__ = ["HANDLED_MESSAGES", "VehicleLink"]
 
-_INT_TYPES = frozenset({MavParamType.UINT8, MavParamType.INT8, MavParamType.UINT16,
-                        MavParamType.INT16, MavParamType.UINT32, MavParamType.INT32})
 AUTOPILOT_COMPONENT_ID = MavComponent.AUTOPILOT1
 CAMERA_COMPONENT_ID = MavComponent.CAMERA
 MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
-# MAVLink FTP is not offered: every request gets a NAK(UnknownCommand) so clients fall back
-
-
-def _bytewise_int(value: float) -> int:
-    return struct.unpack("<i", struct.pack("<f", value))[0]
-
-
-def _bytewise_float(value: int) -> float:
-    return struct.unpack("<f", struct.pack("<i", value))[0]
-
-
 _OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
                            MessageId.GLOBAL_POSITION_INT, MessageId.LOCAL_POSITION_NED,
                            MessageId.HOME_POSITION)
-# what a vehicle sends on request (MAV_CMD_REQUEST_MESSAGE), besides the camera's messages
+
 
 class VehicleLink:
     """MAVLink side of vehicle `ap` (system id k + 1)."""
@@ -245,49 +230,22 @@ class VehicleLink:
         self._on_command(m, CommandArgs.from_int(m))
 
     # -------------------------------------------------------------- parameters
-    def _param_value(self, name: str) -> mavlink.MAVLink_message:
-        store = self.ap.params
-        d = ParamStore.definition(name)
-        value = store[name]
-        if d.is_int:
-            wire, ptype = _bytewise_float(int(value)), MavParamType.INT32
-        else:
-            wire, ptype = value, MavParamType.REAL32
-        return mavlink.MAVLink_param_value_message(
-            name.encode(), wire, ptype, len(store), ParamStore.index_of(name)
-        )
-
     def _param_request_list(self, m) -> None:
-        for name in self.ap.params:
-            self.send(self._param_value(name))
+        self.send_all(param_protocol.param_list(self.ap))
 
     def _param_request_read(self, m) -> None:
-        try:
-            name = m.param_id if m.param_index < 0 else ParamStore.name_at(m.param_index)
-            ParamStore.definition(name)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, str(error))
-            return
-        self.send(self._param_value(name))
+        self._param_answer(param_protocol.param_read(self.ap, m))
 
     def _param_set(self, m) -> None:
         self.dedup.forget()
-        name = m.param_id
-        try:
-            d = ParamStore.definition(name)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, str(error))
-            return
-        value = m.param_value
-        if m.param_type in _INT_TYPES:
-            value = float(_bytewise_int(value))
-        elif d.is_int and math.isfinite(value) and value == int(value):
-            value = float(int(value))
-        try:
-            self.ap.set_param(name, value)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, f"Param rejected: {error}")
-        self.send(self._param_value(name))  # the echo carries the value now in force
+        self._param_answer(param_protocol.param_set(self.ap, m))
+
+    def _param_answer(self, answer: param_protocol.Answer) -> None:
+        problem, value = answer
+        if problem:
+            self.statustext(Severity.WARNING, problem)
+        if value is not None:
+            self.send(value)
 
     # ---------------------------------------------------------------- missions
     def _mission_count(self, m) -> None:
