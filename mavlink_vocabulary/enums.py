@@ -269,6 +269,9 @@ class CameraCapFlags(IntFlag):
 
     CAPTURE_VIDEO = 1
     CAPTURE_IMAGE = 2
+    HAS_MODES = 4
+    CAN_CAPTURE_IMAGE_IN_VIDEO_MODE = 8
+    HAS_VIDEO_STREAM = 256
 
 
 class GpsFixType(IntEnum):

@@ -163,8 +163,10 @@ class VehicleLink:
 
     @property
     def needs_tick(self) -> bool:
-        """Whether `tick` has a wall-clock duty now (an upload, a set-point or stick link)."""
-        return self.missions.uploading or self.ap.mode in _LINK_WATCHED_MODES
+        """Whether `tick` has a wall-clock duty now (an upload, a set-point or stick link, a
+        recording's capture status)."""
+        return (self.missions.uploading or self.ap.mode in _LINK_WATCHED_MODES
+                or self.camera.video.status_due_wall_s is not None)
 
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
@@ -172,6 +174,8 @@ class VehicleLink:
         self.ap.offboard.check_link(wall_now_s)
         self.ap.manual.check_link(wall_now_s)
         self.ap.follow.check_link(wall_now_s)
+        if self.camera.video.status_due(wall_now_s):  # a recording's capture status
+            self.send_once(MessageId.CAMERA_CAPTURE_STATUS)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
