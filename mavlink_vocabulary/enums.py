@@ -98,6 +98,7 @@ class MavType(IntEnum):
     GENERIC = 0
     QUADROTOR = 2
     GCS = 6
+    GIMBAL = 26
     CAMERA = 30
 
 
@@ -115,6 +116,7 @@ class MavComponent(IntEnum):
     ALL = 0
     AUTOPILOT1 = 1
     CAMERA = 100
+    GIMBAL = 154
     MISSIONPLANNER = 190
 
 

@@ -207,6 +207,12 @@ def _get_home(v: Vehicle, a: CommandArgs) -> Reply:
     return Reply.accepted(SendOnce(MessageId.HOME_POSITION))
 
 
+def _gimbal(v: Vehicle, a: CommandArgs) -> Reply:
+    if v.gimbal is None:
+        return Reply(MavResult.UNSUPPORTED)  # no gimbal on this vehicle
+    return v.gimbal.handle_command(v.ap, a, v.command_peer)
+
+
 def _camera(v: Vehicle, a: CommandArgs) -> Reply:
     return v.camera.handle_command(v.ap, a, v.wall_now_s)
 
@@ -270,6 +276,8 @@ HANDLERS: dict[MavCmd, Handler] = {
     MavCmd.REQUEST_STORAGE_INFORMATION: _camera,
     MavCmd.REQUEST_CAMERA_CAPTURE_STATUS: _camera,
     MavCmd.SET_CAMERA_MODE: _camera,
+    MavCmd.DO_GIMBAL_MANAGER_PITCHYAW: _gimbal,
+    MavCmd.DO_GIMBAL_MANAGER_CONFIGURE: _gimbal,
     MavCmd.VIDEO_START_CAPTURE: _camera,
     MavCmd.VIDEO_STOP_CAPTURE: _camera,
     MavCmd.VIDEO_START_STREAMING: _camera,

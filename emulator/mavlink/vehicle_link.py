@@ -23,6 +23,7 @@ from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
 from emulator.mavlink.ftp import FtpServer
+from emulator.mavlink.gimbal import GIMBAL_COMPONENT_ID, GIMBAL_MESSAGES, GimbalComponent
 from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
@@ -57,6 +58,10 @@ class VehicleLink:
             CAMERA_COMPONENT_ID: Encoder(self.system_id, CAMERA_COMPONENT_ID),
         }
         self.camera = CameraComponent()
+        self.gimbal = GimbalComponent() if ap.spec.gimbal else None  # the session asks
+        if self.gimbal is not None:
+            self._encoders[GIMBAL_COMPONENT_ID] = Encoder(self.system_id, GIMBAL_COMPONENT_ID)
+        self.command_peer = (0, 0)  # who sent the command being handled
         self.missions = MissionTransfer(ap)
         self.logs = LogTransfer(ap)
         self.ftp = FtpServer(self.logs.files)
@@ -98,11 +103,16 @@ class VehicleLink:
         if message is not None:
             self.send(message)
 
-    def can_send_once(self, msg_id: int) -> bool:
-        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS  # each can be sent once
+    def can_send_once(self, msg_id: int) -> bool:  # each can be sent once
+        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS or (
+            self.gimbal is not None and msg_id in GIMBAL_MESSAGES)
 
     def send_once(self, msg_id: int) -> None:
-        if msg_id in CAMERA_MESSAGES:
+        if self.gimbal is not None and (msg_id in GIMBAL_MESSAGES or msg_id == -1):
+            message = self.gimbal.build(self.ap, msg_id)
+            if message is not None:
+                self.send(message, self.gimbal.component_of(msg_id))
+        elif msg_id in CAMERA_MESSAGES:
             message = self.camera.build(self.ap, msg_id)
             if message is not None:
                 self.send(message, CAMERA_COMPONENT_ID)
@@ -166,7 +176,7 @@ class VehicleLink:
         """Whether `tick` has a wall-clock duty now (an upload, a set-point or stick link, a
         recording's capture status)."""
         return (self.missions.uploading or self.ap.mode in _LINK_WATCHED_MODES
-                or self.camera.video.status_due_wall_s is not None)
+                or self.camera.video.status_due_wall_s is not None or self.gimbal is not None)
 
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
@@ -176,17 +186,28 @@ class VehicleLink:
         self.ap.follow.check_link(wall_now_s)
         if self.camera.video.status_due(wall_now_s):  # a recording's capture status
             self.send_once(MessageId.CAMERA_CAPTURE_STATUS)
+        if self.gimbal is not None:
+            for msg_id in self.gimbal.due(wall_now_s):
+                self.send_once(msg_id)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
 
     def _on_command(self, m, args: CommandArgs) -> None:
         target_component = getattr(m, "target_component", MavComponent.ALL)
+        if target_component == GIMBAL_COMPONENT_ID and self.gimbal is not None:
+            wanted = self.gimbal.device_request(args)  # the gimbal device answers
+            result = MavResult.UNSUPPORTED if wanted is None else MavResult.ACCEPTED
+            self._ack(m, args.command, result, target_component)
+            if wanted is not None:
+                self.send_once(wanted)
+            return
         if target_component not in _COMMAND_COMPONENTS:
             return  # for a component this vehicle does not have: not ours to answer
         if target_component == CAMERA_COMPONENT_ID and args.command not in CAMERA_COMMANDS:
             self._answer(m, args.command, Reply(MavResult.UNSUPPORTED), target_component)
             return
+        self.command_peer = self._peer(m)
         if args.command not in STATEFUL_COMMANDS:
             self._answer(m, args.command, execute_command(self, args), target_component)
             return
@@ -220,8 +241,8 @@ class VehicleLink:
                 follow_up.run()
 
     def _ack(self, m, command: int, result: int, target_component: int) -> None:
-        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID \
-            else AUTOPILOT_COMPONENT_ID
+        component = target_component if target_component in (
+            CAMERA_COMPONENT_ID, GIMBAL_COMPONENT_ID) else AUTOPILOT_COMPONENT_ID
         src_system, src_component = self._peer(m)
         self.send(mavlink.MAVLink_command_ack_message(
             command, result, 0, 0, src_system, src_component
@@ -300,6 +321,14 @@ class VehicleLink:
             now_ns = int(self.ap.now_s * 1e9)
             self.send(mavlink.MAVLink_timesync_message(now_ns, m.ts1))
 
+    def _gimbal_setpoint(self, m) -> None:
+        if self.gimbal is None:
+            return
+        aim = (self.gimbal.on_set_pitchyaw if m.get_msgId() == MessageId.GIMBAL_MANAGER_SET_PITCHYAW
+               else self.gimbal.on_set_attitude)
+        problem = aim(self.ap, m, self._peer(m))
+        self._complain(Complaint(problem.split(":")[0], problem) if problem else None)
+
     def _log_request(self, m) -> None:
         self.send_all(self.logs.handle(m))
 
@@ -352,6 +381,8 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
     **{msg_id: VehicleLink._log_request for msg_id in LOG_MESSAGES},
+    MessageId.GIMBAL_MANAGER_SET_PITCHYAW: VehicleLink._gimbal_setpoint,
+    MessageId.GIMBAL_MANAGER_SET_ATTITUDE: VehicleLink._gimbal_setpoint,
 }
 
 # the names of the messages a vehicle acts on or answers
