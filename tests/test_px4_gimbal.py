@@ -147,3 +147,34 @@ def test_the_gimbal_is_an_optional_scenario_field_kept_by_the_export() -> None:
     assert "gimbal" not in scenario_to_dict(default_scenario(1))["drones"][0]
     with pytest.raises(ScenarioError, match=r"gimbal.*true or false"):
         scenario_from_dict(_session(gimbal="yes"), source="g.json")
+
+
+def test_mission_gimbal_and_video_items_are_acted_on() -> None:
+    link = _gimbal_link()
+    origin = link.fleet.world.origin
+    lat, lon, _ = origin.to_geodetic(0.0, 30.0, 0.0)
+    lat0, lon0, _ = origin.to_geodetic(0.0, 0.0, 0.0)
+    items = [
+        link.mission_item(1, 0, MavCmd.NAV_TAKEOFF, lat0, lon0, 10.0),
+        link.mission_item(1, 1, MavCmd.SET_CAMERA_MODE, 0, 0, 0.0, params=(0.0, 1.0, NAN, NAN)),
+        link.mission_item(1, 2, MavCmd.VIDEO_START_CAPTURE, 0, 0, 0.0,
+                          params=(0.0, 0.0, NAN, NAN)),
+        link.mission_item(1, 3, MavCmd.DO_GIMBAL_MANAGER_PITCHYAW, 0, 0, 0.0,
+                          params=(-90.0, 0.0, NAN, NAN)),
+        link.mission_item(1, 4, MavCmd.NAV_WAYPOINT, lat, lon, 10.0),
+        link.mission_item(1, 5, MavCmd.VIDEO_STOP_CAPTURE, 0, 0, 0.0,
+                          params=(0.0, NAN, NAN, NAN)),
+    ]
+    assert link.upload_mission(1, items).type == 0
+    assert link.command_long(1, MavCmd.COMPONENT_ARM_DISARM, 1.0).result == MavResult.ACCEPTED
+    assert link.command_long(1, MavCmd.DO_SET_MODE, 1, 4, 4).result == MavResult.ACCEPTED
+    link.wait_for("MISSION_ITEM_REACHED", system=1, where=lambda m: m.seq == 4, within_s=60.0)
+    link.advance(0.1)
+    kinds = [e.kind for e in link.fleet.recorder.events(
+        "d1", kinds=("video_start", "gimbal", "video_stop"))]
+    assert kinds == ["video_start", "gimbal", "video_stop"]
+    [stop] = link.fleet.recorder.events("d1", kinds="video_stop")
+    assert stop.data["position_m"][1] == pytest.approx(30.0, abs=2.5)  # at the waypoint
+    link.advance(2.0)
+    gimbal = link.swarm.links[0].gimbal
+    assert gimbal is not None and gimbal.pitch_deg == -90.0

@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable
 
 from emulator.flight.autopilot import Autopilot, ImageCapture
 from emulator.flight.manual_control import MANUAL_MODES
+from emulator.flight.mission import MissionItem
 from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
@@ -28,6 +29,7 @@ from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
+from emulator.mavlink.payload_items import payload_item_reply
 from emulator.mavlink.pilot_input import apply_follow_target, apply_manual_control
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
@@ -151,6 +153,12 @@ class VehicleLink:
     def on_image_captured(self, capture: ImageCapture) -> None:
         self.send(self.camera.image_captured(self.ap, capture), CAMERA_COMPONENT_ID)
 
+    def on_payload_item(self, item: MissionItem) -> None:
+        """A mission's gimbal or camera item, reached: the gimbal or camera acts on it."""
+        reply = payload_item_reply(self, item)
+        if reply is not None:
+            self._answer(None, None, reply, AUTOPILOT_COMPONENT_ID)
+
     def on_state_changed(self) -> None:
         """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
         self.send(msgs.heartbeat(self.ap))
@@ -225,9 +233,11 @@ class VehicleLink:
         self._answer(m, args.command, reply, target_component)
         self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result)
 
-    def _answer(self, m, command: int, reply: Reply, target_component: int) -> None:
-        """The ACK, the reason as a STATUSTEXT, then what follows an accepted command."""
-        self._ack(m, command, reply.result, target_component)
+    def _answer(self, m, command: int | None, reply: Reply, target_component: int) -> None:
+        """The ACK (none for a mission item), the reason as a STATUSTEXT, then what follows
+        an accepted command."""
+        if command is not None:
+            self._ack(m, command, reply.result, target_component)
         if reply.reason:
             self.statustext(Severity.WARNING if reply.result else Severity.INFO, reply.reason)
         if reply.result != MavResult.ACCEPTED:
