@@ -19,7 +19,7 @@ from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
 from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path
 from tests.hypothesis_draws import import_project_source, load_profile
-from tests.ports import unused_udp_port
+from tests.ports import drop_registry, unused_udp_port
 
 _executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
     weakref.WeakKeyDictionary()
@@ -33,6 +33,10 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     """The whole project is imported before the first test, so Hypothesis's pool of source
     literals is the same whatever test files were collected (tests/hypothesis_draws.py)."""
     import_project_source()
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    drop_registry()  # the xdist workers' record of the ports handed out (tests/ports.py)
 
 
 @pytest.fixture
