@@ -35,6 +35,15 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     import_project_source()
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A test that flies with MAVSDK or drives Chromium takes seconds: it is slow too, so
+    `-m "not slow"` (the fast tier) leaves it out."""
+    for item in items:
+        if item.get_closest_marker("mavsdk") or item.get_closest_marker("browser"):
+            item.add_marker(pytest.mark.slow)
+
+
 def pytest_sessionfinish(session: pytest.Session) -> None:
     drop_registry()  # the xdist workers' record of the ports handed out (tests/ports.py)
 

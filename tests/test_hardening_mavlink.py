@@ -103,6 +103,7 @@ def limits(swarm, k: int) -> tuple:
 
 
 # ------------------------------------------------------------------ speeds
+@pytest.mark.slow
 async def test_change_speed_outside_the_airframe_range_is_denied() -> None:
     """DO_CHANGE_SPEED 1.4e-45 m/s was accepted and kept: ARM and TAKEOFF were then
     accepted and the vehicle stayed on the ground for good."""
