@@ -4,10 +4,13 @@ primitive still in flight, and a pytest run (tests/conftest.py) whose test faile
 
 from __future__ import annotations
 
+import asyncio
 import os
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -100,3 +103,28 @@ def test_a_test_run_that_used_mavsdk_exits_with_pytests_status(
     _assert_clean(done, status)
     assert ("1 failed" if status else "1 passed") in done.stdout
     assert done.stdout.rstrip().endswith("interpreter shut down")
+
+
+@pytest.mark.mavsdk
+async def test_close_lets_calls_still_running_on_worker_threads_end_before_destroying_mavsdk(
+        swarm_factory) -> None:
+    """A primitive cancelled or timed out leaves its blocking MAVSDK call running on a worker
+    thread of the loop's default executor: close() waits for it before MAVSDK goes away."""
+    from mavlink_gateway import FleetConnection, profiles_from_scenario
+
+    swarm = await swarm_factory(1)
+    fleet = await FleetConnection.connect(f"udpin://127.0.0.1:{swarm.ports.api_port}",
+                                          profiles_from_scenario(swarm.fleet.scenario),
+                                          swarm.fleet.scenario.world.origin)
+    returned = threading.Event()
+
+    def blocking_call() -> None:  # as long as a command's retries
+        time.sleep(1.0)
+        returned.set()
+
+    pending = asyncio.ensure_future(asyncio.get_running_loop().run_in_executor(
+        None, blocking_call))
+    await asyncio.sleep(0.1)
+    pending.cancel()  # the awaiting side gives up; the worker thread does not
+    await fleet.close()
+    assert returned.is_set()
