@@ -24,11 +24,15 @@ DISCOVERY_TIMEOUT_S = 15.0
 CALLS_DRAIN_S = 30.0
 
 
+_MAVSDK_MODULES = frozenset({"mavsdk"})
+
+
 class _CallPool(concurrent.futures.ThreadPoolExecutor):
     """The loop's default executor while fleets are open on it: MAVSDK's asyncio binding runs
-    every blocking call on it. It knows which calls are still running, so a fleet can let them
-    end before MAVSDK is destroyed under them (a primitive cancelled or timed out leaves its
-    call running on a worker thread)."""
+    every blocking call on it. It knows which MAVSDK calls are still running (not the other
+    work of the loop, a server's, say), so a fleet can let them end before MAVSDK is destroyed
+    under them (a primitive cancelled or timed out leaves its call running on a worker
+    thread)."""
 
     def __init__(self, workers: int) -> None:
         super().__init__(workers, thread_name_prefix="mavsdk-call")
@@ -38,12 +42,15 @@ class _CallPool(concurrent.futures.ThreadPoolExecutor):
     def submit(self, fn: Callable[..., Any], /, *args: Any,
                **kwargs: Any) -> concurrent.futures.Future[Any]:
         future = super().submit(fn, *args, **kwargs)
-        self._running.add(future)
-        future.add_done_callback(self._running.discard)
+        if getattr(fn, "__module__", None) in _MAVSDK_MODULES or \
+                str(getattr(fn, "__module__", "")).startswith("mavsdk."):
+            self._running.add(future)
+            future.add_done_callback(self._running.discard)
         return future
 
     async def drain(self, timeout_s: float) -> None:
-        """Wait until every call submitted so far has returned (at most `timeout_s`)."""
+        """Wait until every MAVSDK call submitted so far has returned (at most
+        `timeout_s`)."""
         running = [asyncio.wrap_future(f) for f in list(self._running)]
         if running:
             await asyncio.wait(running, timeout=timeout_s)
