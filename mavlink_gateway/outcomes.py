@@ -47,10 +47,12 @@ class DroneState:
         return self.x_m, self.y_m, self.altitude_m
 
     def to_dict(self) -> dict[str, Any]:
+        """The state as JSON-ready values; a quantity telemetry has not told yet (NaN) is None,
+        which JSON carries as null: unknown, never a number."""
         d = asdict(self)
         for key in ("x_m", "y_m", "altitude_m", "heading_deg", "battery_pct", "home_x_m",
                     "home_y_m"):
-            d[key] = round(d[key], 2)
+            d[key] = None if math.isnan(d[key]) else round(d[key], 2)
         return d
 
     def describe(self) -> str:
