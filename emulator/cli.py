@@ -47,6 +47,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     up.add_argument("--gcs-port", type=int, default=14550, help="QGroundControl port (0: none)")
     up.add_argument("--per-vehicle-ports", action="store_true",
                     help="one socket and port pair per vehicle (PX4 multi-instance style)")
+    up.add_argument("--shared-local-origin", action="store_true",
+                    help="LOCAL_POSITION_NED about the session origin for every vehicle "
+                         "(default: each vehicle's own start point, as PX4 instances)")
     up.add_argument("--truth-out", type=Path,
                     help="ground-truth record written on exit (default: runs/<time>.truth.npz)")
     up.add_argument("--no-truth", action="store_true", help="do not write the ground truth")
@@ -104,13 +107,15 @@ web console): called with the swarm and its network index (None for a single net
 
 async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
                  truth_out: Path | None, attachments: Sequence[Attachment] = (),
-                 network: int | None = None, link_faults: LinkFaults | None = None) -> None:
+                 network: int | None = None, link_faults: LinkFaults | None = None,
+                 shared_local_origin: bool = False) -> None:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError):
             loop.add_signal_handler(sig, stop.set)
-    async with Swarm(scenario, clock=clock, ports=ports, link_faults=link_faults) as swarm:
+    async with Swarm(scenario, clock=clock, ports=ports, link_faults=link_faults,
+                     shared_local_origin=shared_local_origin) as swarm:
         mode = "stepped" if clock.stepped else f"{clock.speed:g}x real time"
         print(f"{label}{swarm.n} vehicles from {scenario.source}, {mode}, "
               f"physics {clock.physics_hz:g} Hz", flush=True)
@@ -133,11 +138,11 @@ async def _serve(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label:
 
 def _run_network(scenario: Scenario, clock: ClockConfig, ports: PortPlan, label: str,
                  truth_out: Path | None, attachments: Sequence[Attachment], network: int,
-                 link_faults: LinkFaults | None) -> None:
+                 link_faults: LinkFaults | None, shared_local_origin: bool) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(_serve(scenario, clock, ports, label, truth_out, attachments, network,
-                           link_faults))
+                           link_faults, shared_local_origin))
 
 
 def _truth_path(args: argparse.Namespace) -> Path | None:
@@ -183,7 +188,8 @@ def _up(args: argparse.Namespace) -> int:
                      gcs_port=args.gcs_port, per_vehicle=args.per_vehicle_ports)
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(_serve(scenario, clock, ports, "", args.truth_out,
-                           tuple(getattr(args, "attachments", ())), None, link_faults))
+                           tuple(getattr(args, "attachments", ())), None, link_faults,
+                           getattr(args, "shared_local_origin", False)))
     return 0
 
 
@@ -202,7 +208,7 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
         proc = multiprocessing.Process(
             target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth,
                                        tuple(getattr(args, "attachments", ())), j,
-                                       link_faults),
+                                       link_faults, getattr(args, "shared_local_origin", False)),
             name=f"mavswarm-net{j}",
         )
         proc.start()

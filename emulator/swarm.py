@@ -108,11 +108,14 @@ class Swarm:
     def __init__(self, scenario: Scenario, *, clock: ClockConfig | None = None,
                  ports: PortPlan | None = None,
                  telemetry_hz: Mapping[str, float] | None = None,
-                 link_faults: LinkFaults | None = None) -> None:
+                 link_faults: LinkFaults | None = None,
+                 shared_local_origin: bool = False) -> None:
         self.clock = clock or ClockConfig()
         self.ports = ports or PortPlan()
         self.ports.check(len(scenario.vehicles))
         self.fleet = Fleet(scenario, physics_hz=self.clock.physics_hz)
+        if shared_local_origin:  # LOCAL_POSITION_NED about the session origin for every vehicle
+            self.fleet.share_local_origin()
         if self.clock.stepped:
             # A client's thinking time is not simulated, so "armed but no takeoff for 10 s"
             # would disarm vehicles while others fly: stepped swarms do not auto-disarm.

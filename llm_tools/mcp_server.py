@@ -8,6 +8,9 @@ its compact JSON; a result with status "error" or "rejected" is flagged `isError
 tools, bad arguments, a spent budget and the absence of a running task come back as such error
 results, never as protocol errors, so a model can read them and act.
 
+A registry with the batch tool (`llm_tools.registry.served_registry`) serves it too: several
+calls side by side in one request, one result per call.
+
 Transports: `serve_stdio` (one client over stdin/stdout) and `streamable_http_app` (an ASGI
 app for Streamable HTTP, e.g. under uvicorn).
 """
@@ -27,7 +30,7 @@ from agent_contract import AgentTools, BudgetExhausted
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
-from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry
+from llm_tools.registry import ToolRegistry
 
 __all__ = ["ERROR_STATUSES", "SERVER_NAME", "ToolsProvider", "build_server", "call_result",
            "mcp_tools", "serve_stdio", "streamable_http_app"]
@@ -45,7 +48,7 @@ _INSTRUCTIONS = ("Tools that command a swarm of drones. Every result has a statu
 def mcp_tools(registry: ToolRegistry) -> list[types.Tool]:
     """The registry's tools as MCP tool definitions (input and output schemas included)."""
     return [types.Tool(name=spec.name, description=spec.description,
-                       input_schema=spec.input_schema, output_schema=OUTPUT_SCHEMA)
+                       input_schema=spec.input_schema, output_schema=spec.output_schema)
             for spec in registry.specs()]
 
 

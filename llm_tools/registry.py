@@ -1,5 +1,8 @@
 """One registry of agent tools, from which every adapter (OpenAI, MCP, REST) is built.
 
+A registry made with `batch=True` (REST and MCP) also lists the `batch` tool
+(`llm_tools.batch`), whose schemas are generated from the other tools' specs.
+
 `ToolRegistry.call` never raises: unknown tools, malformed JSON, wrong or missing arguments
 and spent budgets all come back as an error result a model can act on, and nothing reaches
 the gateway unless the arguments validate.
@@ -9,15 +12,22 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from agent_contract import AgentTools, BudgetExhausted, tool_names
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
+from llm_tools.batch import (
+    BATCH,
+    DESCRIPTION,
+    batch_input_schema,
+    batch_output_schema,
+    run_batch,
+)
 from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
 from llm_tools.schema import describe, schema_for, validate
 
-__all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry"]
+__all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry", "served_registry"]
 
 OUTPUT_SCHEMA: dict[str, Any] = {
     "type": "object",
@@ -37,6 +47,7 @@ class ToolSpec:
     name: str
     description: str
     input_schema: dict[str, Any]
+    output_schema: dict[str, Any] = field(default_factory=lambda: OUTPUT_SCHEMA)
 
 
 def _error(message: str) -> dict[str, Any]:
@@ -46,8 +57,9 @@ def _error(message: str) -> dict[str, Any]:
 class ToolRegistry:
     """Tools by name, with their schemas; calls validated before they run."""
 
-    def __init__(self, names: Sequence[str] | None = None) -> None:
-        """The tools named (default: every agent tool), from their `AgentTools` methods."""
+    def __init__(self, names: Sequence[str] | None = None, *, batch: bool = False) -> None:
+        """The tools named (default: every agent tool), from their `AgentTools` methods;
+        `batch`: and the batch tool over them."""
         self._specs: dict[str, ToolSpec] = {}
         known = tool_names()
         for name in known if names is None else names:
@@ -58,6 +70,10 @@ class ToolRegistry:
             method = getattr(AgentTools, name)
             summary, _ = describe(method)
             self._specs[name] = ToolSpec(name, summary, schema_for(method, skip=1))
+        if batch:
+            singles = list(self._specs.values())
+            self._specs[BATCH] = ToolSpec(BATCH, DESCRIPTION, batch_input_schema(singles),
+                                          batch_output_schema(OUTPUT_SCHEMA))
 
     def specs(self) -> list[ToolSpec]:
         return list(self._specs.values())
@@ -84,6 +100,10 @@ class ToolRegistry:
         values, problems = validate(arguments, spec.input_schema)
         if problems:
             return _error(f"{name}: " + "; ".join(problems))
+        if name == BATCH:
+            singles = [n for n in self._specs if n != BATCH]
+            return await run_batch(tools, values["calls"], singles,
+                                   lambda tool, args: self.call(tools, tool, args))
         try:
             outcome = getattr(tools, spec.name)(**values)
             if inspect.isawaitable(outcome):
@@ -98,3 +118,8 @@ class ToolRegistry:
 def default_registry() -> ToolRegistry:
     """Every agent tool."""
     return ToolRegistry()
+
+
+def served_registry() -> ToolRegistry:
+    """Every agent tool and the batch tool: what REST and MCP clients call."""
+    return ToolRegistry(batch=True)

@@ -124,8 +124,13 @@ def _check(value: Any, schema: Mapping[str, Any], where: str, problems: list[str
         if not isinstance(value, list):
             problems.append(f"{where} must be a list, got {preview(value)}")
             return value
-        if len(value) > MAX_ITEMS:
-            problems.append(f"{where} has {len(value)} items; the limit is {MAX_ITEMS}")
+        most = min(MAX_ITEMS, schema.get("maxItems", MAX_ITEMS))
+        if len(value) > most:
+            problems.append(f"{where} has {len(value)} items; the limit is {most}")
+            return value
+        if len(value) < schema.get("minItems", 0):
+            problems.append(f"{where} needs at least {schema['minItems']} item(s), "
+                            f"got {len(value)}")
             return value
         return [_check(v, schema["items"], f"{where}[{i}]", problems)
                 for i, v in enumerate(value)]

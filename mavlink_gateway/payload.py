@@ -19,7 +19,9 @@ from mavlink_vocabulary import MavCmd, MavComponent, MavResult
 __all__ = ["PayloadPrimitives", "perception_dict"]
 
 CHARGING_KIND = "waypoint"  # charging stations are the session's waypoint targets
-FULL_PCT = 99.5
+# Telemetry carries the battery in whole percent, truncated: 99 means 99 to 100, and a drone
+# resting on a station at 99.9 % charges no further (a lockstep wait for 99.5 never ended).
+FULL_PCT = 99.0
 MAX_WAIT_S = 3600.0
 PHOTO_TRIES = 4
 PHOTO_REPORT_WALL_S = 0.6  # wall time a capture report may take before it is asked again

@@ -17,7 +17,6 @@ from mavlink_vocabulary.enums import (
     MavBatteryChargeState,
     MavBatteryFunction,
     MavBatteryType,
-    MavCmd,
     MavComponent,
     MavFrame,
     MavLandedState,
@@ -32,10 +31,10 @@ from mavlink_vocabulary.enums import (
     MavSysStatusSensor,
     MavType,
     MavVtolState,
-    MessageId,
     PositionTargetTypemask,
     SpeedType,
 )
+from mavlink_vocabulary.ids import MavCmd, MessageId
 from mavlink_vocabulary.reasons import (
     FAILSAFE_TEXTS,
     FAILURE_TEXTS,

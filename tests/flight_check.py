@@ -160,7 +160,10 @@ async def fly_one_waypoint(client: MavClient, swarm: Swarm, system: int) -> None
 
 async def recover_and_fly(client: MavClient, swarm: Swarm, system: int,
                           params_at_start: Mapping[str, float]) -> None:
-    """Restore parameters, land/disarm if needed, then fly one waypoint."""
+    """Restore parameters, clear the plans (a fuzzed fence may enclose nothing), land/disarm
+    if needed, then fly one waypoint."""
     await restore_params(client, system, params_at_start)
+    client.send(client.mav.mission_clear_all_encode(system, 1, 255))  # MAV_MISSION_TYPE_ALL
+    await client.wait_for("MISSION_ACK", system=system, where=lambda m: m.mission_type == 255)
     await _land_and_disarm(client, swarm, system)
     await fly_one_waypoint(client, swarm, system)

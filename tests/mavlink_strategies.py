@@ -105,6 +105,8 @@ def field(type_name: str, name: str, ftype: str, length: int) -> st.SearchStrate
         return st.sampled_from((0, 0, 0, 1, 2, 255))
     if name in ("frame", "coordinate_frame"):
         return st.one_of(st.integers(0, 12), integers(ftype))
+    if name == "type_mask" and ftype == "uint8_t":  # SET_ATTITUDE_TARGET's
+        return st.one_of(st.sampled_from((0, 7, 64, 128, 0xFF)), integers(ftype))
     if name == "type_mask":
         return st.one_of(st.sampled_from((0x9F8, 0xDC7, 0xDFF, 0, 0xFFFF)), integers(ftype))
     if name == "param_value":
@@ -191,7 +193,7 @@ def offboard_episode(draw: st.DrawFn) -> list:
     """A set-point (local or global), then OFFBOARD and arm."""
     target = draw(st.sampled_from(SYSTEMS))
     kind = draw(st.sampled_from(("SET_POSITION_TARGET_LOCAL_NED",
-                                 "SET_POSITION_TARGET_GLOBAL_INT")))
+                                 "SET_POSITION_TARGET_GLOBAL_INT", "SET_ATTITUDE_TARGET")))
     setpoint = draw(message(kind, target_system=target, target_component=1))
     return [setpoint, draw(_command(target, 176, 1.0, 6.0, 0.0)),
             draw(_command(target, 400, 1.0)), setpoint]
@@ -224,6 +226,8 @@ NEAR_LAT, NEAR_LON = LAT0 + 0.0002, LON0 + 0.0003
 # For every handled command, plausible parameters 1-7 (NaN: unset)
 BASELINES: dict[int, tuple[float, ...]] = {
     20: (), 21: (math.nan,) * 4 + (NEAR_LAT, NEAR_LON), 22: (),
+    34: (10.0, 2.0, 0.0, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 12.0),
+    241: (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
     115: (90.0, 10.0, 1.0, 0.0), 176: (1.0, 4.0, 3.0), 178: (1.0, 5.0, -1.0),
     179: (0.0, math.nan, math.nan, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 1.0),
     192: (math.nan, 1.0, math.nan, math.nan, NEAR_LAT, NEAR_LON, ALT0 + 12.0),

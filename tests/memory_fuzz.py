@@ -19,7 +19,14 @@ from dataclasses import dataclass
 
 from emulator.flight.modes import FlightMode
 from emulator.flight.params import ParamStore
-from mavlink_vocabulary import MavCmd, MavComponent, MavFrame, MavParamType, MavResult
+from mavlink_vocabulary import (
+    MavCmd,
+    MavComponent,
+    MavFrame,
+    MavMissionType,
+    MavParamType,
+    MavResult,
+)
 from tests.frame_fuzz import FrameFuzzer
 from tests.memory_link import MemoryLink
 
@@ -119,6 +126,11 @@ def recover_and_fly(link: MemoryLink, system: int, params_at_start: Mapping[str,
     for name, value in params_at_start.items():
         if _float32(ap.params[name]) != _float32(value):
             _param_set(link, system, name, value)
+    # the plans cleared (a fuzzed fence may enclose nothing), as a ground station would
+    since = link.send(link.mav.mission_clear_all_encode(system, MavComponent.AUTOPILOT1,
+                                                        MavMissionType.ALL))
+    assert link.wait_for("MISSION_ACK", system=system, since=since, within_s=0.0,
+                         where=lambda m: m.mission_type == MavMissionType.ALL).type == 0
     if ap.in_air:
         assert link.command_long(system, MavCmd.NAV_LAND, *[math.nan] * 7).result == 0
         _run_until(link, lambda: not ap.in_air, 60.0 + 2.0 * max(ap.position_m[2], 0.0),

@@ -77,10 +77,14 @@ TYPE_WEIGHTS = [HANDLED[n] for n in TYPE_NAMES]
 # design) are left out so the seeded storm stays the one it was; the storm of
 # tests/test_hardening_mavlink.py covers them.
 FAULT_PARAMS = ("COM_DL_LOSS_T", "NAV_DLL_ACT", "SYS_FAILURE_EN")
+# The same for what PX4 conformance added later (offboard yaw rates, orbit, geofence):
+# the storm of tests/test_hardening_mavlink.py covers them.
+LATER_PARAMS = ("MC_YAWRATE_MAX", "MC_ORBIT_RAD_MAX", "MC_ORBIT_YAW_MOD", "GF_ACTION")
+LATER_COMMANDS = (34, 241)  # MAV_CMD_DO_ORBIT, MAV_CMD_PREFLIGHT_CALIBRATION
 PARAM_NAMES = [d.name.encode() for d in PARAM_DEFINITIONS
-               if d.name != "SIM_HOVER_ENDUR" and d.name not in FAULT_PARAMS]
-COMMANDS = [*sorted(c for c in HANDLERS if c != 420), 16, 17, 20, 21, 22, 176, 183, 185, 246,
-            31000]
+               if d.name != "SIM_HOVER_ENDUR" and d.name not in FAULT_PARAMS + LATER_PARAMS]
+COMMANDS = [*sorted(c for c in HANDLERS if c != 420 and c not in LATER_COMMANDS),
+            16, 17, 20, 21, 22, 176, 183, 185, 246, 31000]
 
 F32_MAX = 3.4028234663852886e38
 SPECIAL_FLOATS = [

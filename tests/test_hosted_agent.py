@@ -1,7 +1,7 @@
 """The hosted agent inside an episode: it offers each task to the driver, serves it with the
 task's key until the task ends, and then tells the driver; a taken task whose agent goes
-silent (or never makes a request) ends as an agent error naming the reason, and the session goes on to its next task;
-the token use an agent reports lands in its task's record."""
+silent (or never makes a request) ends as an agent error naming the reason, and the session
+goes on to its next task; the token use an agent reports lands in its task's record."""
 
 from __future__ import annotations
 

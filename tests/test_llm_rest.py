@@ -15,6 +15,7 @@ pytestmark = pytest.mark.mavsdk
 
 ALL_OK = {"agent": 200, "operator": 200, "admin": 200}
 ACTORS = {"agent": 200, "operator": 403, "admin": 200}
+FLYERS = {"agent": 200, "operator": 409, "admin": 200}  # an operator flies only without a task
 
 # (method, path, expected status per role); {s} = the session id, {d} = a drone id.
 ROUTES: list[tuple[str, str, dict[str, int]]] = [
@@ -29,7 +30,7 @@ ROUTES: list[tuple[str, str, dict[str, int]]] = [
     ("GET", "/check/sessions/{s}/task", {"agent": 403, "operator": 403, "admin": 200}),
     ("GET", "/drones", ALL_OK),
     ("GET", "/drones/{d}", ALL_OK),
-    ("POST", "/drones/{d}/command/rotate?heading=90", ACTORS),
+    ("POST", "/drones/{d}/command/rotate?heading=90", FLYERS),
     ("GET", "/drones/{d}/nearby", ALL_OK),
     ("GET", "/drones/{d}/nearby/targets", ALL_OK),
     ("GET", "/drones/{d}/nearby/clouds", {"agent": 404, "operator": 404, "admin": 404}),
@@ -39,11 +40,11 @@ ROUTES: list[tuple[str, str, dict[str, int]]] = [
     ("GET", "/environments/current", ALL_OK),
     ("GET", "/targets/nope", {"agent": 404, "operator": 404, "admin": 404}),
     ("GET", "/obstacles/nope", {"agent": 404, "operator": 404, "admin": 404}),
-    ("POST", "/drones/{d}/command", {"agent": 422, "operator": 403, "admin": 422}),
+    ("POST", "/drones/{d}/command", {"agent": 422, "operator": 422, "admin": 422}),
     ("GET", "/sessions/nope", {"agent": 403, "operator": 404, "admin": 404}),
     ("GET", "/sessions/{s}/drones/nope", {"agent": 404, "operator": 404, "admin": 404}),
     ("POST", "/sessions/{s}/tools/teleport", {"agent": 404, "operator": 403, "admin": 404}),
-    ("POST", "/drones/{d}/command/fly_away", {"agent": 404, "operator": 403, "admin": 404}),
+    ("POST", "/drones/{d}/command/fly_away", {"agent": 404, "operator": 409, "admin": 404}),
 ]
 
 

@@ -148,8 +148,9 @@ async def test_offboard_position_setpoint_then_stop_holds(swarm_factory, mavsdk_
         offboard, telemetry = OffboardAsync(system), TelemetryAsync(system)
         ap = swarm.fleet.autopilots[sysid - 1]
         await take_off(swarm, system, sysid, 6.0)
-        # local NED about the world origin: 20 m north, 15 m east, 9 m up
-        target = (15.0, 20.0, 9.0)
+        # local NED about the vehicle's own origin (it started 5 m east of the session's):
+        # 20 m north, 15 m east, 9 m up
+        target = (5.0 + 15.0, 20.0, 9.0)
         await offboard.set_position_ned(PositionNedYaw(20.0, 15.0, -9.0, 45.0))
         await offboard.start()
         assert await offboard.is_active()

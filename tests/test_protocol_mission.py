@@ -178,20 +178,27 @@ async def test_out_of_order_and_duplicate_items_are_re_requested() -> None:
         assert summary(await client.download_mission(1)) == summary(items)
 
 
-async def test_fence_and_rally_lists_are_empty() -> None:
+async def test_fence_and_rally_lists_start_empty_apart_from_the_mission() -> None:
     async with running_swarm(1) as (swarm, client):
         for mission_type in (FENCE, RALLY):
             client.send(client.mav.mission_request_list_encode(1, 1, mission_type))
             count = await client.wait_for("MISSION_COUNT", system=1)
             assert (count.count, count.mission_type) == (0, mission_type)
-            # clearing or uploading an empty list is fine; a non-empty one is unsupported
+            # clearing or uploading an empty list is fine; a non-empty one is requested
+            # item by item in its own type (tests/test_px4_geofence.py uploads them)
             client.send(client.mav.mission_count_encode(1, 1, 0, mission_type))
             ack = await client.wait_for("MISSION_ACK", system=1)
             assert (ack.type, ack.mission_type) == (ACCEPTED, mission_type)
             client.send(client.mav.mission_count_encode(1, 1, 3, mission_type))
+            req = await client.wait_for("MISSION_REQUEST_INT", system=1)
+            assert (req.seq, req.mission_type) == (0, mission_type)
+            client.send(client.mav.mission_clear_all_encode(1, 1, mission_type))
             ack = await client.wait_for("MISSION_ACK", system=1)
-            assert (ack.type, ack.mission_type) == (UNSUPPORTED, mission_type)
-            await client.expect_none("MISSION_REQUEST_INT", within=0.2)
+            assert (ack.type, ack.mission_type) == (ACCEPTED, mission_type)
+        # an unknown plan type is unsupported
+        client.send(client.mav.mission_count_encode(1, 1, 3, 7))
+        ack = await client.wait_for("MISSION_ACK", system=1)
+        assert (ack.type, ack.mission_type) == (UNSUPPORTED, 7)
         # the rally/fence traffic did not touch the mission
         items = mission(client, 1, [(0, 20, 10)])
         assert (await client.upload_mission(1, items)).type == ACCEPTED

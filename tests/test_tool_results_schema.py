@@ -18,13 +18,15 @@ from jsonschema import Draft202012Validator
 from mcp import Client
 from openai.types.chat import ChatCompletionMessage
 
-from agent_contract import AgentTask, AgentTools, TaskBudget, tool_names
+from agent_contract import AgentTask, AgentTools, TaskBudget
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from benchmark.episode import swarm_gateway
 from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.session_file import session_from_dict
 from llm_tools import OUTPUT_SCHEMA, default_registry, parse_tool_calls
+from llm_tools.batch import BATCH
 from llm_tools.mcp_server import streamable_http_app
+from llm_tools.registry import ToolRegistry, served_registry
 from mavlink_gateway import Gateway, Outcome, Status
 from mqtt_bus.schemas import SCHEMAS
 from tests.bench_fixtures import small_session
@@ -51,8 +53,9 @@ async def _listening(app: Any) -> AsyncIterator[str]:
         await task
 
 
-def _every_call(gateway: Gateway) -> list[tuple[str, dict[str, Any]]]:
-    """One call of every tool, in an order that flies one drone through them all."""
+def _every_call(gateway: Gateway, registry: ToolRegistry) -> list[tuple[str, dict[str, Any]]]:
+    """One call of every tool `registry` serves, in an order that flies one drone through them
+    all."""
     first, second = sorted(gateway.drones)[:2]
     x, y, _ = gateway.drones[first].state().position_m
     calls: list[tuple[str, dict[str, Any]]] = [
@@ -75,9 +78,15 @@ def _every_call(gateway: Gateway) -> list[tuple[str, dict[str, Any]]]:
         ("return_home", {"drone_id": first}),
         ("land", {"drone_id": first}),
         ("charge", {"drone_id": first}),
+        (BATCH, {"calls": [{"tool": "drone_state", "arguments": {"drone_id": first}},
+                           {"tool": "wait", "arguments": {"drone_id": second,
+                                                           "duration_s": 1.0}},
+                           {"tool": "nearby", "arguments": {"drone_id": "nobody"}}]}),
         ("finish", {"summary": "done"}),
     ]
-    missing = set(tool_names()) - {name for name, _ in calls}
+    served = {spec.name for spec in registry.specs()}
+    calls = [(name, arguments) for name, arguments in calls if name in served]
+    missing = served - {name for name, _ in calls}
     assert not missing, f"add a call of {sorted(missing)} to this test"
     return calls
 
@@ -86,14 +95,17 @@ def _tools(gateway: Gateway) -> AgentTools:
     return AgentTools(gateway, AgentTask("s", "t01", "fly", TaskBudget(200, 900.0)))
 
 
-async def _check_every_tool(gateway: Gateway, surface: str, call: Call) -> None:
-    validator = Draft202012Validator(OUTPUT_SCHEMA)
+async def _check_every_tool(gateway: Gateway, registry: ToolRegistry, surface: str,
+                            call: Call) -> None:
+    validators = {spec.name: Draft202012Validator(spec.output_schema)
+                  for spec in registry.specs()}
     problems = []
     results: dict[str, list[dict[str, Any]]] = {}
-    for name, arguments in _every_call(gateway):
+    for name, arguments in _every_call(gateway, registry):
         result = await call(name, arguments)
         results.setdefault(name, []).append(result)
-        problems += [f"{surface} {name}: {e.message}" for e in validator.iter_errors(result)]
+        problems += [f"{surface} {name}: {e.message}"
+                     for e in validators[name].iter_errors(result)]
     assert not problems, "\n".join(problems)
     flown = [results[n][0]["status"] for n in ("take_off", "move_to", "hover", "finish")]
     assert flown == ["ok"] * 4, (surface, results)
@@ -101,6 +113,8 @@ async def _check_every_tool(gateway: Gateway, surface: str, call: Call) -> None:
         assert waited["status"] == "ok" and isinstance(waited["message"], str), waited
         assert isinstance(waited["message_arrived"], bool), waited
         assert 0.0 < waited["waited_s"] <= 1.0, waited
+    for batch in results.get(BATCH, []):  # one result per call; a bad call its own answer
+        assert [r["status"] for r in batch["results"]] == ["ok", "ok", "rejected"], batch
 
 
 @pytest.mark.mavsdk
@@ -109,7 +123,7 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
     session = session_from_dict(data, source="s.json")
     task = session.tasks[0]
     async with swarm_gateway(session, lockstep=True) as (swarm, services, gateway):
-        registry = default_registry()
+        registry, served = default_registry(), served_registry()
 
         # REST: the tools route of a live session, an agent key, over a real socket.
         tools = _tools(gateway)
@@ -121,27 +135,29 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
                 base_url=url, headers={"X-API-Key": AGENT_KEY}, timeout=60.0) as http:
             listed = (await http.get(f"/sessions/{session.id}/tools")).json()
             assert {t["name"]: t["output_schema"] for t in listed} == {
-                name: OUTPUT_SCHEMA for name in tool_names()}
+                spec.name: spec.output_schema for spec in served.specs()}
+            assert all(spec.output_schema == OUTPUT_SCHEMA
+                       for spec in served.specs() if spec.name != BATCH)
 
             async def rest(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
                 r = await http.post(f"/sessions/{session.id}/tools/{name}", json=arguments)
                 assert r.status_code == 200, (name, r.status_code, r.text)
                 return dict(r.json())
-            await _check_every_tool(gateway, "REST", rest)
+            await _check_every_tool(gateway, served, "REST", rest)
 
         # MCP: Streamable HTTP, the official client (which checks structured content against
         # each tool's output schema itself and raises when it does not validate).
         current = [_tools(gateway)]
-        async with _listening(streamable_http_app(registry, lambda: current[0])) as url, \
+        async with _listening(streamable_http_app(served, lambda: current[0])) as url, \
                 Client(f"{url}/mcp") as client:
             listed = {t.name: t.output_schema for t in (await client.list_tools()).tools}
-            assert listed == {name: OUTPUT_SCHEMA for name in tool_names()}
+            assert listed == {spec.name: spec.output_schema for spec in served.specs()}
 
             async def mcp(name: str, arguments: dict[str, Any]) -> dict[str, Any]:
                 result = await client.call_tool(name, arguments)
                 assert result.structured_content is not None, name
                 return dict(result.structured_content)
-            await _check_every_tool(gateway, "MCP", mcp)
+            await _check_every_tool(gateway, served, "MCP", mcp)
 
         # OpenAI: an assistant message as the SDK types it, parsed by the adapter, run by the
         # registry, and sent back as the tool message's JSON content.
@@ -155,7 +171,7 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
             (parsed,) = parse_tool_calls(message.model_dump())
             result = await registry.call(openai_tools, parsed.name, parsed.arguments)
             return dict(json.loads(json.dumps(result, allow_nan=False)))
-        await _check_every_tool(gateway, "OpenAI", openai)
+        await _check_every_tool(gateway, registry, "OpenAI", openai)
 
 
 def test_an_outcome_cannot_hide_its_own_fields_behind_its_data() -> None:

@@ -35,7 +35,7 @@ from benchmark.server.hub import Caller, LiveSession
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
 from llm_tools.mcp_server import streamable_http_app
-from llm_tools.registry import ToolRegistry, default_registry
+from llm_tools.registry import ToolRegistry, served_registry
 
 __all__ = ["MCP_PATH", "TAKEN_PATH", "QuietServer", "UnitServer", "advertised_host"]
 
@@ -121,7 +121,7 @@ class UnitServer:
         self.host = host
         self.url = ""
         # The tools REST and MCP serve (one registry, so both list the same tools).
-        self._registry = registry or default_registry()
+        self._registry = registry or served_registry()
         self._current: _Hosted | None = None
         self._last: _Hosted | None = None
         self._retired: dict[str, str] = {}  # key -> what it was for

@@ -1,6 +1,9 @@
 """The FastAPI application: session, drone, task, tool and perception routes under
 `/sessions/{id}`, admin-only check routes under `/check`, and MultiUAV-Plat compatible
-`/drones` routes. OpenAPI docs are served at /docs."""
+`/drones` routes. OpenAPI docs are served at /docs.
+
+An agent's requests run as its thread of control (`agent_threads.py`): the whole session's
+agent, or one drone's agent for a drone key, which sees that drone's tools only."""
 
 from typing import Annotated, Any
 
@@ -8,14 +11,25 @@ from fastapi import Depends, FastAPI, HTTPException, Request
 from fastapi.responses import JSONResponse
 
 from agent_contract import BudgetExhausted
+from benchmark.server.agent_threads import call_tool as call_as_thread
+from benchmark.server.agent_threads import read_tool
 from benchmark.server.auth import live_session, require
 from benchmark.server.checks import add_check_routes
 from benchmark.server.compat import add_compat_routes
 from benchmark.server.compat_collision import add_compat_collision_routes
+from benchmark.server.compat_drones_admin import add_compat_drone_admin_routes
+from benchmark.server.compat_environments import add_compat_environment_routes
 from benchmark.server.compat_health import add_health_routes
+from benchmark.server.compat_histories import add_compat_history_routes
 from benchmark.server.compat_lists import add_compat_list_routes
+from benchmark.server.compat_request_history import add_compat_request_history
+from benchmark.server.compat_screenshot import add_compat_screenshot_routes
 from benchmark.server.compat_session_data import add_compat_session_data_routes
+from benchmark.server.compat_sessions_admin import add_compat_session_admin_routes
+from benchmark.server.compat_tasks import add_compat_task_routes
+from benchmark.server.compat_waypoints import add_compat_waypoint_routes
 from benchmark.server.compat_world import add_compat_world_routes
+from benchmark.server.compat_world_admin import add_compat_world_admin_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.link_routes import add_link_routes
 from benchmark.server.openapi_roles import add_role_docs
@@ -24,7 +38,7 @@ from benchmark.server.session_loading import add_session_loading_routes
 from benchmark.server.views import session_view, task_view
 from llm_tools.body_limit import bound_inputs
 from llm_tools.input_limits import InputError, preview
-from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry, default_registry
+from llm_tools.registry import ToolRegistry, served_registry
 
 __all__ = ["create_app", "drone_or_404"]
 
@@ -42,7 +56,8 @@ def drone_or_404(live: LiveSession, drone: str) -> str:
 
 def _drones(live: LiveSession, caller: Caller) -> dict[str, Any]:
     if caller.role is Role.AGENT:  # the agent's reads are tool calls, counted in its budget
-        return live.tools.list_drones().to_dict()
+        return read_tool(live.tools, caller.drone_id, "list_drones",
+                         lambda tools: tools.list_drones()).to_dict()
     states = live.gateway.list_drones()
     return {"status": "ok", "message": f"{len(states)} drones",
             "drones": [s.to_dict() for s in states]}
@@ -80,7 +95,8 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
         live = live_session(hub, caller, session_id)
         drone = drone_or_404(live, drone_id)
         if caller.role is Role.AGENT:
-            return live.tools.drone_state(drone).to_dict()
+            return read_tool(live.tools, caller.drone_id, "drone_state",
+                             lambda tools: tools.drone_state(drone)).to_dict()
         return live.gateway.drone_state(drone).to_dict()
 
     @app.get("/sessions/{session_id}/nearby/{drone_id}", tags=["drones"],
@@ -90,7 +106,8 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
         live = live_session(hub, caller, session_id)
         drone = drone_or_404(live, drone_id)
         if caller.role is Role.AGENT:
-            return live.tools.nearby(drone).to_dict()
+            return read_tool(live.tools, caller.drone_id, "nearby",
+                             lambda tools: tools.nearby(drone)).to_dict()
         return live.gateway.nearby(drone).to_dict()
 
     @app.get("/sessions/{session_id}/task", tags=["tasks"], summary="The current task")
@@ -103,25 +120,30 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
                    ) -> list[dict[str, Any]]:
         live_session(hub, caller, session_id)
         return [{"name": s.name, "description": s.description, "input_schema": s.input_schema,
-                 "output_schema": OUTPUT_SCHEMA} for s in registry.specs()]
+                 "output_schema": s.output_schema} for s in registry.specs()]
 
     @app.post("/sessions/{session_id}/tools/{name}", tags=["tools"],
               summary="Call an agent tool (agent, admin); the body is its arguments object",
               description="Answers 200 with the tool's result, or 422 with an error result "
-                          "({status: error, message}) when the arguments are refused.")
+                          "({status: error, message}) when the arguments are refused. The "
+                          "`batch` tool runs several calls side by side, one result each. "
+                          "Under the lockstep clock a key's calls run one at a time: a call "
+                          "while another of the same thread runs is `rejected`.")
     async def call_tool(session_id: str, name: str, request: Request,
                         caller: Annotated[Caller, Depends(actor)]) -> JSONResponse:
         live = live_session(hub, caller, session_id)
         if registry.get(name) is None:
             raise HTTPException(404, f"unknown tool {preview(name)}; available tools: "
                                 f"{', '.join(s.name for s in registry.specs())}")
-        result = await registry.call(live.tools, name, await _body_text(request))
+        body = await _body_text(request)
+        result = await call_as_thread(live.tools, caller.drone_id, name,
+                                      lambda tools: registry.call(tools, name, body))
         return JSONResponse(result, status_code=422 if result["status"] == "error" else 200)
 
 
 def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     """The REST API over `hub`'s live sessions (keys in the X-API-Key header)."""
-    registry = registry or default_registry()
+    registry = registry or served_registry()
     app = FastAPI(title="mavswarm agent API",
                   description="Live benchmark sessions; roles agent, operator and admin by "
                               "API key (X-API-Key header).",
@@ -143,5 +165,14 @@ def create_app(hub: Hub, registry: ToolRegistry | None = None) -> FastAPI:
     add_compat_routes(app, hub, registry)
     add_compat_list_routes(app, hub)
     add_compat_collision_routes(app, hub)
+    add_compat_history_routes(app, hub)
+    add_compat_task_routes(app, hub)
+    add_compat_drone_admin_routes(app, hub)
+    add_compat_session_admin_routes(app, hub)
+    add_compat_screenshot_routes(app, hub)
+    add_compat_environment_routes(app, hub)
+    add_compat_waypoint_routes(app, hub)
+    add_compat_world_admin_routes(app, hub)
+    add_compat_request_history(app, hub)
     add_role_docs(app, hub)
     return app

@@ -5,19 +5,30 @@ truth of the current task's window (since the task started, until now)."""
 from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
+from starlette.datastructures import QueryParams
 
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat import resolve_session
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.validators import ENDPOINTS, CheckContext, CheckDefinitionError, evaluate, parse_tree
+from benchmark.validators.endpoint import Endpoint
 from llm_tools.input_limits import preview
 
-__all__ = ["add_check_routes"]
+__all__ = ["add_check_routes", "query_parameters"]
 
 
 def _context(live: LiveSession) -> CheckContext:
     return CheckContext(live.swarm.recorder, live.session.scenario, live.task_start_s,
                         live.services.clock_s())
+
+
+def query_parameters(endpoint: Endpoint, query: QueryParams) -> dict[str, Any]:
+    """A check's parameters from a query string as the reference's clients send them: a list
+    of drones as the parameter repeated (`drone_ids=a&drone_ids=b`), anything else once (its
+    last value)."""
+    lists = {p.name for p in endpoint.params if p.kind == "drones"}
+    return {k: query.getlist(k) if k in lists else query[k] for k in query
+            if k != "session"}
 
 
 def add_check_routes(app: FastAPI, hub: Hub) -> None:
@@ -42,7 +53,7 @@ def add_check_routes(app: FastAPI, hub: Hub) -> None:
         if endpoint not in ENDPOINTS:
             raise HTTPException(404, f"unknown check endpoint {preview(endpoint)}")
         live = resolve_session(hub, caller, session)
-        parameters = {k: v for k, v in request.query_params.items() if k != "session"}
+        parameters = query_parameters(ENDPOINTS[endpoint], request.query_params)
         try:
             node = parse_tree({"endpoint": endpoint, "parameters": parameters},
                               live.session.scenario, path="query")

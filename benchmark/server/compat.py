@@ -3,6 +3,7 @@ commands `POST /drones/{id}/command/{name}` (scalar parameters as query paramete
 `move_along_path` waypoints as a JSON body), answered in the reference command-response
 shape. An agent key acts on its own session; other roles name one with `?session=`."""
 
+import hashlib
 import math
 import secrets
 import time
@@ -14,13 +15,14 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request
 
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat_entities import compat_drone, compat_nearby
+from benchmark.server.compat_write_guard import refuse_flight
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from llm_tools.input_limits import InputError, check_text, parse_json, parse_number, preview
 from llm_tools.registry import ToolRegistry
 from mavlink_gateway import DroneState, Status
 
-__all__ = ["COMMANDS", "UNSUPPORTED", "Command", "add_compat_routes", "resolve_session",
-           "run_command"]
+__all__ = ["COMMANDS", "UNSUPPORTED", "Command", "add_compat_routes", "command_id",
+           "resolve_session", "run_command"]
 
 _STATUS = {Status.OK.value: "success", Status.PARTIAL.value: "partial_success"}
 _REQUIRED = object()
@@ -129,6 +131,20 @@ UNSUPPORTED: dict[str, str] = {
 answered like a refused command (HTTP 200, status "error") and change nothing."""
 
 
+def command_id(live: LiveSession, index: int) -> str:
+    """The 8-hex id of the agent's tool call `index` (its place in the tool log) in the
+    session's current task: the same on every read (`GET /commands/{id}`)."""
+    return hashlib.sha256(f"{live.id}/{live.task.id}/{index}".encode()).hexdigest()[:8]
+
+
+def _logged_id(live: LiveSession, since: int, tool: str, drone_id: str) -> str:
+    """The id of the call of `tool` on `drone_id` logged since position `since`."""
+    calls = live.tools.__dict__.get("calls", [])
+    found = next((c["i"] for c in calls[since:] if c["name"] == tool
+                  and c["drone"] == drone_id), None)
+    return secrets.token_hex(4) if found is None else command_id(live, found)
+
+
 def resolve_session(hub: Hub, caller: Caller, session: str | None) -> LiveSession:
     """The caller's session: an agent's own, else the one named (or the current one)."""
     if caller.role is Role.AGENT:
@@ -164,10 +180,12 @@ async def run_command(live: LiveSession, registry: ToolRegistry, drone_id: str, 
                 "status": "error", "message": f"{name} is not supported: {UNSUPPORTED[name]}; "
                 "nothing was done", "timestamp": time.time()}
     arguments = {"drone_id": drone_id, **command.arguments(dict(params), body, state)}
+    since = len(live.tools.__dict__.get("calls", []))
     result = await registry.call(live.tools, command.tool, arguments)
     status = _STATUS.get(result["status"], "error")
-    answer = {"command_id": secrets.token_hex(4), "drone_id": drone_id, "command": name,
-              "status": status, "message": result["message"], "timestamp": time.time()}
+    answer = {"command_id": _logged_id(live, since, command.tool, drone_id),
+              "drone_id": drone_id, "command": name, "status": status,
+              "message": result["message"], "timestamp": time.time()}
     if name == "move_along_path":
         answer.update(_path_points(arguments["waypoints"], status, result.get("reached", 0)))
     return answer
@@ -188,7 +206,7 @@ def _path_points(points: list[list[float]], status: str, reached: int) -> dict[s
 def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     """Add the MultiUAV-Plat compatible /drones routes to `app`."""
     anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
-    actor = require(hub, Role.AGENT, Role.ADMIN)
+    actor = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
     pick = Query(None, description="session id (operator and admin keys)")
 
     @app.get("/drones", tags=["multiuav-plat"], summary="The session's drones")
@@ -214,8 +232,10 @@ def add_compat_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
         except InputError as error:
             raise InputError(f"{preview(name)}: {error.where}", error.problem,
                              http_status=error.http_status) from None
-        return await run_command(resolve_session(hub, caller, session), registry, drone_id,
-                                 name, dict(request.query_params), body)
+        live = resolve_session(hub, caller, session)
+        refuse_flight(live, caller)
+        return await run_command(live, registry, drone_id, name, dict(request.query_params),
+                                 body)
 
     def _nearby(live: LiveSession, caller: Caller, drone_id: str) -> dict[str, Any]:
         _state(live, drone_id)

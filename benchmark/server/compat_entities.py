@@ -10,6 +10,7 @@ import time
 from collections.abc import Collection, Mapping
 from typing import Any
 
+from benchmark.server.compat_records import full_record
 from benchmark.server.compat_statistics import check_context
 from benchmark.server.compat_tracking import tracking_fields
 from benchmark.server.hub import LiveSession, Role
@@ -26,8 +27,9 @@ def entity_records(live: LiveSession, kind: str, only: Collection[str] | None = 
     moving target's `position` is where it is now, with its `tracking_status` and
     `last_tracked_at` in the current task's window (compat_tracking). `only`: the ids whose
     records are wanted (the others may come without their live fields)."""
-    records = {record["id"]: record for record in live.session.data.get(kind, [])
-               if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
+    records: dict[str, Mapping[str, Any]] = {
+        record["id"]: full_record(kind, record) for record in live.session.data.get(kind, [])
+        if isinstance(record, Mapping) and isinstance(record.get("id"), str)}
     moving = live.swarm.fleet.targets if kind == "targets" else None
     if moving is not None:
         current = {ident: at for ident, at in moving.current().items()
@@ -41,13 +43,25 @@ def entity_records(live: LiveSession, kind: str, only: Collection[str] | None = 
     return records
 
 
-def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
+def _volume(level_pct: float, capacity: Any) -> float | None:
+    """The reference's `battery_volume` (mAh left); None for a capacity that is a size label
+    rather than a number."""
+    if isinstance(capacity, bool) or not isinstance(capacity, int | float):
+        return None
+    return round(level_pct / 100.0 * float(capacity), 2)
+
+
+def compat_drone(live: LiveSession, state: DroneState, *, volume: bool = False
+                 ) -> dict[str, Any]:
     """One drone as the reference returns it: every field of its entity record, with
     position, heading, battery and home from the drone's own telemetry. `speed` is 0.0 as in
-    the reference, whose drones have no kinematics; times are epoch seconds."""
+    the reference, whose drones have no kinematics; times are epoch seconds. `volume`: with
+    the model's `battery_volume` (mAh left), as session data gives it (the reference's drone
+    routes leave it out)."""
     spec = next(v for v in live.session.scenario.vehicles if v.id == state.drone)
     record = entity_records(live, "drones").get(state.drone, {})
-    return {
+    capacity = record.get("battery_capacity", spec.battery_capacity_mah)
+    out = {
         "id": state.drone,
         "name": spec.name,
         "model": spec.model,
@@ -59,7 +73,7 @@ def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
         "perceived_radius": spec.perceived_radius_m,
         "task_radius": spec.task_radius_m,
         "battery_level": round(state.battery_pct, 2),
-        "battery_capacity": record.get("battery_capacity", spec.battery_capacity_mah),
+        "battery_capacity": capacity,
         "max_speed": spec.max_speed_m_s,
         "max_altitude": spec.max_altitude_m,
         "home_position": {"x": round(state.home_x_m, 2), "y": round(state.home_y_m, 2),
@@ -67,6 +81,9 @@ def compat_drone(live: LiveSession, state: DroneState) -> dict[str, Any]:
         "created_at": record.get("created_at", live.started_wall_s),
         "last_updated": time.time(),
     }
+    if volume:
+        out["battery_volume"] = _volume(state.battery_pct, capacity)
+    return out
 
 
 def compat_nearby(live: LiveSession, perceived: Mapping[str, Any]) -> dict[str, Any]:

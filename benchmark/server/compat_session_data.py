@@ -17,6 +17,8 @@ from fastapi import Depends, FastAPI, Query
 from benchmark.server.auth import live_session, require
 from benchmark.server.compat import resolve_session
 from benchmark.server.compat_entities import compat_drone, compat_session_fields, entity_records
+from benchmark.server.compat_histories import session_histories
+from benchmark.server.compat_records import full_record
 from benchmark.server.compat_statistics import (
     agent_progress,
     check_context,
@@ -43,21 +45,24 @@ def _with_check_prefix(node: Any) -> Any:
 
 
 def compat_task(live: LiveSession, index: int, role: Role) -> dict[str, Any]:
-    """Task `index` of the session in the reference's task shape. `is_done`: the operator
-    has moved the session past it. `is_passed` is false: the server does not judge tasks (the
-    benchmark run and the admin check routes do). The check tree is for admins only; nobody
-    gets `related_apis` (the oracle plan is in another shape)."""
+    """Task `index` of the session in the reference's task shape. `is_done`: as mark-done or
+    mark-pending set it, else whether the operator has moved the session past it.
+    `is_passed`: set once an admin's task check passed (compat_tasks), else false. The check
+    tree is for admins only; nobody gets `related_apis` (the oracle plan is in another
+    shape)."""
     task = live.session.tasks[index]
     raw = next((t for t in live.session.data.get("tasks", [])
                 if isinstance(t, Mapping) and t.get("id") == task.id), {})
     current = next((k for k, t in enumerate(live.session.tasks) if t is live.task), -1)
+    marks = live.task_marks.get(task.id, {})
     checks = _with_check_prefix(raw.get("checks")) if role is Role.ADMIN else None
     return {"id": task.id, "name": task.template or task.id, "content": task.text,
             "content_aliases": list(task.aliases), "description": task.category,
             "creator": "system", "originated_from": raw.get("source", "system"),
             "difficulty": task.difficulty, "related_apis": [],
-            "execution_check_apis": checks, "commands": [], "is_done": index < current,
-            "is_passed": False, "created_at": live.started_wall_s,
+            "execution_check_apis": checks, "commands": [],
+            "is_done": marks.get("is_done", index < current),
+            "is_passed": marks.get("is_passed", False), "created_at": live.started_wall_s,
             "last_updated": live.started_wall_s}
 
 
@@ -65,14 +70,20 @@ def session_data(hub: Hub, live: LiveSession, role: Role) -> dict[str, Any]:
     """The reference's flat session export of a live session, for operators and admins."""
     data = live.session.data
     fields = compat_session_fields(live, role, active=hub.current() == live.id)
+    reaches = reach_history(live)
+    reached_by = {target: list(entry["reached_by"])
+                  for target, entry in reaches["target_reaches"]["by_target"].items()}
+    targets = [{**t, "is_reached": t["id"] in reached_by,
+                "reached_by": reached_by.get(t["id"], [])}
+               for t in entity_records(live, "targets").values()]
     return {"id": live.id, "name": live.session.name, **fields,
             "statistics": statistics_block(live),
-            "drones": [compat_drone(live, s) for s in live.gateway.list_drones()],
-            "targets": [dict(t) for t in entity_records(live, "targets").values()],
-            "obstacles": [dict(o) for o in data.get("obstacles", [])],
-            "environment": data.get("environment"),
+            "drones": [compat_drone(live, s, volume=True) for s in live.gateway.list_drones()],
+            "targets": targets,
+            "obstacles": [dict(o) for o in entity_records(live, "obstacles").values()],
+            "environment": full_record("environment", data.get("environment") or {}),
             "tasks": [compat_task(live, k, role) for k in range(len(live.session.tasks))],
-            "history": {**reach_history(live),
+            "history": {**session_histories(live), **reaches,
                         "moving_target_tracking": moving_target_tracking(check_context(live))}}
 
 

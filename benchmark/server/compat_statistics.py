@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmark.server.compat_tracking import tracking_fields
 from benchmark.server.hub import LiveSession
 from benchmark.validators import CheckContext
 from benchmark.validators.coverage import AREA_TASK_TYPES, coverage, task_done, task_progress
@@ -22,6 +23,9 @@ __all__ = ["FULLY_COVERED", "agent_progress", "check_context", "reach_history",
 FULLY_COVERED = 0.999
 """A target counts as fully covered from this coverage ratio on (the reference's 99.9 %)."""
 RECENT_REACHES = 5
+REFERENCE_TASK_TYPES = frozenset({*AREA_TASK_TYPES, "target_assignment", "target_tracking"})
+"""Task types the reference measures progress of; for the others it answers 0, not done."""
+UNTRACKED = "No progress tracking for this task type"
 
 
 def check_context(live: LiveSession) -> CheckContext:
@@ -80,18 +84,25 @@ def task_progress_block(live: LiveSession, ctx: CheckContext | None = None) -> d
     ctx = ctx or check_context(live)
     task_type = live.session.task_type
     counted = [t for t in ctx.scenario.world.targets if not t.is_charging_station]
-    done = task_done(ctx)
-    details: dict[str, Any] = {"total_targets": len(counted)}
+    reached = {t for by_target in _reach_starts(ctx).values() for t in by_target}
+    details: dict[str, Any] = {
+        "total_targets": len(counted),
+        "visited_targets": [t.id for t in counted if t.id in reached],
+        "unvisited_targets": [t.id for t in counted if t.id not in reached],
+        "tracked_targets": [t.id for t in counted if t.motion is not None
+                            and tracking_fields(ctx, t.id)["tracking_status"] == "tracked"]}
     if task_type in AREA_TASK_TYPES:
         mean = (sum(coverage(ctx, t.id) for t in counted) / len(counted)) if counted else 1.0
         details["average_coverage"] = round(100.0 * mean, 2)
     else:
-        reached = {t for by_target in _reach_starts(ctx).values() for t in by_target}
-        details["reached_targets"] = sum(t.id in reached for t in counted)
-    return {"task_type": task_type,
-            "progress_percentage": int(100.0 * task_progress(ctx) + 1e-6),
-            "is_completed": done, "status_message": "Task Finished" if done
-            else "Task to be Done", "details": details,
+        details["reached_targets"] = len(details["visited_targets"])
+    if task_type in REFERENCE_TASK_TYPES:
+        progress, done = int(100.0 * task_progress(ctx) + 1e-6), task_done(ctx)
+        message = "Task Finished" if done else "Task to be Done"
+    else:  # the reference measures no progress for other task types
+        progress, done, message = 0, False, UNTRACKED
+    return {"task_type": task_type, "progress_percentage": progress,
+            "is_completed": done, "status_message": message, "details": details,
             "target_reach_summary": _reach_summary(ctx),
             "area_coverage_summary": _coverage_summary(ctx),
             "window_s": [round(ctx.t0_s, 3), round(ctx.t1_s, 3)]}
@@ -164,10 +175,12 @@ def agent_progress(live: LiveSession) -> dict[str, Any]:
     """Task progress for an agent: the reference's keys, but what the hidden checks decide
     (progress, completion, reaches, coverage) is null; details are the agent's own budget."""
     budget = live.task.budget
-    return {"task_type": live.session.task_type, "progress_percentage": None,
-            "is_completed": None,
-            "status_message": "progress is judged by hidden checks after the task ends; "
-                              "agents do not see it",
+    untracked = live.session.task_type not in REFERENCE_TASK_TYPES
+    return {"task_type": live.session.task_type,
+            "progress_percentage": 0 if untracked else None,
+            "is_completed": False if untracked else None,
+            "status_message": UNTRACKED if untracked else
+            "progress is judged by hidden checks after the task ends; agents do not see it",
             "details": {"task_id": live.task.id, "tool_calls": live.tools.tool_calls,
                         "tool_call_budget": None if budget is None else budget.tool_calls,
                         "sim_time_s": round(live.tools.sim_elapsed_s, 3),

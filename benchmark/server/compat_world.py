@@ -9,7 +9,9 @@ from fastapi import Depends, FastAPI, HTTPException, Query, Request
 from benchmark.server.auth import require
 from benchmark.server.compat import COMMANDS, resolve_session, run_command
 from benchmark.server.compat_entities import compat_session_fields, entity_records
+from benchmark.server.compat_records import full_record
 from benchmark.server.compat_statistics import statistics_block
+from benchmark.server.compat_write_guard import refuse_flight
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.views import session_view, task_view
 from llm_tools.input_limits import parse_json, preview
@@ -45,7 +47,7 @@ def _entity(live: LiveSession, caller: Caller, kind: str, entity_id: str) -> dic
 
 def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
     anyone = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
-    actor = require(hub, Role.AGENT, Role.ADMIN)
+    actor = require(hub, Role.AGENT, Role.OPERATOR, Role.ADMIN)
     pick = Query(None, description="session id (operator and admin keys)")
 
     @app.get("/sessions/current", tags=["multiuav-plat"], summary="The caller's session")
@@ -69,8 +71,8 @@ def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> N
     @app.get("/environments/current", tags=["multiuav-plat"], summary="Weather and wind")
     def environment(caller: Annotated[Caller, Depends(anyone)], session: str | None = pick
                     ) -> dict[str, Any]:
-        return dict(resolve_session(hub, caller, session).session.data.get("environment")
-                    or {})
+        live = resolve_session(hub, caller, session)
+        return full_record("environment", live.session.data.get("environment") or {})
 
     @app.get("/targets/{target_id}", tags=["multiuav-plat"], summary="A target by id")
     def target(target_id: str, caller: Annotated[Caller, Depends(anyone)],
@@ -96,6 +98,7 @@ def add_compat_world_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> N
         if not isinstance(params, dict):
             raise HTTPException(422, "parameters must be an object")
         live = resolve_session(hub, caller, session)
+        refuse_flight(live, caller)
         scalars = {k: v for k, v in params.items() if not isinstance(v, list | dict)}
         return await run_command(live, registry, drone_id, body["command"], scalars,
                                  params or None)

@@ -6,6 +6,7 @@ import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 from agent_contract import AgentTools
 from benchmark.session_file import Session, TaskSpec
@@ -29,6 +30,7 @@ class Caller:
 
     role: Role
     session_id: str | None = None
+    drone_id: str | None = None  # an agent key of one drone's agent (per-drone agents)
 
 
 @dataclass
@@ -47,6 +49,10 @@ class LiveSession:
     tools: AgentTools
     task_start_s: float
     started_wall_s: float = field(default_factory=time.time)  # the compat routes' created_at
+    task_marks: dict[str, dict[str, bool]] = field(default_factory=dict)
+    """The reference's `is_done` / `is_passed` per task id, as its routes set them."""
+    environments: dict[str, dict[str, Any]] = field(default_factory=dict)
+    """The reference's environment records by id (compat_environments); empty until used."""
 
     @property
     def id(self) -> str:
@@ -83,9 +89,10 @@ class Hub:
             return self.current_id
         return next(iter(self.sessions)) if len(self.sessions) == 1 else None
 
-    def add_key(self, key: str, role: Role | str, session_id: str | None = None) -> None:
-        """Register an API key. An agent key must name a session in the hub; other roles
-        must not name one."""
+    def add_key(self, key: str, role: Role | str, session_id: str | None = None,
+                drone_id: str | None = None) -> None:
+        """Register an API key. An agent key must name a session in the hub (and may name one
+        of its drones: that drone's agent); other roles must not name one."""
         if not isinstance(key, str) or not key.strip():
             raise ValueError(f"key: expected a non-empty string, got {key!r}")
         try:
@@ -100,9 +107,13 @@ class Hub:
         elif session_id is not None:
             raise ValueError(f"session_id: only agent keys are bound to a session, got "
                              f"{session_id!r} for role {role.value!r}")
+        if drone_id is not None and (role is not Role.AGENT or drone_id
+                                     not in self.sessions[str(session_id)].gateway.drones):
+            raise ValueError(f"drone_id: {drone_id!r} is not a drone of session {session_id!r}"
+                             if role is Role.AGENT else "drone_id: only agent keys name a drone")
         if key in self._keys:
             raise ValueError("key: this API key is already registered")
-        self._keys[key] = Caller(role, session_id)
+        self._keys[key] = Caller(role, session_id, drone_id)
 
     def caller(self, key: str) -> Caller | None:
         return self._keys.get(key)

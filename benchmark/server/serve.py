@@ -7,9 +7,13 @@ moves it on: `session_control.py`), and the agent acts through an `AgentTools` b
 task's budget. Both servers run until their
 asyncio task is cancelled (or, under uvicorn, until SIGINT/SIGTERM).
 
-API keys are given as `role[:session]=key` (role agent, operator or admin; only an agent key
-names a session, and may leave it out when one session is served). With no keys given, one
-agent key per session plus an operator and an admin key are generated and printed.
+API keys are given as `role[:session[/drone]]=key` (role agent, operator or admin; only an agent
+key names a session, and may leave it out when one session is served; naming a drone makes it
+that drone's agent, one thread of its own). With no keys given, one agent key per session (per
+drone with `--keys-per-drone`) plus an operator and an admin key are generated and printed.
+
+The clock is lockstep by default (`--clock stepped` for the stepped one): simulated time runs
+only while every thread of a session's agent waits on the world (`agent_threads.py`).
 """
 
 from __future__ import annotations
@@ -18,17 +22,18 @@ import argparse
 import asyncio
 import contextlib
 import functools
-import secrets
 import sys
 from collections.abc import AsyncIterator, Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, TextIO
 
 import uvicorn
 
+from benchmark.episode import CLOCKS
 from benchmark.importer import load_any_session
-from benchmark.server import Hub, Role, create_app
+from benchmark.server import Hub, create_app
+from benchmark.server.api_keys import ApiKey, generated_keys, parse_api_key
+from benchmark.server.api_keys import add_keys as _add_keys
 from benchmark.server.hub import LiveSession
 from benchmark.server.listen import listen_socket
 from benchmark.server.operator_rule import served_refusal
@@ -41,7 +46,7 @@ from benchmark.server.session_runner import (
 from benchmark.session_file import Session
 from emulator.reference_mapping import notes_to_show
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
-from llm_tools.registry import default_registry
+from llm_tools.registry import served_registry
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 from mqtt_bus.swarm_bus import gateway_session_bus
 from mqtt_bus.topics import check_segment
@@ -72,65 +77,6 @@ AppExtension = Callable[[Any, Hub, Sequence["ApiKey"]], Callable[[str], None] | 
 TRANSPORTS: tuple[Transport, ...] = ("stdio", "http")
 
 
-@dataclass(frozen=True)
-class ApiKey:
-    """One API key: its role and, for an agent key, the session it is bound to (None: the
-    only session served)."""
-
-    role: Role
-    key: str
-    session_id: str | None = None
-
-    def spec(self) -> str:
-        """The key in the `role[:session]=key` form `parse_api_key` reads."""
-        where = f":{self.session_id}" if self.session_id else ""
-        return f"{self.role.value}{where}={self.key}"
-
-
-def parse_api_key(text: str) -> ApiKey:
-    """Read `role[:session]=key`, e.g. `agent:area_search-easy-1=s3cret` or `admin=root`."""
-    if not isinstance(text, str) or "=" not in text:
-        raise ValueError(f"api key: expected 'role[:session]=key', got {text!r}")
-    head, key = text.split("=", 1)
-    role_text, _, session_id = head.partition(":")
-    try:
-        role = Role(role_text.strip())
-    except ValueError:
-        raise ValueError(f"api key {text!r}: role must be one of "
-                         f"{[r.value for r in Role]}, got {role_text!r}") from None
-    if not key.strip():
-        raise ValueError(f"api key {text!r}: the key after '=' is empty")
-    if ":" in head and not session_id.strip():
-        raise ValueError(f"api key {text!r}: the session after ':' is empty")
-    if session_id and role is not Role.AGENT:
-        raise ValueError(f"api key {text!r}: only agent keys name a session, not role "
-                         f"{role.value!r}")
-    return ApiKey(role, key.strip(), session_id.strip() or None)
-
-
-def generated_keys(session_ids: Sequence[str]) -> list[ApiKey]:
-    """Fresh random keys: one agent key per session, one operator key, one admin key."""
-    keys = [ApiKey(Role.AGENT, secrets.token_urlsafe(18), sid) for sid in session_ids]
-    keys.append(ApiKey(Role.OPERATOR, secrets.token_urlsafe(18)))
-    keys.append(ApiKey(Role.ADMIN, secrets.token_urlsafe(18)))
-    return keys
-
-
-def _add_keys(hub: Hub, keys: Sequence[ApiKey]) -> None:
-    for key in keys:
-        session_id = key.session_id
-        if key.role is Role.AGENT and session_id is None:
-            if len(hub.sessions) != 1:
-                raise ValueError(f"api key {key.role.value}=...: an agent key must name its "
-                                 f"session when several are served "
-                                 f"({', '.join(hub.sessions)})")
-            session_id = next(iter(hub.sessions))
-        try:
-            hub.add_key(key.key, key.role, session_id)
-        except ValueError as error:
-            raise ValueError(f"api key for role {key.role.value!r}: {error}") from None
-
-
 def _load(path: str | Path) -> Session:
     """A session file of either format; the notes on a converted MultiUAV-Plat file are
     printed to stderr."""
@@ -141,11 +87,11 @@ def _load(path: str | Path) -> Session:
 
 
 @contextlib.asynccontextmanager
-async def live_hub(session_paths: Sequence[str | Path],
-                   physics_hz: float = 50.0) -> AsyncIterator[Hub]:
-    """A Hub with one live session per file (a stepped swarm and gateway each), closed on
-    exit; sessions an operator loads while it runs are closed with them. Session ids must be
-    distinct."""
+async def live_hub(session_paths: Sequence[str | Path], physics_hz: float = 50.0, *,
+                   clock: str = "lockstep") -> AsyncIterator[Hub]:
+    """A Hub with one live session per file (a swarm with `clock`, lockstep or stepped, and
+    a gateway each), closed on exit; sessions an operator loads while it runs are closed with
+    them. Session ids must be distinct."""
     if not session_paths:
         raise ValueError("session_paths: expected at least one session file, got none")
     sessions = [_load(path) for path in session_paths]
@@ -158,7 +104,7 @@ async def live_hub(session_paths: Sequence[str | Path],
         first_task(session)
     hub = Hub()
     hub.session_folders.files.extend(Path(p).resolve() for p in session_paths)
-    async with SessionRunner(physics_hz) as runner:
+    async with SessionRunner(physics_hz, clock) as runner:
         for session in sessions:
             hub.add_session(await runner.start(session))
         hub.starter = runner.start
@@ -201,20 +147,23 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
                      on_ready: Callable[[str], None] | None = None,
                      out: TextIO | None = None, open_access: bool = False,
                      mqtt: BrokerUrl | None = None, mqtt_osd_hz: float = 2.0,
-                     extend: AppExtension | None = None) -> None:
+                     extend: AppExtension | None = None, clock: str = "lockstep",
+                     keys_per_drone: bool = False) -> None:
     """Serve the REST API over live sessions from `session_paths` until cancelled. `keys` are
     `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
     `out` (stdout by default) with the URL. `open_access` lets requests without a key act as
     the agent of the one session served (MultiUAV-Plat clients send none). `mqtt`: every
     session started here also goes on that broker (README "MQTT bus"). `extend(app, hub,
     keys)` adds routes of a layer above (the web console) and may return what to call with
-    the base URL once the server listens."""
+    the base URL once the server listens. `clock`: lockstep (default) or stepped;
+    `keys_per_drone`: generated agent keys are one per drone (per-drone agents)."""
     if open_access and len(session_paths) != 1:
         raise ValueError("--open serves exactly one session: a request without a key must "
                          "know whose agent it is")
     parsed = [k if isinstance(k, ApiKey) else parse_api_key(k) for k in keys]
     out = out or sys.stdout
-    async with live_hub(session_paths) as hub, contextlib.AsyncExitStack() as buses:
+    async with live_hub(session_paths, clock=clock) as hub, \
+            contextlib.AsyncExitStack() as buses:
         if mqtt is not None:
             async def on_bus(live: LiveSession) -> None:
                 bus = await buses.enter_async_context(gateway_session_bus(
@@ -237,12 +186,13 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
 
                 hub.starter = start_on_bus
         if not parsed:
-            parsed = generated_keys(list(hub.sessions))
+            drones = {sid: list(live.gateway.drones) for sid, live in hub.sessions.items()}
+            parsed = generated_keys(list(hub.sessions), drones if keys_per_drone else None)
             print("generated API keys (send one in the X-API-Key header):", file=out)
             for key in parsed:
                 print(f"  {key.spec()}", file=out)
-        _add_keys(hub, parsed)
         hub.open_access = open_access
+        _add_keys(hub, parsed)
         app = create_app(hub)
         extended = extend(app, hub, parsed) if extend is not None else None
 
@@ -259,15 +209,20 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
 
 async def serve_mcp(session_path: str | Path, *, transport: Transport = "stdio",
                     host: str = DEFAULT_HOST, port: int = DEFAULT_MCP_PORT,
-                    on_ready: Callable[[str], None] | None = None) -> None:
+                    on_ready: Callable[[str], None] | None = None, clock: str = "lockstep",
+                    on_session: Callable[[LiveSession], None] | None = None) -> None:
     """Serve one live session's agent tools over MCP until cancelled (stdio: until the client
     disconnects). Over HTTP the endpoint is `http://host:port/mcp`; nothing is printed to
-    stdout (stdio carries the protocol), the URL goes to stderr."""
+    stdout (stdio carries the protocol), the URL goes to stderr. The client is the session's
+    agent, one thread under a lockstep `clock` (parallel calls go in one `batch` call);
+    `on_session(live)` is called once the session runs."""
     if transport not in TRANSPORTS:
         raise ValueError(f"transport: expected one of {TRANSPORTS}, got {transport!r}")
-    registry = default_registry()
-    async with live_hub([session_path]) as hub:
+    registry = served_registry()
+    async with live_hub([session_path], clock=clock) as hub:
         (live,) = hub.sessions.values()
+        if on_session is not None:
+            on_session(live)
         if transport == "stdio":
             await serve_stdio(registry, lambda: live.tools)
             return
@@ -301,13 +256,18 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     rest.add_argument("--host", default=DEFAULT_HOST, help="address to listen on")
     rest.add_argument("--port", type=int, default=DEFAULT_REST_PORT, help="TCP port")
     rest.add_argument("--key", dest="keys", action="append", default=[],
-                      metavar="ROLE[:SESSION]=KEY",
-                      help="an API key (repeatable); none: generate and print keys")
+                      metavar="ROLE[:SESSION[/DRONE]]=KEY",
+                      help="an API key (repeatable); an agent key naming a drone is that "
+                           "drone's agent; none: generate and print keys")
+    rest.add_argument("--keys-per-drone", action="store_true",
+                      help="generated agent keys: one per drone (per-drone agents, each a "
+                           "thread of its own) instead of one per session")
     rest.add_argument("--open", dest="open_access", action="store_true",
                       help="requests without a key act as the agent of the one session "
                            "served, as MultiUAV-Plat clients expect (default: 401)")
     rest.add_argument("--verbose", action="store_true",
                       help="also print MAVSDK's own log lines and info logging")
+    _add_clock(rest)
     add_mqtt_arguments(rest, session=False)
     rest.set_defaults(run=run_serve)
     mcp = sub.add_parser("mcp", help="serve one session's agent tools over MCP",
@@ -316,7 +276,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     mcp.add_argument("--transport", choices=TRANSPORTS, default="stdio")
     mcp.add_argument("--host", default=DEFAULT_HOST, help="http: address to listen on")
     mcp.add_argument("--port", type=int, default=DEFAULT_MCP_PORT, help="http: TCP port")
+    _add_clock(mcp)
     mcp.set_defaults(run=run_mcp)
+
+
+def _add_clock(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--clock", choices=CLOCKS, default="lockstep",
+                        help="lockstep (default): simulated time runs only while the agent's "
+                             "requests wait on the world, never while it thinks; stepped: it "
+                             "runs whenever a drone executes a goal")
 
 
 def _guarded(run: Callable[[], None]) -> int:
@@ -337,10 +305,12 @@ def run_serve(args: argparse.Namespace) -> int:
     return _guarded(lambda: asyncio.run(serve_rest(
         _sessions(args), host=args.host, port=args.port, keys=args.keys,
         open_access=args.open_access, mqtt=mqtt_options(args),
-        mqtt_osd_hz=args.mqtt_osd_hz, extend=getattr(args, "extend", None))))
+        mqtt_osd_hz=args.mqtt_osd_hz, extend=getattr(args, "extend", None),
+        clock=args.clock, keys_per_drone=args.keys_per_drone)))
 
 
 def run_mcp(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm mcp` until interrupted or the client leaves."""
     return _guarded(lambda: asyncio.run(serve_mcp(args.session, transport=args.transport,
-                                                  host=args.host, port=args.port)))
+                                                  host=args.host, port=args.port,
+                                                  clock=args.clock)))

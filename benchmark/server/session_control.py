@@ -6,13 +6,12 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
-from agent_contract import AgentTask
 from benchmark.episode import reset_for_task
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.live_faults import end_task_faults, start_task_faults
+from benchmark.server.session_runner import task_tools
 from benchmark.session_file import TaskSpec
-from benchmark.tool_log import LoggedTools
 
 __all__ = ["add_session_control_routes", "next_task"]
 
@@ -26,7 +25,7 @@ async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
     unusable tasks skipped; HTTP 409 when no usable task follows."""
     tasks = live.session.tasks
     index = next((k for k, t in enumerate(tasks) if t is live.task), -1)
-    following = tasks[index + 1:] if index >= 0 else ()
+    following = tasks[index + 1:] if index >= 0 else tasks  # free flight: the first task
     skipped: list[str] = []
     task: TaskSpec | None = None
     for candidate in following:
@@ -43,7 +42,8 @@ async def next_task(live: LiveSession) -> tuple[TaskSpec, list[str]]:
     end_task_faults(live)
     await reset_for_task(live.swarm, live.services, live.gateway)
     live.task = task
-    live.tools = LoggedTools(live.gateway, AgentTask(live.id, task.id, task.text, task.budget))
+    live.tools = task_tools(live.gateway, live.id, task,
+                            drones=getattr(live.tools, "drone_threads", ()))
     live.task_start_s = live.services.clock_s()
     start_task_faults(live)
     return task, skipped

@@ -1,25 +1,27 @@
 """Starting and stopping live sessions: a session (a mavswarm or MultiUAV-Plat file, or the same
 JSON sent to the server) becomes a stepped swarm, a gateway connected to it over MAVLink, and
 the agent's tools for its current task. `mavswarm serve` starts its sessions this way, and an
-operator loads more while it runs (`session_loading.py`)."""
+operator loads more while it runs (`session_loading.py`). The clock is lockstep by default
+(`clock="stepped"` for the stepped one): the agent's threads hold it while they think
+(`agent_threads.py`)."""
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import session_link_faults, swarm_gateway
+from benchmark.episode import CLOCKS, session_link_faults, swarm_gateway
 from benchmark.importer import import_session
+from benchmark.server.agent_threads import ServedTools
 from benchmark.server.hub import LiveSession
 from benchmark.server.live_faults import start_task_faults
 from benchmark.session_file import Session, TaskSpec, session_from_dict
-from benchmark.tool_log import LoggedTools
 from mavlink_gateway import Gateway
 
 __all__ = ["FREE_FLIGHT", "SessionRunner", "current_task_tools", "first_task",
-           "session_from_json"]
+           "session_from_json", "task_tools"]
 
 FREE_FLIGHT = TaskSpec(
     id="free-flight", template="", category="free flight", difficulty="",
@@ -40,11 +42,22 @@ def first_task(session: Session) -> TaskSpec:
     return task
 
 
+def task_tools(gateway: Gateway, session_id: str, task: TaskSpec, *,
+               drones: Sequence[str] = ()) -> ServedTools:
+    """The agent's tools for `task` under its budget, with its threads (`drones`: one per
+    drone, else one for the whole agent); under a lockstep clock a task with checks is held
+    while they think, free flight is not. Whoever ends the task (an operator's next task, a
+    play-out before the checks) closes them first (`await tools.close()`), or they go on
+    holding the clock."""
+    assert task.budget is not None
+    return ServedTools(gateway, AgentTask(session_id, task.id, task.text, task.budget),
+                       pins=gateway.services.lockstep and task.checks is not None,
+                       drones=drones)
+
+
 def current_task_tools(session: Session, gateway: Gateway) -> AgentTools:
     """The agent's tools for the session's current (first) task, under its budget."""
-    task = first_task(session)
-    assert task.budget is not None
-    return LoggedTools(gateway, AgentTask(session.id, task.id, task.text, task.budget))
+    return task_tools(gateway, session.id, first_task(session))
 
 
 def session_from_json(data: Any, source: str) -> tuple[Session, list[str]]:
@@ -63,8 +76,11 @@ class SessionRunner:
     """Starts live sessions, each with its own swarm and gateway, and closes them all on exit
     (or one by one). Use as an async context manager."""
 
-    def __init__(self, physics_hz: float = 50.0) -> None:
+    def __init__(self, physics_hz: float = 50.0, clock: str = "lockstep") -> None:
+        if clock not in CLOCKS:
+            raise ValueError(f"clock: expected one of {', '.join(CLOCKS)}, got {clock!r}")
         self.physics_hz = physics_hz
+        self.clock = clock
         self._stacks: dict[str, contextlib.AsyncExitStack] = {}
 
     async def start(self, session: Session) -> LiveSession:
@@ -79,7 +95,7 @@ class SessionRunner:
         stack = contextlib.AsyncExitStack()
         try:
             swarm, services, gateway = await stack.enter_async_context(
-                swarm_gateway(session, self.physics_hz,
+                swarm_gateway(session, self.physics_hz, lockstep=self.clock == "lockstep",
                               link_faults=session_link_faults(session)))
         except BaseException:
             await stack.aclose()

@@ -19,10 +19,12 @@ from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY
 from emulator.flight.camera import ImageCapture, capture_image
 from emulator.flight.failures import VehicleFailures
 from emulator.flight.fleet_view import FleetView
+from emulator.flight.geofence_plans import GeofencePlans
 from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw_rate
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
+from emulator.flight.orbit import OrbitControl
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle import Vehicle
 from emulator.flight.vehicle_state import MISSION_PHASES, Phase, TimerAction
@@ -41,10 +43,20 @@ class Autopilot(Vehicle):
         super().__init__(k, spec, fleet)
         self.mission = MissionRunner(self)
         self.offboard = OffboardControl(self)
+        self.orbit = OrbitControl(self)
+        self.geofence = GeofencePlans(self)
         self.failures = VehicleFailures(self)
 
     def pause_mission(self) -> None:
         self.mission.pause()
+
+    def check_target(self, target_m: Vec3, what: str) -> None:
+        """Refuse a destination outside the geofence (parameters and fence plan)."""
+        super().check_target(target_m, what)
+        self.geofence.check_target(target_m, what)
+
+    def rtl_destination_m(self) -> Vec3:
+        return self.geofence.rtl_destination_m()
 
     # --------------------------------------------------------- physics events
     def on_arrived(self) -> None:
@@ -97,6 +109,13 @@ class Autopilot(Vehicle):
             self.set_timer(delay, TimerAction.AUTO_DISARM, busy=True)
         self.refresh_busy()
 
+    def on_velocity_step(self, dt_s: float) -> None:
+        """After every physics step flown by velocity: orbit or offboard set the next one."""
+        if self.state.mode is FlightMode.ORBIT:
+            self.orbit.on_step()
+        else:
+            self.offboard.on_step(dt_s)
+
     def on_yaw_reached(self) -> None:
         self.refresh_busy()
         self.mission.on_yaw_reached()
@@ -134,6 +153,7 @@ class Autopilot(Vehicle):
         if self.armed:
             return
         self.failures.check_arming()
+        self.geofence.check_arming()
         if self.fleet.bat.level[self.k] >= BATTERY_CRITICAL:
             raise CommandRefused(f"Arming denied: battery {self.battery_pct:.0f}% too low")
         self.fleet.armed[self.k] = True

@@ -10,7 +10,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from emulator.flight import dynamics as dy
-from emulator.flight.mission import Cmd, MissionItem
+from emulator.flight.mission import PAYLOAD_COMMANDS, Cmd, MissionItem
 from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
@@ -260,6 +260,10 @@ class MissionRunner:
         self.ap.take_photo()
         self._execute(item.seq + 1)
 
+    def _pass_over(self, item: MissionItem) -> None:
+        """A gimbal or camera item with nothing to act on here (PAYLOAD_COMMANDS)."""
+        self._execute(item.seq + 1)
+
 
 _HANDLERS: dict[int, Callable[[MissionRunner, MissionItem], None]] = {
     Cmd.NAV_WAYPOINT: MissionRunner._waypoint,
@@ -272,4 +276,5 @@ _HANDLERS: dict[int, Callable[[MissionRunner, MissionItem], None]] = {
     Cmd.CONDITION_YAW: MissionRunner._yaw,
     Cmd.DO_CHANGE_SPEED: MissionRunner._change_speed,
     Cmd.IMAGE_START_CAPTURE: MissionRunner._photo,
+    **dict.fromkeys(PAYLOAD_COMMANDS, MissionRunner._pass_over),
 }

@@ -69,6 +69,8 @@ def cruise_plan(fleet: FleetView, limit: int, *, max_solo: int) -> CruisePlan | 
     dyn, dt = fleet.dyn, fleet.dt_s
     if _any(dyn.control == CONTROL_VELOCITY):
         return None  # offboard set-points are checked against the fence every step
+    if fleet.fenced:
+        return None  # vehicles with a fence plan are checked against it every step
     horizon = float(limit)
     timer = fleet.timer_s.min()
     if math.isfinite(timer):

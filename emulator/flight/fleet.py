@@ -84,9 +84,27 @@ class Fleet:
             self.recorder.attach_targets(self.targets)
         self.guard = ClearanceGuard(self.world, n)
         self._step_guard: StepGuard | None = self if self.guard.enabled else None
+        self.fenced: tuple[int, ...] = ()  # vehicles with a fence plan (fence_changed)
         self.autopilots = [Autopilot(k, spec, self) for k, spec in enumerate(specs)]
+        # Each vehicle's local frame (LOCAL_POSITION_NED, local offboard set-points): its EKF
+        # origin, the ground under where it started, as every PX4 instance has its own.
+        self.local_origin_m = np.array([(s.position_m[0], s.position_m[1], 0.0) for s in specs],
+                                       dtype=float)
         self.index_by_id = {s.id: k for k, s in enumerate(specs)}
         self._record()
+
+    def fence_changed(self) -> None:
+        """A vehicle's fence plan changed: the vehicles with one are checked every step."""
+        self.fenced = tuple(ap.k for ap in self.autopilots if ap.geofence.fenced)
+
+    def share_local_origin(self) -> None:
+        """Give every vehicle the session origin as its local origin (one shared frame)."""
+        self.local_origin_m[:] = 0.0
+
+    def local_origin(self, k: int) -> tuple[float, float, float]:
+        """Vehicle k's local origin, ENU m about the session origin."""
+        x, y, z = self.local_origin_m[k].tolist()
+        return x, y, z
 
     @property
     def n(self) -> int:
@@ -138,7 +156,12 @@ class Fleet:
         if _any(by_velocity):
             acted = True
             for k in _indices(by_velocity):
-                aps[k].offboard.check_fence()
+                aps[k].on_velocity_step(self.dt_s)
+        if self.fenced:
+            for k in self.fenced:
+                if self.airborne[k]:
+                    acted = True
+                    aps[k].geofence.check()
         if battery_step:
             charging = self.bat.charge_rate_pct_s > 0.0
             if _any(charging):

@@ -13,6 +13,7 @@ from mavlink_vocabulary import MavCmd, MavFrame, MavMissionResult
 
 __all__ = [
     "NAV_COMMANDS",
+    "PAYLOAD_COMMANDS",
     "SUPPORTED_COMMANDS",
     "Cmd",
     "MissionItem",
@@ -29,7 +30,18 @@ MissionResult = MavMissionResult  # a MISSION_ACK's type
 NAV_COMMANDS = frozenset(
     {Cmd.NAV_WAYPOINT, Cmd.NAV_LOITER_UNLIM, Cmd.NAV_LOITER_TIME, Cmd.NAV_LAND, Cmd.NAV_TAKEOFF}
 )
-SUPPORTED_COMMANDS = NAV_COMMANDS | {
+# Gimbal, region-of-interest and camera items PX4 accepts in a plan (QGroundControl's and
+# MAVSDK's mission plugins write them): stored and passed over in flight, since the vehicle
+# carries no gimbal and its camera takes photos only when told to.
+PAYLOAD_COMMANDS = frozenset({
+    Cmd.DO_SET_ROI_LOCATION, Cmd.DO_SET_ROI_WPNEXT_OFFSET, Cmd.DO_SET_ROI_NONE,
+    Cmd.DO_DIGICAM_CONTROL, Cmd.DO_MOUNT_CONFIGURE, Cmd.DO_MOUNT_CONTROL,
+    Cmd.DO_SET_CAM_TRIGG_DIST, Cmd.DO_SET_CAM_TRIGG_INTERVAL, Cmd.DO_GIMBAL_MANAGER_PITCHYAW,
+    Cmd.DO_GIMBAL_MANAGER_CONFIGURE, Cmd.IMAGE_STOP_CAPTURE, Cmd.DO_TRIGGER_CONTROL,
+    Cmd.VIDEO_START_CAPTURE, Cmd.VIDEO_STOP_CAPTURE, Cmd.SET_CAMERA_MODE, Cmd.SET_CAMERA_ZOOM,
+    Cmd.SET_CAMERA_FOCUS,
+})
+SUPPORTED_COMMANDS = NAV_COMMANDS | PAYLOAD_COMMANDS | {
     Cmd.NAV_RETURN_TO_LAUNCH, Cmd.NAV_DELAY, Cmd.CONDITION_YAW, Cmd.DO_CHANGE_SPEED,
     Cmd.IMAGE_START_CAPTURE,
 }

@@ -135,7 +135,8 @@ def start_rtl(ap: VehicleControl) -> None:
     ap.pause_mission()
     ap.switch_mode(FlightMode.RTL)
     x, y, z = ap.position_m
-    hx, hy, hz = ap.state.home_m
+    hx, hy, _ = ap.rtl_destination_m()
+    hz = ap.state.home_m[2]
     if math.hypot(hx - x, hy - y) < ap.params["NAV_ACC_RAD"]:
         descend_and_land(ap, (hx, hy))
         return
@@ -147,6 +148,6 @@ def start_rtl(ap: VehicleControl) -> None:
 
 
 def _return_home(ap: VehicleControl) -> None:
-    hx, hy, _ = ap.state.home_m
+    hx, hy, _ = ap.rtl_destination_m()
     ap.fly_to((hx, hy, ap.position_m[2]), phase=Phase.RETURNING)
     ap.state.land_at_m = (hx, hy)

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from emulator.flight.mission import FRAMES_AMSL, FRAMES_RELATIVE
 from emulator.flight.modes import decode_px4_mode
 from emulator.flight.refusal import CommandRefused
+from emulator.mavlink.calibration import preflight_calibration
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.reply import Action, Reply, SendOnce
 from emulator.mavlink.vehicle import Vehicle
@@ -114,6 +115,25 @@ def _reposition(v: Vehicle, a: CommandArgs) -> Reply:
     speed = a.p1 if a.p1 > 0 else None  # NaN, 0 or negative: the configured speed
     yaw = math.degrees(a.p4) % 360.0 if _finite(a.p4) else math.nan
     v.ap.reposition(target, speed_m_s=speed, yaw_deg=yaw)
+    return Reply.accepted()
+
+
+def _orbit(v: Vehicle, a: CommandArgs) -> Reply:
+    """MAV_CMD_DO_ORBIT: p1 radius (m, positive clockwise), p2 speed (m/s), p3 yaw behaviour,
+    x/y/z the centre, z AMSL (unset: the current centre, or where the vehicle is)."""
+    ap = v.ap
+    center: list[float | None] = [None, None, None]
+    if a.latitude_deg is not None or _finite(a.altitude_m):
+        # PX4 reads the centre's altitude as AMSL whatever the frame (MAVSDK's do_orbit sends
+        # an absolute altitude in a COMMAND_INT of frame GLOBAL_RELATIVE_ALT)
+        amsl = CommandArgs(a.command, a.p1, a.p2, a.p3, a.p4, a.latitude_deg, a.longitude_deg,
+                           a.altitude_m, MavFrame.GLOBAL)
+        x, y, z = _local_target(v, amsl, "Orbit")
+        if a.latitude_deg is not None:
+            center[:2] = [x, y]
+        if _finite(a.altitude_m):
+            center[2] = z
+    ap.orbit.start((center[0], center[1], center[2]), a.p1, a.p2, a.p3)
     return Reply.accepted()
 
 
@@ -231,6 +251,8 @@ HANDLERS: dict[MavCmd, Handler] = {
     MavCmd.NAV_RETURN_TO_LAUNCH: _rtl,
     MavCmd.DO_SET_MODE: _set_mode,
     MavCmd.DO_REPOSITION: _reposition,
+    MavCmd.DO_ORBIT: _orbit,
+    MavCmd.PREFLIGHT_CALIBRATION: preflight_calibration,
     MavCmd.DO_SET_HOME: _set_home,
     MavCmd.DO_CHANGE_SPEED: _change_speed,
     MavCmd.CONDITION_YAW: _yaw,

@@ -172,7 +172,7 @@ def global_position_int(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_mes
 
 
 def local_position_ned(ap: Autopilot, time_boot_ms: int) -> mavlink.MAVLink_message:
-    x, y, z = ap.position_m
+    x, y, z = (a - b for a, b in zip(ap.position_m, ap.fleet.local_origin(ap.k), strict=True))
     v = ap.fleet.dyn.velocity_m_s[ap.k]
     return mavlink.MAVLink_local_position_ned_message(
         time_boot_ms, y, x, -z, float(v[1]), float(v[0]), float(-v[2])

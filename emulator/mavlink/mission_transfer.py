@@ -1,7 +1,9 @@
 """The mission protocol: upload, download and clear, with retransmission of lost items.
 
-An upload is atomic: the vehicle's mission is replaced only when every item has arrived and
-passed validation; a stalled, restarted or refused upload leaves the old mission in place.
+It carries the three plan types, as PX4: the mission, the fence and the rally points
+(mission_type MISSION, FENCE, RALLY; MISSION_CLEAR_ALL of type ALL clears all three).
+An upload is atomic: the vehicle's plan is replaced only when every item has arrived and
+passed validation; a stalled, restarted or refused upload leaves the old plan in place.
 Retries and time-outs run on the wall clock (they concern the link, not the flight). Every
 method returns the messages to send in answer; nothing here sends.
 """
@@ -30,6 +32,7 @@ MAX_RETRIES = 8
 INT32_LIMIT = 2**31
 NO_COORDINATE = INT32_LIMIT - 1  # an unset MISSION_ITEM_INT x / y
 Peer = tuple[int, int]
+_PLAN_TYPES = (MavMissionType.MISSION, MavMissionType.FENCE, MavMissionType.RALLY)
 Messages = list[mavlink.MAVLink_message]
 def wire_result(code: int) -> MavMissionResult:
     """The MAV_MISSION_RESULT of a result code of emulator.flight.mission (ERROR if unknown)."""
@@ -40,10 +43,11 @@ def wire_result(code: int) -> MavMissionResult:
 
 
 class _Upload:
-    __slots__ = ("count", "items", "last_activity_s", "peer", "retries")
+    __slots__ = ("count", "items", "last_activity_s", "mission_type", "peer", "retries")
 
-    def __init__(self, count: int, peer: Peer, now_s: float) -> None:
+    def __init__(self, count: int, peer: Peer, now_s: float, mission_type: int) -> None:
         self.count = count
+        self.mission_type = mission_type
         self.items: list[MissionItem] = []
         self.peer = peer
         self.last_activity_s = now_s
@@ -73,16 +77,15 @@ class MissionTransfer:
         up = self._upload
         assert up is not None
         return mavlink.MAVLink_mission_request_int_message(
-            up.peer[0], up.peer[1], seq, MavMissionType.MISSION)
+            up.peer[0], up.peer[1], seq, up.mission_type)
 
     # ------------------------------------------------------------------ upload
     def on_count(self, m, peer: Peer, now_s: float) -> Messages:
         mission_type = getattr(m, "mission_type", MavMissionType.MISSION)
-        if mission_type != MavMissionType.MISSION:
-            result = MavMissionResult.ACCEPTED if m.count == 0 else MavMissionResult.UNSUPPORTED
-            return [_ack(peer, result, mission_type)]
+        if mission_type not in _PLAN_TYPES:
+            return [_ack(peer, MavMissionResult.UNSUPPORTED, mission_type)]
         if m.count > MAX_ITEMS:
-            return [_ack(peer, MavMissionResult.NO_SPACE),
+            return [_ack(peer, MavMissionResult.NO_SPACE, mission_type),
                     msgs.statustext(Severity.WARNING,
                                     f"Mission refused: {m.count} items > {MAX_ITEMS}")]
         out: Messages = []
@@ -91,22 +94,24 @@ class MissionTransfer:
         self._ended = None
         if m.count == 0:
             self._upload = None
-            self.ap.mission.clear()
-            out.append(_ack(peer, MavMissionResult.ACCEPTED))
+            self._clear(mission_type)
+            out.append(_ack(peer, MavMissionResult.ACCEPTED, mission_type))
             return out
-        self._upload = _Upload(m.count, peer, now_s)
+        self._upload = _Upload(m.count, peer, now_s, mission_type)
         out.append(self._request(0))
         return out
 
     def on_item(self, m, peer: Peer, now_s: float, *, is_int: bool) -> Messages:
         up = self._upload
-        if getattr(m, "mission_type", MavMissionType.MISSION) != MavMissionType.MISSION:
-            return []
+        mission_type = getattr(m, "mission_type", MavMissionType.MISSION)
         if up is None:
             ended = self._ended
             if ended is not None and ended[:2] == (peer, m.seq):
-                return [_ack(peer, ended[2])]  # a repeat of the last item: the ACK was lost
-            return [_ack(peer, MavMissionResult.DENIED)]
+                # a repeat of the last item: the ACK was lost
+                return [_ack(peer, ended[2], mission_type)]
+            return [_ack(peer, MavMissionResult.DENIED, mission_type)]
+        if mission_type != up.mission_type:
+            return []
         if peer != up.peer:  # PX4: "partner id mismatch", the item is ignored
             return [msgs.statustext(Severity.WARNING, "Mission item from another GCS ignored")]
         expected = len(up.items)
@@ -116,25 +121,60 @@ class MissionTransfer:
             return [self._request(expected)]
         item = _to_item(m, is_int)
         ap = self.ap
-        code, reason = validate_item(
-            item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
-            ap.params["GF_MAX_HOR_DIST"],
-        )
-        if code == MissionResult.ACCEPTED:
-            code, reason = validate_item_limits(item, ap.params)
-        result = wire_result(code)
-        if result != MavMissionResult.ACCEPTED:
-            self._upload = None
-            self._ended = (peer, m.seq, result)
-            return [_ack(peer, result), msgs.statustext(Severity.WARNING, reason)]
+        if mission_type == MavMissionType.MISSION:
+            code, reason = validate_item(
+                item, ap.fleet.world.origin, ap.home_m, ap.params["GF_MAX_VER_DIST"],
+                ap.params["GF_MAX_HOR_DIST"],
+            )
+            if code == MissionResult.ACCEPTED:
+                code, reason = validate_item_limits(item, ap.params)
+        else:  # fence and rally items are checked as a whole plan once all have arrived
+            code, reason = MissionResult.ACCEPTED, ""
         up.items.append(item)
         up.retries = 0
-        if len(up.items) < up.count:
+        if code == MissionResult.ACCEPTED and len(up.items) < up.count:
             return [self._request(len(up.items))]
         self._upload = None
-        self._ended = (peer, m.seq, MavMissionResult.ACCEPTED)
-        ap.mission.replace(up.items)
-        return [_ack(peer, MavMissionResult.ACCEPTED)]
+        if code == MissionResult.ACCEPTED:
+            code, reason = self._store(mission_type, up.items)
+        result = wire_result(code)
+        self._ended = (peer, m.seq, result)
+        if result != MavMissionResult.ACCEPTED:
+            return [_ack(peer, result, mission_type), msgs.statustext(Severity.WARNING, reason)]
+        return [_ack(peer, MavMissionResult.ACCEPTED, mission_type)]
+
+    def _store(self, mission_type: int, items: list[MissionItem]) -> tuple[int, str]:
+        """Replace the plan of `mission_type`: (MAV_MISSION_RESULT, reason)."""
+        ap = self.ap
+        try:
+            if mission_type == MavMissionType.FENCE:
+                ap.geofence.set_fence(items)
+            elif mission_type == MavMissionType.RALLY:
+                ap.geofence.set_rally(items)
+            else:
+                ap.geofence.check_mission(items)
+                ap.mission.replace(items)
+        except CommandRefused as refusal:
+            return MissionResult.INVALID, str(refusal)
+        return MissionResult.ACCEPTED, ""
+
+    def _clear(self, mission_type: int) -> None:
+        ap = self.ap
+        if mission_type in (MavMissionType.MISSION, MavMissionType.ALL):
+            ap.mission.clear()
+        if mission_type in (MavMissionType.FENCE, MavMissionType.ALL):
+            ap.geofence.set_fence([])
+        if mission_type in (MavMissionType.RALLY, MavMissionType.ALL):
+            ap.geofence.set_rally([])
+
+    def _items(self, mission_type: int) -> tuple[MissionItem, ...] | list[MissionItem]:
+        if mission_type == MavMissionType.FENCE:
+            return self.ap.geofence.fence_items
+        if mission_type == MavMissionType.RALLY:
+            return self.ap.geofence.rally_items
+        if mission_type == MavMissionType.MISSION:
+            return self.ap.mission.items
+        return ()
 
     def tick(self, now_s: float) -> Messages:
         """Re-request a lost item; give up after MAX_RETRIES silent intervals."""
@@ -152,34 +192,36 @@ class MissionTransfer:
     # ---------------------------------------------------------------- download
     def on_request_list(self, m, peer: Peer) -> Messages:
         mission_type = getattr(m, "mission_type", MavMissionType.MISSION)
-        count = self.ap.mission.total if mission_type == MavMissionType.MISSION else 0
+        count = len(self._items(mission_type))
         return [mavlink.MAVLink_mission_count_message(peer[0], peer[1], count, mission_type)]
 
     def on_request(self, m, peer: Peer, *, wants_int: bool) -> Messages:
         mission_type = getattr(m, "mission_type", MavMissionType.MISSION)
-        items = self.ap.mission.items if mission_type == MavMissionType.MISSION else ()
+        items = self._items(mission_type)
         if not 0 <= m.seq < len(items):
             return [_ack(peer, MavMissionResult.INVALID_SEQUENCE, mission_type)]
         it = items[m.seq]
-        current = int(it.seq == self.ap.mission.current)
+        current = int(mission_type == MavMissionType.MISSION and it.seq == self.ap.mission.current)
         if wants_int:
             return [mavlink.MAVLink_mission_item_int_message(
                 peer[0], peer[1], it.seq, it.frame, it.command, current, it.autocontinue,
-                it.param1, it.param2, it.param3, it.param4, it.x, it.y, it.z,
-                MavMissionType.MISSION,
+                it.param1, it.param2, it.param3, it.param4, it.x, it.y, it.z, mission_type,
             )]
         return [mavlink.MAVLink_mission_item_message(
             peer[0], peer[1], it.seq, it.frame, it.command, current, it.autocontinue,
             it.param1, it.param2, it.param3, it.param4, it.x * 1e-7, it.y * 1e-7, it.z,
-            MavMissionType.MISSION,
+            mission_type,
         )]
 
     # ------------------------------------------------------------------ others
     def on_clear_all(self, m, peer: Peer) -> Messages:
         mission_type = getattr(m, "mission_type", MavMissionType.MISSION)
-        if mission_type in (MavMissionType.MISSION, MavMissionType.ALL):
+        if mission_type not in (*_PLAN_TYPES, MavMissionType.ALL):
+            return [_ack(peer, MavMissionResult.UNSUPPORTED, mission_type)]
+        up = self._upload
+        if up is not None and mission_type in (up.mission_type, MavMissionType.ALL):
             self._upload = None
-            self.ap.mission.clear()
+        self._clear(mission_type)
         return [_ack(peer, MavMissionResult.ACCEPTED, mission_type)]
 
     def on_set_current(self, m) -> Messages:

@@ -41,6 +41,7 @@ DEFAULT_STREAMS: tuple[StreamSpec, ...] = tuple(
         (MessageId.BATTERY_STATUS, "BATTERY_STATUS", 0.5),
         (MessageId.HOME_POSITION, "HOME_POSITION", 0.5),
         (CAMERA_HEARTBEAT, "CAMERA_HEARTBEAT", 1.0),
+        (MessageId.HIGHRES_IMU, "HIGHRES_IMU", 0.0),  # off until a client sets its rate
     )
 )
 
@@ -64,7 +65,9 @@ class StreamSchedule:
         self.default_period_s = period
         self.period_s = np.tile(period, (n, 1))
         stagger = (np.arange(n) / max(n, 1))[:, None]
-        self.next_due_s = wall_now_s + np.where(np.isfinite(period), period * stagger, math.inf)
+        finite = np.isfinite(period)
+        self.next_due_s = wall_now_s + np.where(finite, np.where(finite, period, 0.0) * stagger,
+                                                math.inf)
 
     def due(self, wall_now_s: float) -> Iterator[tuple[int, np.ndarray]]:
         """(msg_id, vehicle indices) for every stream with something due; reschedules them."""

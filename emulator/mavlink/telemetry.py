@@ -22,6 +22,7 @@ from emulator.mavlink import messages as msgs
 from emulator.mavlink.camera import CAMERA_COMPONENT_ID, MAV_AUTOPILOT_INVALID, MAV_TYPE_CAMERA
 from emulator.mavlink.codec import mavlink
 from emulator.mavlink.frames import FramePart, MessageLayout
+from emulator.mavlink.imu import highres_imu_fields
 from emulator.mavlink.streams import CAMERA_HEARTBEAT
 from mavlink_vocabulary import MavState
 
@@ -46,6 +47,7 @@ _LAYOUTS = {
     42: MessageLayout.of(mavlink.MAVLink_mission_current_message),
     147: MessageLayout.of(mavlink.MAVLink_battery_status_message),
     242: MessageLayout.of(mavlink.MAVLink_home_position_message),
+    105: MessageLayout.of(mavlink.MAVLink_highres_imu_message),
 }
 _LAYOUTS[CAMERA_HEARTBEAT] = _LAYOUTS[0]
 BATCHED_STREAMS: frozenset[int] = frozenset(_LAYOUTS)
@@ -76,6 +78,7 @@ class FleetTelemetry:
             33: self._global_position_int, 32: self._local_position_ned, 30: self._attitude,
             24: self._gps_raw_int, 74: self._vfr_hud, 42: self._mission_current,
             147: self._battery_status, 242: self._home_position,
+            105: lambda ks: highres_imu_fields(self.fleet, ks),
             CAMERA_HEARTBEAT: self._camera_heartbeat,
         }
 
@@ -172,7 +175,7 @@ class FleetTelemetry:
 
     def _local_position_ned(self, ks: np.ndarray) -> Sequence[object]:
         dyn = self.fleet.dyn
-        p = dyn.position_m[ks]
+        p = dyn.position_m[ks] - self.fleet.local_origin_m[ks]
         v = dyn.velocity_m_s[ks]
         return (self._time_boot_ms(), p[:, 1], p[:, 0], -p[:, 2], v[:, 1], v[:, 0], -v[:, 2])
 

@@ -22,8 +22,11 @@ from emulator.mavlink.codec import Encoder, mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
+from emulator.mavlink.ftp import FtpServer
+from emulator.mavlink.imu import highres_imu
+from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
-from emulator.mavlink.offboard import Complaint, apply_global_setpoint, apply_local_setpoint
+from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
@@ -36,10 +39,6 @@ AUTOPILOT_COMPONENT_ID = MavComponent.AUTOPILOT1
 CAMERA_COMPONENT_ID = MavComponent.CAMERA
 MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
 # MAVLink FTP is not offered: every request gets a NAK(UnknownCommand) so clients fall back
-FTP_OPCODE_NAK = 129
-FTP_ERR_UNKNOWN_COMMAND = 7
-FTP_PAYLOAD_BYTES = 251
-FTP_HEADER_BYTES = 12
 
 
 def _bytewise_int(value: float) -> int:
@@ -54,13 +53,6 @@ _OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
                            MessageId.GLOBAL_POSITION_INT, MessageId.LOCAL_POSITION_NED,
                            MessageId.HOME_POSITION)
 # what a vehicle sends on request (MAV_CMD_REQUEST_MESSAGE), besides the camera's messages
-_ONE_SHOT = frozenset({
-    MessageId.HEARTBEAT, MessageId.SYS_STATUS, MessageId.GPS_RAW_INT, MessageId.ATTITUDE,
-    MessageId.LOCAL_POSITION_NED, MessageId.GLOBAL_POSITION_INT, MessageId.MISSION_CURRENT,
-    MessageId.VFR_HUD, MessageId.BATTERY_STATUS, MessageId.AUTOPILOT_VERSION,
-    MessageId.HOME_POSITION, MessageId.EXTENDED_SYS_STATE,
-})
-
 
 class VehicleLink:
     """MAVLink side of vehicle `ap` (system id k + 1)."""
@@ -78,6 +70,8 @@ class VehicleLink:
         }
         self.camera = CameraComponent()
         self.missions = MissionTransfer(ap)
+        self.logs = LogTransfer(ap)
+        self.ftp = FtpServer(self.logs.files)
         self.wall_now_s = wall_clock()
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
@@ -117,7 +111,7 @@ class VehicleLink:
             self.send(message)
 
     def can_send_once(self, msg_id: int) -> bool:
-        return msg_id in CAMERA_MESSAGES or msg_id in _ONE_SHOT
+        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS  # each can be sent once
 
     def send_once(self, msg_id: int) -> None:
         if msg_id in CAMERA_MESSAGES:
@@ -321,11 +315,8 @@ class VehicleLink:
             self.warned.add(complaint.key)
             self.statustext(Severity.WARNING, complaint.text)
 
-    def _set_position_target_local_ned(self, m) -> None:
-        self._complain(apply_local_setpoint(self.ap, m, self.wall_now_s))
-
-    def _set_position_target_global_int(self, m) -> None:
-        self._complain(apply_global_setpoint(self.ap, m, self.wall_now_s))
+    def _offboard_setpoint(self, m) -> None:
+        self._complain(SETPOINT_APPLIERS[m.get_msgId()](self.ap, m, self.wall_now_s))
 
     def _ping(self, m) -> None:
         if m.target_system == self.system_id:  # broadcast pings are not answered
@@ -337,22 +328,14 @@ class VehicleLink:
             now_ns = int(self.ap.now_s * 1e9)
             self.send(mavlink.MAVLink_timesync_message(now_ns, m.ts1))
 
+    def _log_request(self, m) -> None:
+        self.send_all(self.logs.handle(m))
+
     def _file_transfer(self, m) -> None:
-        payload = bytes(m.payload)
-        if len(payload) < FTP_HEADER_BYTES:
-            return
-        seq = (int.from_bytes(payload[0:2], "little") + 1) & 0xFFFF
-        reply = bytearray(FTP_PAYLOAD_BYTES)
-        reply[0:2] = seq.to_bytes(2, "little")
-        reply[2] = payload[2]  # session
-        reply[3] = FTP_OPCODE_NAK
-        reply[4] = 1  # payload size: one error byte
-        reply[5] = payload[3]  # the request's opcode
-        reply[12] = FTP_ERR_UNKNOWN_COMMAND
         src_system, src_component = self._peer(m)
-        self.send(mavlink.MAVLink_file_transfer_protocol_message(
-            0, src_system, src_component, list(reply)
-        ))
+        for reply in self.ftp.handle(bytes(m.payload)):
+            self.send(mavlink.MAVLink_file_transfer_protocol_message(
+                0, src_system, src_component, list(reply)))
 
 
 _COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
@@ -370,6 +353,7 @@ _BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
     MessageId.BATTERY_STATUS: lambda v: msgs.battery_status(v.ap),
     MessageId.HOME_POSITION: lambda v: msgs.home_position(v.ap, v.time_boot_ms() * 1000),
     MessageId.AUTOPILOT_VERSION: lambda v: msgs.autopilot_version(v.ap),
+    MessageId.HIGHRES_IMU: lambda v: highres_imu(v.ap.fleet, v.k),
 }
 
 _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None]] = {
@@ -386,11 +370,11 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.MISSION_REQUEST: VehicleLink._mission_request,
     MessageId.MISSION_CLEAR_ALL: VehicleLink._mission_clear_all,
     MessageId.MISSION_SET_CURRENT: VehicleLink._mission_set_current,
-    MessageId.SET_POSITION_TARGET_LOCAL_NED: VehicleLink._set_position_target_local_ned,
-    MessageId.SET_POSITION_TARGET_GLOBAL_INT: VehicleLink._set_position_target_global_int,
+    **{msg_id: VehicleLink._offboard_setpoint for msg_id in SETPOINT_APPLIERS},
     MessageId.PING: VehicleLink._ping,
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
+    **{msg_id: VehicleLink._log_request for msg_id in LOG_MESSAGES},
 }
 
 # the names of the messages a vehicle acts on or answers
