@@ -8,14 +8,21 @@ refused with a REJECTED outcome and is not counted.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Awaitable, Callable
+import json
+from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
 from agent_contract.protocol import AgentTask, BudgetExhausted
 from mavlink_gateway import Gateway, Outcome, Status
 from mavlink_gateway.pacing import run_concurrently
 
-__all__ = ["BudgetedTools"]
+__all__ = ["TRANSCRIPT_MAX_CHARS", "TRANSCRIPT_MAX_ENTRIES", "TRANSCRIPT_MAX_TEXT",
+           "TRANSCRIPT_ROLES", "BudgetedTools"]
+
+TRANSCRIPT_ROLES = ("system", "user", "assistant", "tool")
+TRANSCRIPT_MAX_TEXT = 20_000  # characters kept of one content or one call's arguments
+TRANSCRIPT_MAX_ENTRIES = 2_000  # messages kept of one task's transcript
+TRANSCRIPT_MAX_CHARS = 1_000_000  # characters kept of one task's transcript in all
 
 
 class BudgetedTools:
@@ -33,6 +40,9 @@ class BudgetedTools:
         self.completion_tokens = 0
         self.cost_usd = 0.0
         self.spent: BudgetExhausted | None = None
+        self.transcript: list[dict[str, Any]] = []
+        self.transcript_dropped = 0
+        self._transcript_chars = 0
 
     @property
     def tool_calls(self) -> int:
@@ -56,6 +66,41 @@ class BudgetedTools:
         self.prompt_tokens += int(prompt)
         self.completion_tokens += int(completion)
         self.cost_usd += float(cost_usd)
+
+    def add_transcript(self, role: str, content: str, *,
+                       tool_calls: list[dict[str, Any]] | None = None,
+                       tokens: dict[str, int] | None = None,
+                       tool_call_id: str | None = None, agent: str | None = None) -> None:
+        """Record one message of the agent's model conversation, at the simulated time now:
+        its role (system, user, assistant or tool), its text, the tool calls an assistant
+        message makes (each {"id", "name", "arguments"}: the arguments as the model wrote them,
+        in full) and the tokens of the model turn that answered ({"prompt", "completion"}).
+        The benchmark stores it beside the task's replay. Bounded: a text or arguments longer
+        than TRANSCRIPT_MAX_TEXT characters is cut (marked "..."); past TRANSCRIPT_MAX_ENTRIES
+        messages or TRANSCRIPT_MAX_CHARS characters, messages are counted in
+        `transcript_dropped` and not kept. A role not in TRANSCRIPT_ROLES, a tool call that is
+        not an object, or tokens that are not counts raise ValueError (nothing is recorded)."""
+        if role not in TRANSCRIPT_ROLES:
+            raise ValueError(f"transcript role must be one of {', '.join(TRANSCRIPT_ROLES)}; "
+                             f"got {role!r}")
+        entry: dict[str, Any] = {"t_s": round(self.clock_s, 3), "role": role,
+                                 "content": _cut(str(content or ""))}
+        if tool_calls:
+            entry["tool_calls"] = [_transcript_call(c) for c in tool_calls]
+        if agent is not None:
+            entry["agent"] = str(agent)
+        if tool_call_id is not None:
+            entry["tool_call_id"] = str(tool_call_id)
+        if tokens is not None:
+            entry["tokens"] = _transcript_tokens(tokens)
+        size = len(entry["content"]) + sum(len(c["arguments"])
+                                           for c in entry.get("tool_calls", []))
+        if (len(self.transcript) >= TRANSCRIPT_MAX_ENTRIES
+                or self._transcript_chars + size > TRANSCRIPT_MAX_CHARS):
+            self.transcript_dropped += 1
+            return
+        self._transcript_chars += size
+        self.transcript.append(entry)
 
     def _charge(self, name: str) -> Outcome | None:
         if self.finished:
@@ -103,3 +148,30 @@ class BudgetedTools:
         if pending:
             await asyncio.gather(*pending, return_exceptions=True)
         self._in_flight.clear()
+
+
+def _cut(value: Any) -> str:
+    """A transcript text (arguments given as an object are JSON-encoded), bounded."""
+    if value is None:
+        return ""
+    text = value if isinstance(value, str) else json.dumps(value, default=str)
+    return text if len(text) <= TRANSCRIPT_MAX_TEXT else text[:TRANSCRIPT_MAX_TEXT] + "..."
+
+
+def _transcript_call(call: Any) -> dict[str, str]:
+    if not isinstance(call, Mapping):
+        raise ValueError('each transcript tool call must be an object {"id", "name", '
+                         f'"arguments"}}; got {str(call)[:80]!r}')
+    return {"id": _cut(call.get("id")), "name": _cut(call.get("name")),
+            "arguments": _cut(call.get("arguments"))}
+
+
+def _transcript_tokens(tokens: Any) -> dict[str, int]:
+    counts = {}
+    for key in ("prompt", "completion"):
+        value = tokens.get(key, 0) if isinstance(tokens, Mapping) else None
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ValueError('transcript tokens must be {"prompt": N, "completion": N} with '
+                             f"counts of 0 or more; got {str(tokens)[:80]!r}")
+        counts[key] = value
+    return counts

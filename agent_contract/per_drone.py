@@ -55,6 +55,10 @@ class DroneView:
         self.completion_tokens += int(completion)
         self._tools.add_tokens(prompt, completion, cost_usd)
 
+    def add_transcript(self, role: str, content: str, **fields: Any) -> None:
+        """Into the team's transcript, as this drone's agent's."""
+        self._tools.add_transcript(role, content, **fields, agent=self.drone_id)
+
     def list_drones(self) -> Outcome:
         outcome = self._tools.list_drones()
         drones = [d for d in (outcome.data or {}).get("drones", [])

@@ -26,6 +26,10 @@ An agent is any object with an ``async def run(self, task: AgentTask, tools: Age
   ``await asyncio.to_thread(...)``; never block the event loop itself.
 - Tokens and cost of the agent's model: report each model call with
   ``tools.add_tokens(prompt, completion, cost_usd)``; the task's record sums them.
+- The model conversation, for the run inspector: record each message with
+  ``tools.add_transcript(role, content, tool_calls=[{"id", "name", "arguments"}],
+  tokens={"prompt", "completion"})``; it is stored beside the task's replay, with the
+  simulated time of each message.
 - An agent that makes no tool call and does not return stops simulated time, so its budget
   never runs out: the benchmark stops it after ``--agent-timeout-s`` wall seconds without a
   tool call or a simulated-time step (default 600) and records ``agent_error``.

@@ -326,9 +326,8 @@ def _build_builtin(name: str, session: Session, options: AgentOptions) -> Agent:
         from benchmark.agents import NoopAgent
         return NoopAgent()
     if name == "oracle":
-        from benchmark.oracle import OracleAgent
-        plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
-        return OracleAgent(session.scenario, plans)
+        from benchmark.oracle.session_oracle import oracle_for_session
+        return oracle_for_session(session)
     from llm_tools.agents import ModelConfig, ReactAgent, WorkflowAgent
     config = ModelConfig(base_url=options.base_url, model=options.model,
                          price_in_usd_per_mtok=options.price_in_usd_per_mtok,

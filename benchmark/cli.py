@@ -51,6 +51,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     gen.add_argument("--no-verify", action="store_true",
                      help="skip proving each task with the oracle (faster; not for release)")
     gen.add_argument("--workers", type=_at_least_one, default=1, help="sessions generated at once")
+    _add_draw_arguments(gen)
     _add_backend_arguments(gen)
     add_verbose_argument(gen)
 
@@ -107,6 +108,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                         help="folder for report.md, report.json and report.html (default: "
                              "beside the first)")
     _add_inspector_argument(report)
+    report.add_argument("--allow-mixed", action="store_true",
+                        help="pool records of different suites (session files of one id with "
+                             "different fingerprints, e.g. a public and a private split)")
 
     compare = bsub.add_parser("compare", help="compare runs: paired transitions with McNemar "
                               "tests, rates with bootstrap intervals (compare.md/.json/.html)")
@@ -166,11 +170,39 @@ def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
                              "instance for this run)")
 
 
+def _add_draw_arguments(gen: argparse.ArgumentParser) -> None:
+    """A researcher's draw: README 'Drawing your own suite'."""
+    gen.add_argument("--seed", default="", metavar="SECRET",
+                     help="draw a private split: the shipped suite's distribution, other "
+                          "sessions nobody draws again without SECRET")
+    gen.add_argument("--families", nargs="+", default=[], metavar="FAMILY")
+    gen.add_argument("--levels", nargs="+", default=[], metavar="LEVEL")
+    gen.add_argument("--sessions-per-cell", type=int, default=0, metavar="N",
+                     help="sessions per family x level (default 5)")
+    gen.add_argument("--tasks-per-session", type=int, default=0, metavar="N",
+                     help="tasks per session (default 20)")
+    gen.add_argument("--templates", type=Path, action="append", default=[], metavar="DIR",
+                     help="a folder of template files (*.json) added to the built-ins "
+                          "(repeatable)")
+    gen.add_argument("--replace-templates", action="store_true",
+                     help="draw from the --templates folders only")
+    gen.add_argument("--world", type=Path, default=None, metavar="FILE",
+                     help="draw tasks for this session file's world instead of the suite's")
+
+
 def _generate(args: argparse.Namespace) -> int:
     from benchmark.progress import ProgressBar
-    from benchmark.suite import generate_suite
+    from benchmark.suite import Draw, generate_suite
+    draw = Draw(secret=args.seed, families=tuple(args.families), levels=tuple(args.levels),
+                sessions_per_cell=args.sessions_per_cell, tasks=args.tasks_per_session,
+                templates=tuple(args.templates), replace=args.replace_templates)
+    if args.world is not None:
+        from benchmark.world_tasks import generate_world_file
+        print(f"wrote {generate_world_file(args.world, args.out, draw, not args.no_verify)}")
+        return 0
     with ProgressBar("sessions", pass_rate=False) as bar:
         written = generate_suite(args.out, only=args.only, verify=not args.no_verify,
+                                 draw=draw,
                                  workers=args.workers, backend=args.backend,
                                  ray_address=args.ray_address, mavsdk_log=args.verbose,
                                  on_start=bar.begin,
@@ -271,12 +303,15 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 
 
 def _report(args: argparse.Namespace) -> int:
+    from benchmark.fingerprint import check_poolable
     from benchmark.metrics import summarize
     from benchmark.report import metrics_table, write_report
     from benchmark.report_html import check_inspector_url
     from benchmark.report_runs import load_report_runs, write_runs_report
     check_inspector_url(args.inspector_url)
     runs = load_report_runs(args.results)
+    # one suite unless asked (benchmark.fingerprint), though each run is reported apart
+    check_poolable([r for run in runs for r in run.records], allow_mixed=args.allow_mixed)
     out = args.out or runs[0].source.parent
     if len(runs) == 1:
         md, js, html = write_report(runs[0].records, out, inspector_url=args.inspector_url,

@@ -120,7 +120,7 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
             f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin,
             landed_state_hz=None if lockstep else LANDED_STATE_HZ,
         ) as fleet:
-            yield swarm, services, Gateway(fleet.drones, services)
+            yield swarm, services, Gateway(fleet.drones, services, connection=fleet)
 
 
 def session_swarm(session: Session, options: EpisodeOptions
@@ -184,17 +184,20 @@ async def _play_out(swarm: Swarm, deadline_s: float) -> float:
 
 
 def base_record(*, session_id: str, family: str, level: str, task_id: str, template: str,
-                category: str, agent: str, trial: int) -> dict[str, Any]:
-    """The fields that name a task's record."""
+                category: str, agent: str, trial: int, fingerprint: str | None = None
+                ) -> dict[str, Any]:
+    """The fields that name a task's record; fingerprint: its session file's
+    (benchmark.fingerprint), None when the session could not be read."""
     return {"key": record_key(session_id, task_id, agent, trial), "session": session_id,
             "family": family, "level": level, "task": task_id, "template": template,
-            "category": category, "agent": agent, "trial": trial}
+            "category": category, "agent": agent, "trial": trial, "fingerprint": fingerprint}
 
 
 def _base_record(session: Session, task: TaskSpec, agent: str, trial: int) -> dict[str, Any]:
+    from benchmark.fingerprint import session_fingerprint
     return base_record(session_id=session.id, family=session.family, level=session.level,
                        task_id=task.id, template=task.template, category=task.category,
-                       agent=agent, trial=trial)
+                       agent=agent, trial=trial, fingerprint=session_fingerprint(session))
 
 
 def error_record(base: Mapping[str, Any], error: str) -> dict[str, Any]:
@@ -367,6 +370,7 @@ async def run_task(session: Session, task: TaskSpec, agent: Agent, swarm: Swarm,
             truth(context)
         end_state = services.operator_snapshot()
         replay = encode_window(swarm.recorder, t0_s, t1_s, tools.call_log())
+        replay.update(tools.transcript_json())
         replay["task"] = {"text": task.text, "checks": tree_to_json(task.checks),
                           "budget": {"tool_calls": task.budget.tool_calls,
                                      "sim_time_s": task.budget.sim_time_s}}

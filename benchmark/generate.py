@@ -11,16 +11,17 @@ with the next attempt. The result depends on the seed alone.
 from __future__ import annotations
 
 import asyncio
+import hashlib
 import math
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.oracle import OracleAgent
-from benchmark.scenarios import generate_world
+from benchmark.scenarios import SESSION_INDICES, generate_world
 from benchmark.session_file import (
     Session,
     TaskSpec,
@@ -39,6 +40,8 @@ __all__ = [
     "TASKS_PER_SESSION",
     "GenerationError",
     "build_task",
+    "catalogue_with",
+    "generate_for_world",
     "generate_session",
     "write_session",
 ]
@@ -82,13 +85,32 @@ def build_task(template: Template, view: SessionView, rng: random.Random, task_i
     return task
 
 
+def catalogue_with(folders: Sequence[Path] = (), *, replace: bool = False
+                   ) -> tuple[Template, ...]:
+    """The built-in templates plus those of the template-file folders (or only the latter,
+    with replace); an id used twice is refused naming the file."""
+    from benchmark.template_files import TemplateFileError, load_templates
+    out = [] if replace else list(CATALOGUE)
+    for folder in folders:
+        for template in load_templates(folder):
+            if any(t.key == template.key for t in out):
+                raise TemplateFileError(f"{folder}: template id {template.key!r} is already "
+                                        f"in the catalogue")
+            out.append(template)
+    if not out:
+        raise GenerationError("no templates to draw from")
+    return tuple(out)
+
+
 class _Drawer:
     """Template choice for each slot, and parameter draws for each attempt."""
 
-    def __init__(self, family: str, seed: int, view: SessionView) -> None:
+    def __init__(self, family: str, seed: int, view: SessionView, level: str = "",
+                 catalogue: Sequence[Template] = CATALOGUE) -> None:
         self.view = view
         self.seed = seed
-        self.fitting = [t for t in CATALOGUE if t.fits(view)]
+        self.fitting = [t for t in catalogue if t.fits(view)
+                        and (not t.levels or level in t.levels)]
         if not self.fitting:
             raise GenerationError("no template fits this session")
         weights = CATEGORY_WEIGHTS.get(family, {})
@@ -150,14 +172,18 @@ async def _verified_tasks(world: dict[str, Any], session: Session, drawer: _Draw
                 if spec.error is not None:
                     raise GenerationError(f"{world['id']}: {spec.error}")
                 agent.set_plan(spec.id, spec.oracle)
+                if spec.checks is not None:  # no hand plan: one derived from the checks
+                    agent.set_checks(spec.id, spec.checks, sorted(
+                        {f.drone for f in spec.faults.failures} if spec.faults else ()))
                 record = await _prove(session, spec, agent, swarm, services, gateway, start)
                 if record["passed"]:
                     drawer.accept(raw)
                     tasks.append(raw)
                     break
                 failed = [c["endpoint"] for c in record["checks"] if not c["passed"]]
+                why = f": {record['error']}" if record.get("error") else ""
                 progress(f"{world['id']} {raw['id']} {raw['template']}: oracle failed "
-                         f"{failed} ({record['finish']}); redrawing")
+                         f"{failed} ({record['finish']}{why}); redrawing")
             else:
                 raise GenerationError(f"{world['id']}: slot {slot + 1}: no passable task in "
                                       f"{MAX_ATTEMPTS} attempts")
@@ -182,12 +208,35 @@ def _unverified_tasks(drawer: _Drawer, count: int) -> list[dict[str, Any]]:
 
 def generate_session(family: str, level: str, index: int, *, verify: bool = True,
                      tasks: int = TASKS_PER_SESSION,
-                     progress: Callable[[str], None] = print) -> dict[str, Any]:
-    """The full session object for (family, level, index)."""
-    world = generate_world(family, level, index)
-    empty = session_from_dict({**world, "tasks": []}, source=world["id"])
+                     progress: Callable[[str], None] = print, secret: str = "",
+                     catalogue: Sequence[Template] = CATALOGUE,
+                     max_index: int = SESSION_INDICES[-1]) -> dict[str, Any]:
+    """The full session object for (family, level, index), drawn from the secret's seeds
+    when one is given (a private split)."""
+    world = generate_world(family, level, index, secret=secret, max_index=max_index)
+    return _with_tasks(world, int(world["seed"]), verify, tasks, progress, catalogue)
+
+
+def generate_for_world(world: dict[str, Any], *, secret: str = "", verify: bool = True,
+                       tasks: int = TASKS_PER_SESSION,
+                       progress: Callable[[str], None] = print,
+                       catalogue: Sequence[Template] = CATALOGUE) -> dict[str, Any]:
+    """Tasks drawn for a world of one's own (a session object; its tasks are replaced),
+    seeded by the secret and the world's id."""
+    label = f"mavswarm/world/{secret}/{world.get('id', '')}".encode()
+    seed = int.from_bytes(hashlib.sha256(label).digest()[:8], "big") >> 11
+    world = {**world, "tasks": []}
+    world.setdefault("description", "")
+    return _with_tasks(world, seed, verify, tasks, progress, catalogue)
+
+
+def _with_tasks(world: dict[str, Any], seed: int, verify: bool, tasks: int,
+                progress: Callable[[str], None], catalogue: Sequence[Template]
+                ) -> dict[str, Any]:
+    family, level = str(world.get("family", "")), str(world.get("level", ""))
+    empty = session_from_dict({**world, "tasks": []}, source=str(world.get("id", "<world>")))
     view = _view(world, empty)
-    drawer = _Drawer(family, int(world["seed"]), view)
+    drawer = _Drawer(family, seed, view, level, catalogue)
     if verify:
         drawn = asyncio.run(_verified_tasks(world, empty, drawer, tasks, progress))
     else:

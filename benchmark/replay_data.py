@@ -7,11 +7,18 @@ within `TOLERANCE_DEG`), so steady flight costs two samples a leg and braking ke
 Values are quantised (0.1 s, 0.1 m, 1 degree, 0.1 % battery) and delta-encoded as integers, and
 the whole is gzipped JSON (about 1-2 bytes a kept sample).
 
+An LLM agent's transcript (`AgentTools.add_transcript`: its messages, tool calls with their
+arguments in full, tokens per model turn, each at its simulated time) is kept in the task's
+file under `transcript` (with `transcript_dropped`), not in results.jsonl. It is bounded where
+it is recorded: 20,000 characters a text, 2,000 messages and 1,000,000 characters a task (see
+`agent_contract.budget`), so at most about 1.2 MB of JSON (text and keys) before gzip.
+
 Layout under a results folder::
 
     replay/<session>/world.json.gz                    the session's world (drones, targets,
                                                       obstacles as the session file has them)
-    replay/<session>/<task>.<agent>.<trial>.json.gz   one task: window, paths, events, calls
+    replay/<session>/<task>.<agent>.<trial>.json.gz   one task: window, paths, events, calls,
+                                                      transcript
 """
 
 from __future__ import annotations

@@ -74,6 +74,18 @@ class LoggedTools(AgentTools):
                        key=lambda c: (c["t0_s"], str(c["drone"] or ""), c["i"]))
         return [{**c, "i": k} for k, c in enumerate(calls)]
 
+    def transcript_json(self) -> dict[str, Any]:
+        """The agent's model transcript for the task's replay file (`add_transcript`: bounded
+        there), with how many messages the bounds dropped; empty when the agent recorded
+        none. Ordered by simulated time, then agent (a per-drone team's), each agent's own
+        messages in the order it said them: the same whatever order the agents' thinking let
+        them through."""
+        if not self.transcript and not self.transcript_dropped:
+            return {}
+        ordered = sorted(self.transcript, key=lambda e: (e["t_s"], e.get("agent", "")))
+        return {"transcript": [dict(e) for e in ordered],
+                "transcript_dropped": self.transcript_dropped}
+
     def activity(self) -> dict[str, dict[str, Any]]:
         """Per drone: the tool it is executing now (or None) and how its last call ended."""
         running, last = self.__dict__.get("_running", {}), self.__dict__.get("_last", {})

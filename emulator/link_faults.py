@@ -219,6 +219,12 @@ class LinkGate:
         self._seed = struct.pack("<Q", faults.seed)
         self._clean = faults.clean
 
+    def add_vehicle(self, vehicle_id: str) -> None:
+        """One more vehicle (joining a running swarm), under the current settings."""
+        self._ids = (*self._ids, vehicle_id)
+        f = self.faults
+        self._profiles.append((f.profile(vehicle_id, UPLINK), f.profile(vehicle_id, DOWNLINK)))
+
     @property
     def active(self) -> bool:
         """Any frame to decide (the transport skips the gate otherwise)."""

@@ -85,6 +85,10 @@ class WatchBoard:
         self._watches: list[Watch] = []
         self._stop_counts = [0] * fleet.n
 
+    def add_vehicle(self) -> None:
+        """One more vehicle joined the fleet."""
+        self._stop_counts.append(0)
+
     def open(self, k: int | None, until_s: float = math.inf, *, advance: bool = False,
              message_for: str | None = None) -> Watch:
         fleet = self._fleet

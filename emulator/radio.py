@@ -42,6 +42,14 @@ class Radio:
         self._recorder = recorder
         self._clock = clock
 
+    def add_drone(self, drone_id: str) -> None:
+        """A drone that joined the swarm, with an empty inbox."""
+        self._inboxes.setdefault(drone_id, deque())
+
+    def remove_drone(self, drone_id: str) -> None:
+        """A drone that left: it neither sends nor receives from now on."""
+        self._inboxes.pop(drone_id, None)
+
     def _check(self, drone_id: str, role: str) -> None:
         if not isinstance(drone_id, str) or drone_id not in self._inboxes:
             known = ", ".join(self._inboxes)

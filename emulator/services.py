@@ -49,7 +49,17 @@ class SwarmServices:
 
     @property
     def drone_ids(self) -> tuple[str, ...]:
-        return tuple(ap.vehicle_id for ap in self._fleet.autopilots)
+        """The drones in the swarm now (those that left are gone), in system-id order."""
+        index = self._fleet.index_by_id
+        return tuple(ap.vehicle_id for ap in self._fleet.autopilots if ap.vehicle_id in index)
+
+    def add_drone(self, drone_id: str) -> None:
+        """A drone joined the swarm (emulator.fleet_membership.join): it has a radio."""
+        self.radio.add_drone(drone_id)
+
+    def remove_drone(self, drone_id: str) -> None:
+        """A drone left the swarm: messages to it are refused from now on."""
+        self.radio.remove_drone(drone_id)
 
     def clock_s(self) -> float:
         """Simulated time now."""
@@ -88,7 +98,9 @@ class SwarmServices:
     def sense(self, drone_id: str) -> Perception:
         """What drone_id's sensor perceives now (its SIM_SENS_RAD disc)."""
         ap = self._autopilot(drone_id)
-        others = {o.vehicle_id: o.position_m for o in self._fleet.autopilots if o is not ap}
+        present = self._fleet.index_by_id
+        others = {o.vehicle_id: o.position_m for o in self._fleet.autopilots
+                  if o is not ap and o.vehicle_id in present}
         return self._fleet.sensor.sense(ap.position_m, ap.params["SIM_SENS_RAD"],
                                         vehicles=others, exclude_vehicle=drone_id)
 

@@ -114,6 +114,8 @@ class Swarm:
         self.ports = ports or PortPlan()
         self.ports.check(len(scenario.vehicles))
         self.fleet = Fleet(scenario, physics_hz=self.clock.physics_hz)
+        self.shared_local_origin = shared_local_origin
+        self.left: set[int] = set()  # vehicles that left the run (emulator.fleet_membership)
         if shared_local_origin:  # LOCAL_POSITION_NED about the session origin for every vehicle
             self.fleet.share_local_origin()
         if self.clock.stepped:
@@ -131,16 +133,16 @@ class Swarm:
             list(range(self.fleet.n))]
         self.networks = [NetworkProtocol(self._destinations(i), self.faults.gate)
                          for i in range(len(groups))]
-        self._network_of = [self.networks[0]] * self.fleet.n
+        self.network_of = [self.networks[0]] * self.fleet.n
         for network, group in zip(self.networks, groups, strict=True):
             for k in group:
-                self._network_of[k] = network
+                self.network_of[k] = network
         self.links = [
-            VehicleLink(ap, self._network_of[ap.k].send_frame, self.streams, time.monotonic)
+            VehicleLink(ap, self.network_of[ap.k].send_frame, self.streams, time.monotonic)
             for ap in self.fleet.autopilots
         ]
         for link in self.links:
-            self._network_of[link.k].add(link)
+            self.network_of[link.k].add(link)
         # Periodic telemetry is built for all due vehicles at once; the links' encoders
         # share its sequence numbers, so every vehicle/component keeps one sequence.
         self.telemetry = FleetTelemetry(self.fleet)
@@ -216,7 +218,7 @@ class Swarm:
 
     def _emit(self, k: int, data: bytes) -> None:
         """One telemetry frame of vehicle k into its network's queue."""
-        self._network_of[k].send_frame(k, data)
+        self.network_of[k].send_frame(k, data)
 
     # ----------------------------------------------------------------- access
     @property
@@ -337,6 +339,10 @@ class Swarm:
         self._bursts[self.fleet.index_by_id[drone_id]] = 2
         self._wake.set()
 
+    def wake(self) -> None:
+        """Have the scheduler look at the fleet again now (it changed between steps)."""
+        self._wake.set()
+
     def send_all_telemetry(self) -> None:
         """Every vehicle's whole telemetry on the next loop turn (after an operator reset)."""
         for k in range(self.fleet.n):
@@ -345,6 +351,10 @@ class Swarm:
 
     def _send_bursts(self) -> None:
         bursts, self._bursts = self._bursts, {}
+        for k in self.left:  # a vehicle that left says nothing more
+            bursts.pop(k, None)
+        if not bursts:
+            return
         if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
             for k in bursts:
                 self.links[k].resend_mission_reached()
@@ -454,7 +464,8 @@ class Swarm:
     def tick_links(self, wall_now_s: float) -> None:
         """The links' wall-clock duties: mission item retries, the offboard failsafe."""
         for link in self.links:
-            if link.missions.uploading or link.ap.mode is FlightMode.OFFBOARD:
+            if (link.missions.uploading or link.ap.mode is FlightMode.OFFBOARD) \
+                    and link.k not in self.left:
                 link.tick(wall_now_s)
 
     def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:

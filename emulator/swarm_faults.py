@@ -47,6 +47,11 @@ class SwarmFaults:
         self._link_events: set[int] = set()  # ids of scheduled events that belong to the links
         self.configure(faults or LinkFaults(), record=faults is not None)
 
+    def add_vehicle(self, ap: Autopilot) -> None:
+        """A vehicle joined the running swarm: its links follow the current settings."""
+        self.gate.add_vehicle(ap.vehicle_id)
+        ap.failures.silenced = self.gate.silenced
+
     # ------------------------------------------------------------ settings
     def configure(self, faults: LinkFaults, *, record: bool = True) -> None:
         """Use `faults` from now on (at start, or an operator's change at run time)."""

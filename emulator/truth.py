@@ -365,6 +365,7 @@ class TruthRecorder(TruthHistory):
         self._first_t_s = math.nan
         self._next_keyframe_t_s = -math.inf
         self._moving: TargetRows | None = None
+        self._left: np.ndarray | None = None  # vehicles no longer recorded (left the run)
 
     @property
     def end_t_s(self) -> float:
@@ -498,7 +499,7 @@ class TruthRecorder(TruthHistory):
             stored[1:] |= moving[:-1]
         stored[0] |= self._was_moving
         if keyframe is not None:
-            stored[keyframe] = True
+            stored[keyframe] = True if self._left is None else ~self._left
         np.copyto(self._was_moving, last)
         steps, index = stored.nonzero()
         if not index.size:
@@ -526,6 +527,43 @@ class TruthRecorder(TruthHistory):
         """The rows of `_new_rows` are filled in."""
         if rows.base is not self._stage:
             self._group_into_chunks(rows)
+
+    def add_vehicle(self, vehicle_id: str, t_s: float, position_m: npt.ArrayLike,
+                    yaw_deg: float, battery_pct: float) -> int:
+        """Record a vehicle that joins the run at t_s (the latest recorded step) from its first
+        row on; returns its index. ValueError for an id recorded before (a left one too)."""
+        if not isinstance(vehicle_id, str) or not vehicle_id:
+            raise ValueError("a vehicle id is a non-empty string")
+        if vehicle_id in self._index_of:
+            raise ValueError(f"vehicle {vehicle_id!r} is already recorded in this run")
+        if self._stage_len:
+            self._flush()
+        k = self._n
+        self.vehicle_ids = (*self.vehicle_ids, vehicle_id)
+        self._index_of[vehicle_id] = k
+        self._events_by_vehicle.append([])
+        self._n = n = k + 1
+        self._shapes = ((n, 3), (n,), (n,), (n,))
+        self._was_moving = np.append(self._was_moving, False)
+        self._chunks.append([np.empty((_FIRST_CHUNK_ROWS, _N_COLS))])
+        self._fill.append(0)
+        if self._left is not None:
+            self._left = np.append(self._left, False)
+        self._all_index = np.arange(n, dtype=np.intp) if self._left is None else \
+            (~self._left).nonzero()[0]
+        x, y, z = (float(v) for v in np.asarray(position_m, dtype=float))
+        self._append(k, np.array([[float(t_s), x, y, z, float(yaw_deg), float(battery_pct)]]))
+        return k
+
+    def retire(self, vehicle_id: str) -> None:
+        """Stop recording a vehicle that left the run: its history ends at the latest
+        recorded step and stays queryable."""
+        k = self._vehicle_index(vehicle_id)
+        if self._left is None:
+            self._left = np.zeros(self._n, dtype=bool)
+        self._left[k] = True
+        self._was_moving[k] = False
+        self._all_index = (~self._left).nonzero()[0]
 
     def record_event(self, t_s: float, vehicle_id: str, kind: str, **data: Any) -> TruthEvent:
         """Record an event for a known vehicle; ``data`` must be JSON-serialisable."""

@@ -7,7 +7,7 @@ import inspect
 import math
 import time
 from collections.abc import Awaitable, Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mavlink_gateway.command_send import Acted, NoAnswer, Refusal, send_command
 from mavlink_gateway.drone_link import DroneLink
@@ -23,6 +23,9 @@ from mavlink_gateway.lockstep_wait import (
 )
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
+
+if TYPE_CHECKING:
+    from mavlink_gateway.fleet import FleetConnection
 
 __all__ = ["GatewayCore", "Interrupted", "NoAnswer", "Refusal"]
 
@@ -66,9 +69,13 @@ def _short(value: object, limit: int = 60) -> str:
 class GatewayCore:
     """Drone lookup, per-drone serialisation and outcome waits."""
 
-    def __init__(self, drones: Mapping[str, DroneLink], services: Services) -> None:
+    def __init__(self, drones: Mapping[str, DroneLink], services: Services, *,
+                 connection: FleetConnection | None = None) -> None:
         self.drones = dict(drones)
         self.services = services
+        # The MAVLink connection the links came from: drones joining the swarm are discovered
+        # on it (Gateway.add_drone); None where the drones are fixed.
+        self.connection = connection
         self._busy: dict[str, str] = {}
         self._goals: dict[str, Goal] = {}
         # The primitive that a replacing primitive interrupted, while the latter runs.

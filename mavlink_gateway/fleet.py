@@ -78,6 +78,12 @@ class FleetConnection:
         self.drones.update(found)
         return found
 
+    async def detach(self, drone_id: str) -> None:
+        """Forget a drone (it left the swarm): its link stops; nothing when unknown."""
+        link = self.drones.pop(drone_id, None)
+        if link is not None:
+            await link.close()
+
     async def close(self) -> None:
         for link in self.drones.values():
             await link.close()

@@ -19,6 +19,21 @@ class Gateway(PayloadPrimitives):
     it replaces the current goal (`hold`, and `move_to`/`land` with `replace=True`).
     """
 
+    async def add_drone(self, profile: DroneProfile) -> None:
+        """Learn a drone that joined the swarm (discovered on the gateway's connection and
+        ready with telemetry when this returns); FleetError when it does not appear."""
+        if self.connection is None:
+            raise RuntimeError("this gateway was given a fixed set of drones")
+        self.drones.update(await self.connection.attach([profile]))
+
+    async def remove_drone(self, drone_id: str) -> None:
+        """Forget a drone that left the swarm: it is unknown from now on."""
+        self.drones.pop(drone_id, None)
+        self._busy.pop(drone_id, None)
+        self._goals.pop(drone_id, None)
+        if self.connection is not None:
+            await self.connection.detach(drone_id)
+
     def list_drones(self) -> list[DroneState]:
         return [link.state() for link in self.drones.values()]
 

@@ -101,3 +101,30 @@ async def test_sessions_created_from_the_reference_layout_and_reset(tmp_path: Pa
         assert r.status_code == 409  # its benchmark task runs
         r = await s.client.put("/sessions/abcd1234", json={"name": "x"}, headers=headers)
         assert r.status_code == 409
+
+
+async def test_a_deleted_session_stops_and_is_gone(tmp_path: Path) -> None:
+    async with plat_server(tmp_path, _free()) as s:
+        (first,) = s.hub.sessions
+        headers = {"X-API-Key": KEYS["operator"]}
+        operator = PlatClient(s.client, KEYS["operator"])
+        busy = await operator.post("/sessions/abcd1234", plat_world())
+        assert s.hub.current() == busy["id"]
+        for key in (None, KEYS["agent"]):
+            r = await s.client.delete(f"/sessions/{first}",
+                                      headers={"X-API-Key": key} if key else {})
+            assert r.status_code == 403, r.text
+        r = await s.client.delete("/sessions/abcd1234", headers=headers)
+        assert r.status_code == 409 and "running benchmark task" in r.text
+        r = await s.client.delete("/sessions/nope", headers=headers)
+        assert r.status_code == 404
+        live = s.hub.sessions[first]
+        deleted = await s.client.delete(f"/sessions/{first}", headers=headers)
+        assert deleted.status_code == 200, deleted.text
+        assert deleted.json()["sessions"] == ["abcd1234"]
+        assert list(s.hub.sessions) == ["abcd1234"] and s.hub.current() == "abcd1234"
+        assert not live.swarm.endpoints[0].is_open  # its swarm was shut down
+        r = await s.client.get(f"/sessions/{first}/command-history", headers=headers)
+        assert r.status_code == 404
+        r = await s.client.delete(f"/sessions/{first}", headers=headers)
+        assert r.status_code == 404

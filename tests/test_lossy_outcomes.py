@@ -309,10 +309,12 @@ async def test_no_call_is_rejected_when_it_acted_on_a_lossy_link_under_the_stepp
 @pytest.mark.mavsdk
 @pytest.mark.slow
 async def test_serve_agents_over_rest_get_no_false_refusal_on_a_lossy_link(tmp_path: Path):
-    # `mavswarm serve` (stepped clock) over real HTTP, as an external agent drives it.
+    # `mavswarm serve --clock stepped` over real HTTP, as an external agent drives it, one
+    # request per drone at once (under the default lockstep clock one agent key is one thread
+    # of control, so concurrent calls take the batch tool or a key per drone).
     data = {**small_session(["takeoff_hold"]), "link_faults": {"seed": 5, "loss": 0.2}}
     tally: Counter[str] = Counter()
-    async with _serving(tmp_path, data) as (client, live):
+    async with _serving(tmp_path, data, clock="stepped") as (client, live):
         base = f"/sessions/{live.id}/tools"
         drones = [d["id"] for d in data["drones"]][:3]
 

@@ -34,12 +34,12 @@ ABOVE_BUILDINGS_M = 60.0  # the delivery world's tallest building stands 54 m
 
 
 @contextlib.asynccontextmanager
-async def _serving(tmp_path: Path, data: dict[str, Any]
+async def _serving(tmp_path: Path, data: dict[str, Any], clock: str = "lockstep"
                    ) -> AsyncIterator[tuple[httpx.AsyncClient, LiveSession]]:
     """`mavswarm serve` of one session file (live_hub and create_app, as serve_rest assembles
-    them) under uvicorn on a free port."""
+    them, with `clock`) under uvicorn on a free port."""
     path = write_json(tmp_path / f"{data['id']}.json", data)
-    async with live_hub([path]) as hub:
+    async with live_hub([path], clock=clock) as hub:
         (live,) = hub.sessions.values()
         hub.add_key("k-agent", Role.AGENT, live.id)
         hub.add_key("k-operator", Role.OPERATOR)

@@ -77,8 +77,11 @@ class _Hosted:
 
 def _add_task_routes(app: FastAPI, hub: Hub) -> None:
     """What a hosted task adds to `mavswarm serve`'s routes: token use, and MultiUAV-Plat's
-    `mark-done`, which ends the task as `finish` does."""
+    `mark-done`, which ends the task as `finish` does. They go before `serve`'s own routes of
+    the same paths (the operator's `mark-done` of `benchmark.server.compat_tasks`): in a hosted
+    run the agent's `mark-done` ends its task."""
     agent = require(hub, Role.AGENT)
+    before = len(app.router.routes)
 
     @app.post("/sessions/current/tokens", tags=["tasks"],
               summary="Report the token use of the agent's model calls for this task")
@@ -111,6 +114,10 @@ def _add_task_routes(app: FastAPI, hub: Hub) -> None:
     def mark_in(session_id: str, task_id: str, caller: Annotated[Caller, Depends(agent)]
                 ) -> dict[str, Any]:
         return mark(live_session(hub, caller, session_id), task_id)
+
+    added = app.router.routes[before:]
+    del app.router.routes[before:]
+    app.router.routes[:0] = added
 
 
 class UnitServer:

@@ -11,12 +11,14 @@ from typing import Any
 
 from agent_contract import AgentTask, AgentTools
 from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
+from benchmark.oracle.derive import Unplannable, derive_plan
 from benchmark.oracle.planner import NoPath, PathPlanner
 from benchmark.oracle.pursuit import Pursuit
+from benchmark.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
 
-__all__ = ["OracleAgent", "OracleError"]
+__all__ = ["OracleAgent", "OracleCannotPlan", "OracleError"]
 
 log = logging.getLogger(__name__)
 
@@ -54,6 +56,11 @@ class OracleError(RuntimeError):
     """Raised when the oracle cannot carry out its plan (a refused or failed primitive)."""
 
 
+class OracleCannotPlan(RuntimeError):
+    """Raised by run when a task has no hand plan and none can be derived from its checks:
+    the task's record ends as agent_error with the leaf and the reason."""
+
+
 Op = Mapping[str, Any]
 
 
@@ -62,10 +69,19 @@ class OracleAgent:
 
     name = "oracle"
 
-    def __init__(self, scenario: Scenario, plans: Mapping[str, Sequence[Sequence[Op]]]) -> None:
+    def __init__(self, scenario: Scenario, plans: Mapping[str, Sequence[Sequence[Op]]],
+                 *, checks: Mapping[str, Node] | None = None,
+                 faulted: Mapping[str, Sequence[str]] | None = None,
+                 derived_only: bool = False) -> None:
+        """plans: hand-written plans by task id; checks: check trees to derive a plan from
+        when a task has none (or always, with derived_only); faulted: by task id, the drones
+        its hidden faults strike (given no optional work in derived plans)."""
         self._scenario = scenario
         self._world = scenario.world
         self._plans = dict(plans)
+        self._checks = dict(checks or {})
+        self._faulted = dict(faulted or {})
+        self.derived_only = derived_only
         self._planner = PathPlanner(scenario.world, clearance_m=PLAN_CLEARANCE_M)
         self._specs = {v.id: v for v in scenario.vehicles}
         self._pursuit = Pursuit(scenario.world)
@@ -78,13 +94,28 @@ class OracleAgent:
         else:
             self._plans[task_id] = plan
 
+    def set_checks(self, task_id: str, checks: Node, faulted: Sequence[str] = ()) -> None:
+        """Give (or replace) the check tree a plan is derived from for one task."""
+        self._checks[task_id] = checks
+        self._faulted[task_id] = list(faulted)
+
+    def derive(self, task_id: str) -> Sequence[Sequence[Op]]:
+        """A plan derived from the task's checks and the drones' last known states."""
+        checks = self._checks.get(task_id)
+        if checks is None:
+            raise OracleCannotPlan(f"task {task_id} has neither a reference plan nor checks")
+        try:
+            return derive_plan(checks, self._scenario, self._state,
+                               faulted=self._faulted.get(task_id, ()))
+        except Unplannable as error:
+            raise OracleCannotPlan(str(error)) from None
+
     async def run(self, task: AgentTask, tools: AgentTools) -> None:
-        plan = self._plans.get(task.task_id)
-        if plan is None:
-            tools.finish("no reference plan for this task")
-            return
         listing = tools.list_drones()
         self._state = {d["drone"]: d for d in (listing.data or {}).get("drones", [])}
+        plan = None if self.derived_only else self._plans.get(task.task_id)
+        if plan is None:
+            plan = self.derive(task.task_id)
         for phase in plan:
             queues: dict[str, list[Op]] = {}
             for op in phase:
@@ -224,6 +255,8 @@ class OracleAgent:
             await self._meet(tools, d, op["target"], float(op["altitude_m"]), zone=(zx, zy, zr))
         elif kind == "until_fault":
             await self._until_fault(tools, d, float(op["altitude_m"]), float(op["duration_s"]))
+        elif kind == "meet":
+            await self._meet(tools, d, op["target"], float(op["altitude_m"]))
         elif kind == "photo_target":
             await self._meet(tools, d, op["target"], float(op["altitude_m"]))
             self._check(d, "photo", await tools.take_photo(d))

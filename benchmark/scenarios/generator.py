@@ -91,25 +91,33 @@ Session = dict[str, Any]
 TemplateFor = Callable[[float], ShapeTemplate]
 
 
-def _check_key(family: str, level: str, index: int) -> tuple[FamilySpec, LevelSpec]:
+def _check_key(family: str, level: str, index: int, max_index: int = SESSION_INDICES[-1]
+               ) -> tuple[FamilySpec, LevelSpec]:
     fam, spec = family_spec(family), level_spec(level)
-    if isinstance(index, bool) or not isinstance(index, int) or index not in SESSION_INDICES:
+    if (isinstance(index, bool) or not isinstance(index, int)
+            or not SESSION_INDICES[0] <= index <= max_index):
         raise ValueError(f"index must be an integer from {SESSION_INDICES[0]} to "
-                         f"{SESSION_INDICES[-1]}; got {index!r}")
+                         f"{max_index}; got {index!r}")
     return fam, spec
 
 
-def session_id(family: str, level: str, index: int) -> str:
-    """The session's id, e.g. 'area_search-easy-1'; raises ValueError on a bad key."""
-    _check_key(family, level, index)
+def session_id(family: str, level: str, index: int, *,
+               max_index: int = SESSION_INDICES[-1]) -> str:
+    """The session's id, e.g. 'area_search-easy-1'; raises ValueError on a bad key (an index
+    above max_index: the shipped suite has 5 sessions per cell, a drawn one may have more)."""
+    _check_key(family, level, index, max_index)
     return f"{family}-{level}-{index}"
 
 
-def session_seed(family: str, level: str, index: int) -> int:
+def session_seed(family: str, level: str, index: int, *, secret: str = "",
+                 max_index: int = SESSION_INDICES[-1]) -> int:
     """A stable 53-bit seed: the first 8 bytes of sha256("mavswarm/<family>/<level>/<index>")
-    shifted right by 11 bits (so it survives a JSON round trip through doubles)."""
-    _check_key(family, level, index)
-    digest = hashlib.sha256(f"mavswarm/{family}/{level}/{index}".encode()).digest()
+    shifted right by 11 bits (so it survives a JSON round trip through doubles). With a
+    secret, sha256("mavswarm/<secret>/<family>/<level>/<index>"): a private split nobody
+    draws again without the secret."""
+    _check_key(family, level, index, max_index)
+    label = f"{secret}/" if secret else ""
+    digest = hashlib.sha256(f"mavswarm/{label}{family}/{level}/{index}".encode()).digest()
     return int.from_bytes(digest[:8], "big") >> 11
 
 
@@ -308,11 +316,13 @@ def _description(fam: FamilySpec, spec: LevelSpec, corner: str, main: int, stati
             f"and {spec.obstacle_count} obstacles.")
 
 
-def generate_world(family: str, level: str, index: int) -> Session:
-    """The session dict (without tasks) of one benchmark key; raises ValueError on a bad key
-    and PlacementError if the level's counts cannot be placed."""
-    fam, spec = _check_key(family, level, index)
-    seed = session_seed(family, level, index)
+def generate_world(family: str, level: str, index: int, *, secret: str = "",
+                   max_index: int = SESSION_INDICES[-1]) -> Session:
+    """The session dict (without tasks) of one benchmark key (drawn from the secret's seeds
+    when one is given); raises ValueError on a bad key and PlacementError if the level's
+    counts cannot be placed."""
+    fam, spec = _check_key(family, level, index, max_index)
+    seed = session_seed(family, level, index, secret=secret, max_index=max_index)
     rng = random.Random(seed)
     layout = Layout(spec.map_width_m, spec.map_height_m, margin_m=MAP_MARGIN_M)
     environment = _environment(rng)
@@ -320,10 +330,11 @@ def generate_world(family: str, level: str, index: int) -> Session:
     drones = _drones(rng, spec, layout, base)
     stations = spec.charging_station_count
     if fam.family == "target_tracking":
-        return _tracking_world(family, level, index, rng, layout, drones, environment, corner)
+        return _tracking_world(family, level, index, seed, rng, layout, drones, environment,
+                               corner)
     if fam.family == "resilience":
-        return _resilience_world(family, level, index, rng, layout, drones, environment,
-                                 corner)
+        return _resilience_world(family, level, index, seed, rng, layout, drones,
+                                 environment, corner)
     main = spec.target_count(fam.area_targets) - stations
     names = [f"{fam.target_name} {k}" for k in range(1, main + 1)]
     targets = [_area_target(rng, spec, layout, n) for n in names] if fam.area_targets else []
@@ -335,12 +346,12 @@ def generate_world(family: str, level: str, index: int) -> Session:
                     environment, drones, targets, obstacles)
 
 
-def _tracking_world(family: str, level: str, index: int, rng: random.Random, layout: Layout,
-                    drones: list[dict[str, Any]], environment: dict[str, Any], corner: str
-                    ) -> Session:
+def _tracking_world(family: str, level: str, index: int, seed: int, rng: random.Random,
+                    layout: Layout, drones: list[dict[str, Any]], environment: dict[str, Any],
+                    corner: str) -> Session:
     """target_tracking: moving targets' tracks placed before the obstacles, fixed targets and
     charging stations after them."""
-    fam, spec = _check_key(family, level, index)
+    fam, spec = family_spec(family), level_spec(level)
     movers = moving_count(family, level)
     fixed = TRACKING_TARGETS[level] - movers
     targets = [_moving_target(rng, layout, f"Moving Target {k}", k % PATH_MODE_EVERY == 0)
@@ -355,16 +366,16 @@ def _tracking_world(family: str, level: str, index: int, rng: random.Random, lay
                    f"drones at a base in the {corner} corner, {movers} moving targets, {fixed} "
                    f"fixed target{'' if fixed == 1 else 's'}, {stations} {station_text} and "
                    f"{spec.obstacle_count} obstacles.")
-    return _session(fam, spec, index, session_seed(family, level, index), description,
-                    environment, drones, targets, obstacles)
+    return _session(fam, spec, index, seed, description, environment, drones, targets,
+                    obstacles)
 
 
-def _resilience_world(family: str, level: str, index: int, rng: random.Random,
+def _resilience_world(family: str, level: str, index: int, seed: int, rng: random.Random,
                       layout: Layout, drones: list[dict[str, Any]],
                       environment: dict[str, Any], corner: str) -> Session:
     """resilience: the area families' area targets placed before the obstacles, then
     RESILIENCE_FIXED_TARGETS fixed targets and the charging stations."""
-    fam, spec = _check_key(family, level, index)
+    fam, spec = family_spec(family), level_spec(level)
     stations = spec.charging_station_count
     areas = spec.area_target_count - stations
     targets = [_area_target(rng, spec, layout, f"Search Area {k}") for k in range(1, areas + 1)]
@@ -377,8 +388,8 @@ def _resilience_world(family: str, level: str, index: int, rng: random.Random,
                    f"drones at a base in the {corner} corner, {areas} area targets, {fixed} "
                    f"fixed targets, {stations} {station_text} and {spec.obstacle_count} "
                    f"obstacles.")
-    return _session(fam, spec, index, session_seed(family, level, index), description,
-                    environment, drones, targets, obstacles)
+    return _session(fam, spec, index, seed, description, environment, drones, targets,
+                    obstacles)
 
 
 def _session(fam: FamilySpec, spec: LevelSpec, index: int, seed: int, description: str,
@@ -386,7 +397,7 @@ def _session(fam: FamilySpec, spec: LevelSpec, index: int, seed: int, descriptio
              targets: list[dict[str, Any]], obstacles: list[dict[str, Any]]) -> Session:
     family, level = fam.family, spec.level
     return {
-        "schema": SCHEMA, "id": session_id(family, level, index), "family": family,
+        "schema": SCHEMA, "id": f"{family}-{level}-{index}", "family": family,
         "level": level, "index": index, "seed": seed,
         "name": f"{fam.title}, {level}, #{index}",
         "description": description,

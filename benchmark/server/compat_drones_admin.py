@@ -14,7 +14,12 @@ benchmark task runs (compat_write_guard):
 - `PUT /drones/{id}/position` `{x, y, z}`: with z = 0 the drone is placed on the ground there
   (an operator reset; refused inside an obstacle's footprint); with z > 0 it is flown there
   over MAVLink (taking off first when on the ground), as DECISIONS 1 wants: no teleports in
-  the air. Answers the drone's record.
+  the air. Answers the drone's record;
+- `POST /drones` (the reference's registration fields): a new drone joins the running swarm
+  as a new MAVLink vehicle (the next free system id, emulator.fleet_membership) and the
+  gateway learns it, so `GET /drones` lists it and the agent tools fly it; answers its record;
+- `DELETE /drones/{id}`: the drone leaves the swarm (it stops speaking; its ground truth ends
+  there) and is 404 afterwards. Refused (409) for a drone a task's checks name, or the last.
 
 Bodies are pydantic models: a bad one is 422 naming the field and changes nothing."""
 
@@ -31,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from benchmark.server.auth import require
 from benchmark.server.compat import resolve_session
+from benchmark.server.compat_drone_join import DroneBody, create_drone, delete_drone
 from benchmark.server.compat_entities import compat_drone
 from benchmark.server.compat_write_guard import refuse_writes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
@@ -261,6 +267,19 @@ def add_compat_drone_admin_routes(app: FastAPI, hub: Hub) -> None:
                                session: str | None = pick) -> dict[str, Any]:
         return await charge_all(unless_done(
             caller, session, lambda ap: float(ap.fleet.bat.pct[ap.k]) >= FULL_PCT))
+
+    @app.post("/drones", tags=["multiuav-plat"],
+              summary="Add a drone to the running swarm as a new MAVLink vehicle (operator, "
+                      "admin)")
+    async def create(body: DroneBody, caller: Annotated[Caller, Depends(staff)],
+                     session: str | None = pick) -> dict[str, Any]:
+        return await create_drone(writable(caller, session, "drone changes"), body)
+
+    @app.delete("/drones/{drone_id}", tags=["multiuav-plat"],
+                summary="Take a drone out of the running swarm (operator, admin)")
+    async def delete(drone_id: str, caller: Annotated[Caller, Depends(staff)],
+                     session: str | None = pick) -> dict[str, Any]:
+        return await delete_drone(writable(caller, session, "drone changes"), drone_id)
 
     @app.post("/drones/{drone_id}/battery", tags=["multiuav-plat"],
               summary="Set a drone's battery level (operator, admin)")

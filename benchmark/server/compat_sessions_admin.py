@@ -5,6 +5,9 @@
 - `POST /sessions/{id}` (restore with that id): the same under the path's id; a session
   already live under it is not overwritten (409: its swarm runs; reset it or load another);
 - `PUT /sessions/{id}` `{name, description}`: renames or describes a live session;
+- `DELETE /sessions/{id}`: stops a live session (its agent's tools close, its swarm and
+  gateway shut down) and forgets it; another becomes current only when one is picked (or
+  one is left);
 - `POST /sessions/current/reset` and `POST /sessions/{id}/reset`: statistics, reaches,
   coverage, tracking and the command, status and path histories start again from now (a new
   window, DECISIONS 9); entities, positions and batteries are untouched. Refused (409) while a
@@ -103,6 +106,22 @@ def add_compat_session_admin_routes(app: FastAPI, hub: Hub) -> None:
         live.session = dataclasses.replace(live.session, data=data,
                                            name=changes.get("name", live.session.name))
         return _metadata(hub, live, caller.role, [])
+
+    @app.delete("/sessions/{session_id}", tags=["multiuav-plat"],
+                summary="Stop a live session and forget it (operator, admin)")
+    async def delete(session_id: str, caller: Annotated[Caller, Depends(staff)]
+                     ) -> dict[str, Any]:
+        live = live_session(hub, caller, session_id)
+        refuse_writes(live, "session deletion")
+        if hub.stopper is None:
+            raise HTTPException(501, "this server cannot stop sessions while it runs")
+        del hub.sessions[live.id]
+        if hub.current_id == live.id:
+            hub.current_id = None
+        await live.tools.close()
+        await hub.stopper(live.id)
+        return {"message": f"session {live.id} deleted", "id": live.id,
+                "current": hub.current(), "sessions": list(hub.sessions)}
 
     @app.post("/sessions", tags=["multiuav-plat"],
               summary="Create a session from the reference's layout and start it (operator, "

@@ -74,6 +74,9 @@ class Hub:
         self.starter: Callable[[Session], Awaitable[LiveSession]] | None = None
         """Starts a live session (swarm and gateway) for a loaded session file; None where
         the server cannot load sessions while it runs."""
+        self.stopper: Callable[[str], Awaitable[None]] | None = None
+        """Closes a live session's swarm and gateway (`DELETE /sessions/{id}`); None where the
+        server cannot stop sessions while it runs."""
         self.session_folders = SessionFolders()
         """Where `POST /sessions/load {"path": ...}` reads files (benchmark.session_folders)."""
 

@@ -108,6 +108,7 @@ async def live_hub(session_paths: Sequence[str | Path], physics_hz: float = 50.0
         for session in sessions:
             hub.add_session(await runner.start(session))
         hub.starter = runner.start
+        hub.stopper = runner.stop
         yield hub
 
 

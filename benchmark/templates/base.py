@@ -112,6 +112,7 @@ class Template:
     stations: int = 0
     families: tuple[str, ...] = ()  # empty: every family
     moving_targets: int = 0
+    levels: tuple[str, ...] = ()  # empty: every level (generation filters by it)
 
     def fits(self, view: SessionView) -> bool:
         return (len(view.drones) >= self.drones and len(view.areas) >= self.area_targets

@@ -12,6 +12,7 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -23,6 +24,7 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import nearest_first as _nearest_first
@@ -79,27 +81,13 @@ def _route_ops(drone_id: str, points: Sequence[Point], alt: int) -> list[Node]:
     return ops
 
 
-def _recharge_stop(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    station = rng.choice(view.stations)
-    where = fmt_xy(station.position_m[0], station.position_m[1])
-    flight = _diagonal_m(view)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {station.name} at {where}, land on the charging pad and charge "
-            f"the battery to full. Leave the drone resting on the station.",
-            f"{d.name} needs a recharge: take it to {station.name} at {where}, set it down on "
-            f"the pad and stay there until the battery reads 100 %.",
-            f"Send {d.name} to land on the charging station {station.name}, located at "
-            f"{where}, and top its battery up completely; it should end the task on the "
-            f"station.",
-        ],
-        checks=all_of(*_charged_on(d.id, station)),
-        oracle=[[{"op": "charge", "drone": d.id, "station": station.id}]],
-        flight_m=flight,
-        hover_s=_charge_s(station, flight),
-        steps=4,
-    )
+def station_charge(view: SessionView, rng: random.Random, values: dict[str, Any],
+                   entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of recharge_stop.json: where the station is and how long charging takes."""
+    station = entities["station"]
+    return {"where": (station.position_m[0], station.position_m[1]),
+            "charge_s": _charge_s(station, _diagonal_m(view))}
+
 
 
 def _tour_then_recharge(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -166,7 +154,7 @@ def _return_with_reserve(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES = (
-    Template("recharge_stop", "battery_management", "medium", _recharge_stop, stations=1),
+    load_template(FILES / "recharge_stop.json"),
     Template("tour_then_recharge", "battery_management", "hard", _tour_then_recharge,
              stations=1),
     Template("return_with_reserve", "battery_management", "medium", _return_with_reserve,

@@ -5,15 +5,19 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Sequence
+from pathlib import Path
 
 from benchmark.templates.base import SessionView, TemplateUnfit, fmt_xy, leaf
 from emulator.scenario import VehicleSpec
 from emulator.world import Target
 
-__all__ = ["diagonal_m", "home_xy", "inspectable", "names", "nearest_first", "spread_points",
-           "target_xy", "visited"]
+__all__ = ["FILES", "diagonal_m", "home_xy", "inspectable", "names", "nearest_first",
+           "spread_points", "target_xy", "visited"]
 
 Point = tuple[float, float]
+
+FILES = Path(__file__).resolve().parent / "files"
+"""The built-in templates written as template files (benchmark.template_files)."""
 
 
 def spread_points(view: SessionView, rng: random.Random, n: int, min_gap_m: float,

@@ -8,52 +8,21 @@ from __future__ import annotations
 
 import random
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
     Template,
-    TemplateUnfit,
     all_of,
-    fmt_xy,
     leaf,
     pick,
 )
-from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import FILES
 
 __all__ = ["CODE_WORDS", "TEMPLATES"]
 
 CODE_WORDS = ("SECTOR", "GRID", "ALPHA", "BRAVO", "DELTA", "ECHO", "KILO", "RIDGE", "VALLEY",
               "HARBOR")
-
-
-def _relay_report(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    alt = rng.randint(15, 30)
-    x, y = view.free_point(rng, region=view.region(0.2, 0.2, 0.85, 0.85))
-    code = f"{rng.choice(CODE_WORDS)}-{rng.randint(2, 99)}"
-    text = f"{a.name} on station, {code} is clear."
-    where = fmt_xy(x, y)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {a.name} to {where} at {alt} m. Once it is there, have it send {b.name} the "
-            f'message "{text}"',
-            f"{a.name} goes to the relay point {where} ({alt} metres up) and then reports to "
-            f'{b.name} with a direct message reading "{text}"',
-            f"Position {a.name} over {where} at an altitude of {alt} m, then send a message "
-            f'from {a.name} to {b.name} that says "{text}" (the code {code} must appear as '
-            f"written).",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=a.id, x=x, y=y, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_sent_message_content", drone_id=a.id, content=code,
-                 to_drone_id=b.id),
-        ),
-        oracle=[[{"op": "goto", "drone": a.id, "x": x, "y": y, "z": alt},
-                 {"op": "message", "drone": a.id, "to": b.id, "text": text}]],
-        flight_m=_diagonal_m(view),
-        steps=3,
-    )
 
 
 def _broadcast_status(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -81,45 +50,8 @@ def _broadcast_status(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _spot_and_tell(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    candidates = [*view.points, *view.areas]
-    if not candidates:
-        raise TemplateUnfit("no point or area target to spot")
-    target = rng.choice(candidates)
-    alt = rng.randint(15, 30)
-    where = fmt_xy(target.position_m[0], target.position_m[1])
-    text = f"{target.name} spotted, come and confirm."
-    return TaskDraft(
-        phrasings=[
-            f"{a.name} flies at {alt} m over {target.name} at {where}. When it gets there, it "
-            f"sends {b.name} a message naming the target (\"{target.name}\"). Then {b.name} "
-            f"flies over {target.name} as well.",
-            f"Spot and tell: take {a.name} over {target.name} {where} at {alt} metres, have "
-            f"it message {b.name} with the name \"{target.name}\", and afterwards send "
-            f"{b.name} over the same target.",
-            f"First {a.name} reaches {target.name} (around {where}, fly at {alt} m); next it "
-            f"tells {b.name} by direct message, including the text \"{target.name}\"; "
-            f"finally {b.name} also flies over {target.name}.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=target.id, drone_id=a.id),
-            leaf("drone_has_sent_message_content", drone_id=a.id, content=target.name,
-                 to_drone_id=b.id),
-            leaf("target_is_reached_by_drone", target_id=target.id, drone_id=b.id),
-        ),
-        oracle=[
-            [{"op": "reach", "drone": a.id, "target": target.id, "altitude_m": alt}],
-            [{"op": "message", "drone": a.id, "to": b.id, "text": text}],
-            [{"op": "reach", "drone": b.id, "target": target.id, "altitude_m": alt}],
-        ],
-        flight_m=_diagonal_m(view),
-        steps=5,
-    )
-
-
 TEMPLATES = (
-    Template("relay_report", "communication", "easy", _relay_report, drones=2),
+    load_template(FILES / "relay_report.json"),
     Template("broadcast_status", "communication", "easy", _broadcast_status, drones=2),
-    Template("spot_and_tell", "communication", "medium", _spot_and_tell, drones=2),
+    load_template(FILES / "spot_and_tell.json"),
 )

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import math
 import random
+from typing import Any
 
 import shapely
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -18,9 +20,9 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
-from benchmark.templates.common import target_xy as _xy
 from emulator.world import Target
 
 __all__ = ["TEMPLATES"]
@@ -205,65 +207,12 @@ def _sweep_line(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ shared targets
-def _double_check_target(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    (t,) = pick(rng, _inspectable(view, 1), 1)
-    alt = rng.randint(14, 24)
-    return TaskDraft(
-        phrasings=[
-            f"Double-check {t.name} at {_xy(t)}: take off both {a.name} and {b.name} to {alt} m "
-            f"and fly each of them over the target at that altitude, so that two drones have "
-            f"reached it.",
-            f"Both {a.name} and {b.name} must reach {t.name} (around {_xy(t)}). Launch each to "
-            f"exactly {alt} metres and keep that altitude on the way.",
-            f"Send two drones, {a.name} and {b.name}, to {t.name} near {_xy(t)}, both taking "
-            f"off to {alt} m; the target counts as confirmed once both have flown over it.",
-        ],
-        checks=all_of(
-            leaf("drone_has_taken_off", drone_id=a.id, min_altitude=float(alt),
-                 max_altitude=float(alt), tolerance=1.5),
-            leaf("drone_has_taken_off", drone_id=b.id, min_altitude=float(alt),
-                 max_altitude=float(alt), tolerance=1.5),
-            leaf("target_reached_drone_number", target_id=t.id, expected_count=2),
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=b.id),
-        ),
-        oracle=[[{"op": "takeoff", "drone": a.id, "altitude_m": alt},
-                 {"op": "takeoff", "drone": b.id, "altitude_m": alt}],
-                [{"op": "reach", "drone": a.id, "target": t.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": t.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view),
-        steps=4,
-    )
+def targets_apart(view: SessionView, rng: random.Random, values: dict[str, Any],
+                  entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of cross_check_targets.json: the distance between the two targets (budget)."""
+    first, second = entities["target_1"], entities["target_2"]
+    return {"flight": math.dist(first.position_m[:2], second.position_m[:2])}
 
-
-def _cross_check_targets(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    first, second = pick(rng, _inspectable(view, 2), 2)
-    alt = view.cruise_altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Cross-check two targets with {a.name} and {b.name}: each drone has to fly over "
-            f"both {first.name} at {_xy(first)} and {second.name} at {_xy(second)}.",
-            f"{a.name} and {b.name} must both reach {first.name} at {_xy(first)} as well as "
-            f"{second.name} at {_xy(second)}; the order is up to you.",
-            f"Have every one of {a.name} and {b.name} pass over {first.name} near {_xy(first)} "
-            f"and over {second.name} near {_xy(second)}, so both targets are confirmed by two "
-            f"drones.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=first.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=second.id, drone_id=a.id),
-            leaf("target_is_reached_by_drone", target_id=first.id, drone_id=b.id),
-            leaf("target_is_reached_by_drone", target_id=second.id, drone_id=b.id),
-        ),
-        oracle=[[{"op": "reach", "drone": a.id, "target": first.id, "altitude_m": alt},
-                 {"op": "reach", "drone": a.id, "target": second.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": second.id, "altitude_m": alt},
-                 {"op": "reach", "drone": b.id, "target": first.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view) + math.dist(first.position_m[:2], second.position_m[:2]),
-        steps=6,
-    )
 
 
 TEMPLATES = (
@@ -271,6 +220,6 @@ TEMPLATES = (
     Template("rendezvous", _CATEGORY, "medium", _rendezvous, drones=3),
     Template("fleet_launch", _CATEGORY, "easy", _fleet_launch),
     Template("sweep_line", _CATEGORY, "hard", _sweep_line, drones=3),
-    Template("double_check_target", _CATEGORY, "medium", _double_check_target, drones=2),
-    Template("cross_check_targets", _CATEGORY, "hard", _cross_check_targets, drones=2),
+    load_template(FILES / "double_check_target.json"),
+    load_template(FILES / "cross_check_targets.json"),
 )

@@ -12,21 +12,17 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
-    TaskDraft,
-    Template,
     TemplateUnfit,
-    all_of,
     fmt_xy,
     leaf,
-    pick,
     tour_length,
 )
-from benchmark.templates.common import diagonal_m as _diagonal_m
+from benchmark.templates.common import FILES, spread_points
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import nearest_first as _nearest_first
-from benchmark.templates.common import spread_points
 
 __all__ = ["AREA_SIDE_M", "TEMPLATES"]
 
@@ -61,97 +57,43 @@ def _ends(drone_id: str, point: Point, landings: int) -> list[Node]:
             leaf("drone_on_ground", drone_id=drone_id, tolerance=0.5)]
 
 
-def _parcel_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
+def parcel_spots(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of parcel_delivery.json: pickup and drop spots 150 m apart or more, and the
+    distance between them (for the budget)."""
     pickup, drop = _spots(view, rng, 2, 150.0)
-    p, q = fmt_xy(*pickup), fmt_xy(*drop)
-    return TaskDraft(
-        phrasings=[
-            f"Deliver a parcel with {d.name}: fly at {alt} m to the pickup point {p} and land "
-            f"there to collect it, then take off again, fly to the drop-off point {q} and land "
-            f"there.",
-            f"{d.name} picks up a package at {p} (land on the spot) and brings it to {q}, "
-            f"where it lands again. Cruise at {alt} metres between the stops.",
-            f"Parcel run for {d.name}: touch down at {p} for the pickup, then carry the parcel "
-            f"at {alt} m altitude to {q} and finish on the ground there.",
-        ],
-        checks=all_of(
-            _landed_at(d.id, pickup),
-            _landed_at(d.id, drop),
-            *_ends(d.id, drop, 2),
-        ),
-        oracle=[_land_ops(d.id, [pickup, drop], alt)],
-        flight_m=math.dist(pickup, drop) + _diagonal_m(view),
-        steps=6,
-    )
+    return {"pickup": pickup, "drop": drop, "flight": math.dist(pickup, drop)}
 
 
-def _multi_drop(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    drops = _nearest_first(_home_xy(view, view.drones.index(d)), _spots(view, rng, 3, 100.0))
-    listed = ", ".join(fmt_xy(*p) for p in drops)
-    return TaskDraft(
-        phrasings=[
-            f"{d.name} has three parcels to drop off. Flying at {alt} m, land at each of these "
-            f"points in this order: {listed}. It stays on the ground at the last one.",
-            f"Make three delivery stops with {d.name} at cruise altitude {alt} metres: land at "
-            f"{listed}, one after another, and remain landed at the final stop.",
-            f"Drop-off round for {d.name}: touch down in turn at {listed} (travel at {alt} m "
-            f"between stops) and end the round on the ground at the third point.",
-        ],
-        checks=all_of(
-            *(_landed_at(d.id, p) for p in drops),
-            *_ends(d.id, drops[-1], 3),
-        ),
-        oracle=[_land_ops(d.id, drops, alt)],
-        flight_m=tour_length(drops) + _diagonal_m(view),
-        steps=9,
-    )
+
+def drop_round(view: SessionView, rng: random.Random, values: dict[str, Any],
+               entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of multi_drop.json: three drop spots, nearest first from the drone's home, as
+    listed in the text, and the round's length (budget)."""
+    drone = entities["drone_1"]
+    drops = _nearest_first(_home_xy(view, view.drones.index(drone)), _spots(view, rng, 3, 100.0))
+    return {"drop1": drops[0], "drop2": drops[1], "drop3": drops[2],
+            "listed": ", ".join(fmt_xy(*p) for p in drops), "flight": tour_length(drops)}
 
 
-def _team_delivery(view: SessionView, rng: random.Random) -> TaskDraft:
-    a, b = pick(rng, view.drones, 2)
-    alt = rng.randint(15, 30)
+
+def two_rounds(view: SessionView, rng: random.Random, values: dict[str, Any],
+               entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of team_delivery.json: a pickup and a drop spot per drone, the drops 100 m apart
+    or more, and the longer leg (budget)."""
     for _ in range(_TRIES):
         pick_a, drop_a, pick_b, drop_b = _spots(view, rng, 4, 60.0)
         if math.dist(drop_a, drop_b) >= 100.0:
             break
     else:
         raise TemplateUnfit("no two drop points 100 m apart")
-    plans = ((a, pick_a, drop_a), (b, pick_b, drop_b))
-    checks: list[Node] = []
-    ops: list[Node] = []
-    for drone, pickup, drop in plans:
-        checks.extend([_landed_at(drone.id, pickup), _landed_at(drone.id, drop),
-                       *_ends(drone.id, drop, 2)])
-        ops.extend(_land_ops(drone.id, [pickup, drop], alt))
-    checks.append(leaf("two_drones_distance", drone_1_id=a.id, drone_2_id=b.id,
-                       min_distance=30.0))
-    pa, qa, pb, qb = (fmt_xy(*p) for p in (pick_a, drop_a, pick_b, drop_b))
-    return TaskDraft(
-        phrasings=[
-            f"Two deliveries at once, both flown at {alt} m. {a.name} lands at {pa} to pick up "
-            f"its parcel and then lands at {qa} to drop it; {b.name} lands at {pb} to pick up "
-            f"and then at {qb} to drop. Both end on the ground at their drop points, at least "
-            f"30 m from each other.",
-            f"Team delivery at {alt} metres: {a.name} goes {pa} -> {qa} and {b.name} goes "
-            f"{pb} -> {qb}, landing at every stop. They finish landed at their drop-off "
-            f"points, no closer than 30 m to each other.",
-            f"Have {a.name} collect a parcel by landing at {pa} and deliver it by landing at "
-            f"{qa}, while {b.name} does the same from {pb} to {qb}; cruise at {alt} m. Both "
-            f"stay on the ground at their drop points, 30 m or more apart.",
-        ],
-        checks=all_of(*checks),
-        oracle=[ops],
-        flight_m=max(math.dist(pick_a, drop_a), math.dist(pick_b, drop_b)) + _diagonal_m(view),
-        steps=12,
-    )
+    return {"pick_a": pick_a, "drop_a": drop_a, "pick_b": pick_b, "drop_b": drop_b,
+            "flight": max(math.dist(pick_a, drop_a), math.dist(pick_b, drop_b))}
+
 
 
 TEMPLATES = (
-    Template("parcel_delivery", "delivery", "medium", _parcel_delivery),
-    Template("multi_drop", "delivery", "medium", _multi_drop),
-    Template("team_delivery", "delivery", "hard", _team_delivery, drones=2),
+    load_template(FILES / "parcel_delivery.json"),
+    load_template(FILES / "multi_drop.json"),
+    load_template(FILES / "team_delivery.json"),
 )

@@ -12,6 +12,7 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -23,6 +24,7 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import home_xy as _home_xy
 from benchmark.templates.common import visited as _visited
@@ -111,34 +113,6 @@ def _survey(view: SessionView, rng: random.Random, n: int, start_xy: Point, alt:
     raise TemplateUnfit(f"no survey of {n} points within {max_route_m:.0f} m")
 
 
-def _checkpoint(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(12, 30)
-    hover = rng.randint(5, 15)
-    x, y = view.free_point(rng, region=view.region(0.2, 0.2, 0.85, 0.85))
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to the checkpoint {fmt_xy(x, y)} at {alt} m and hover there for "
-            f"{hover} seconds, staying in the air.",
-            f"{d.name}: reach {fmt_xy(x, y)} at an altitude of {alt} metres, then hold a steady "
-            f"hover over that spot ({hover} s or more).",
-            f"Send {d.name} to {fmt_xy(x, y)}, {alt} m up, and keep it hovering above the "
-            f"checkpoint for about {hover} seconds.",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=x, y=y, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_position", drone_id=d.id, x=x, y=y, z=float(alt), tolerance=3.0),
-            leaf("drone_hovering", drone_id=d.id, tolerance=0.5),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": x, "y": y, "z": alt},
-                 {"op": "hover", "drone": d.id, "duration_s": hover}]],
-        flight_m=_diagonal_m(view),
-        hover_s=float(hover),
-        steps=3,
-    )
-
-
 def _waypoint_tour(view: SessionView, rng: random.Random) -> TaskDraft:
     (d,) = pick(rng, view.drones, 1)
     home = _home_xy(view, view.drones.index(d))
@@ -206,9 +180,11 @@ def _patrol_loop(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _compass_legs(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
+def compass_start(view: SessionView, rng: random.Random, values: dict[str, Any],
+                  entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of compass_legs.json: leg lengths and a start whose north-then-east legs are
+    clear at the altitude, the checks' 90 % of each, and the flight (budget)."""
+    alt = values["alt"]
     for _ in range(_TRIES):
         north, east = rng.randint(60, 150), rng.randint(60, 150)
         sx, sy = view.free_point(rng, region=(30.0, 30.0, view.map_w_m - 30.0 - east,
@@ -219,55 +195,10 @@ def _compass_legs(view: SessionView, rng: random.Random) -> TaskDraft:
             break
     else:
         raise TemplateUnfit("no clear north-then-east legs")
-    start = fmt_xy(sx, sy)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {start} at {alt} m. From there, fly straight north for {north} m, "
-            f"then straight east for {east} m.",
-            f"{d.name}: go to the start point {start} ({alt} metres up), then move {north} m "
-            f"due north in a straight line and after that {east} m due east.",
-            f"Starting over {start} at {alt} m altitude, {d.name} should fly a straight leg of "
-            f"{north} m heading north (0 degrees), then a straight leg of {east} m heading east "
-            f"(90 degrees).",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=sx, y=sy, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_moved_directed_distance", drone_id=d.id,
-                 min_distance=float(round(0.9 * north, 1)), heading=0.0, tolerance=5.0),
-            leaf("drone_has_moved_directed_distance", drone_id=d.id,
-                 min_distance=float(round(0.9 * east, 1)), heading=90.0, tolerance=5.0),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": sx, "y": sy, "z": alt},
-                 {"op": "towards", "drone": d.id, "heading_deg": 0.0, "distance_m": north},
-                 {"op": "towards", "drone": d.id, "heading_deg": 90.0, "distance_m": east}]],
-        flight_m=north + east + _diagonal_m(view),
-        steps=4,
-    )
+    return {"start": (sx, sy), "north": north, "east": east,
+            "north_min": round(0.9 * north, 1), "east_min": round(0.9 * east, 1),
+            "flight": north + east}
 
-
-def _precision_landing(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    x, y = view.free_point(rng, region=view.region(0.2, 0.2, 0.85, 0.85))
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} at {alt} m to {fmt_xy(x, y)} and land it exactly on that spot.",
-            f"{d.name} must touch down precisely at {fmt_xy(x, y)}; cruise there at {alt} "
-            f"metres, then land.",
-            f"Make a precision landing with {d.name}: travel at {alt} m to {fmt_xy(x, y)} and "
-            f"set it down on the ground right there.",
-        ],
-        checks=all_of(
-            leaf("drone_position", drone_id=d.id, x=x, y=y, tolerance=3.0),
-            leaf("drone_on_ground", drone_id=d.id, tolerance=0.5),
-            leaf("drone_has_landed", drone_id=d.id, min_count=1),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": x, "y": y, "z": alt},
-                 {"op": "land", "drone": d.id}]],
-        flight_m=_diagonal_m(view),
-        steps=3,
-    )
 
 
 def _long_survey(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -338,11 +269,11 @@ def _dual_survey(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES = (
-    Template("checkpoint", "navigation", "easy", _checkpoint),
+    load_template(FILES / "checkpoint.json"),
     Template("waypoint_tour", "navigation", "medium", _waypoint_tour),
     Template("patrol_loop", "navigation", "medium", _patrol_loop),
-    Template("compass_legs", "navigation", "medium", _compass_legs),
-    Template("precision_landing", "navigation", "medium", _precision_landing),
+    load_template(FILES / "compass_legs.json"),
+    load_template(FILES / "precision_landing.json"),
     Template("long_survey", "navigation", "hard", _long_survey),
     Template("dual_survey", "navigation", "hard", _dual_survey, drones=2),
 )

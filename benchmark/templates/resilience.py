@@ -20,6 +20,7 @@ import random
 from collections.abc import Sequence
 from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -31,9 +32,9 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES, spread_points
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
-from benchmark.templates.common import spread_points
 from benchmark.templates.common import target_xy as _xy
 from emulator.scenario import VehicleSpec
 
@@ -213,30 +214,14 @@ def _delivery_motor(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ a lossy link in delivery
-def _delivery_lossy(view: SessionView, rng: random.Random) -> TaskDraft:
-    (drone,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
+def lossy_delivery(view: SessionView, rng: random.Random, values: dict[str, Any],
+                   entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of delivery_over_lossy_link.json: pickup and drop spots, their distance and the
+    seed of the degraded link."""
     pickup, drop = _points(view, rng, 2, 150.0)
-    faults = {"link": {"seed": rng.randrange(1, 2**31), "vehicles": {drone.id: LOSSY_LINK}}}
-    p, q = fmt_xy(*pickup), fmt_xy(*drop)
-    return TaskDraft(
-        phrasings=[
-            f"Deliver a parcel with {drone.name}: fly at {alt} m to the pickup point {p} and "
-            f"land there, then take off again, fly to the drop-off point {q} and land there.",
-            f"{drone.name} collects a package at {p} (landing on the spot) and brings it to "
-            f"{q}, where it lands and stays. Cruise at {alt} metres.",
-            f"Parcel run for {drone.name} at {alt} m altitude: touch down at {p}, then carry "
-            f"the parcel to {q} and finish on the ground there.",
-        ],
-        checks=all_of(
-            _landed_at(drone.id, pickup), _landed_at(drone.id, drop),
-            leaf("drone_has_landed", drone_id=drone.id, min_count=2),
-            leaf("drone_position", drone_id=drone.id, x=drop[0], y=drop[1], tolerance=3.0),
-            leaf("drone_on_ground", drone_id=drone.id, tolerance=0.5),
-        ),
-        oracle=[_land_ops(drone.id, [pickup, drop], alt)],
-        flight_m=_diagonal_m(view) + math.dist(pickup, drop), steps=8, faults=faults,
-    )
+    return {"pickup": pickup, "drop": drop, "flight": math.dist(pickup, drop),
+            "link_seed": rng.randrange(1, 2**31)}
+
 
 
 TEMPLATES: tuple[Template, ...] = (
@@ -248,6 +233,5 @@ TEMPLATES: tuple[Template, ...] = (
              drones=2, families=_FAMILY),
     Template("delivery_despite_motor_failure", _CATEGORY, "hard", _delivery_motor, drones=2,
              families=_FAMILY),
-    Template("delivery_over_lossy_link", _CATEGORY, "medium", _delivery_lossy,
-             families=_FAMILY),
+    load_template(FILES / "delivery_over_lossy_link.json"),
 )

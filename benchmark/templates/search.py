@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Sequence
+from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -18,6 +20,7 @@ from benchmark.templates.base import (
     pick,
     tour_length,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import inspectable as _inspectable
 from benchmark.templates.common import names as _names
@@ -53,54 +56,6 @@ def _spread_points(view: SessionView, rng: random.Random, count: int,
 
 
 # ------------------------------------------------------------------ photos and hovering
-def _photo_at_point(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    x, y = view.free_point(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {fmt_xy(x, y)} at an altitude of {alt} m and take a photo there.",
-            f"Send {d.name} up to {alt} metres over the point {fmt_xy(x, y)} and capture an "
-            f"image once it has arrived.",
-            f"{d.name} should photograph the spot {fmt_xy(x, y)} from {alt} m above it.",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=x, y=y, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_taken_photo", drone_id=d.id, min_count=1,
-                 at_position={"x": x, "y": y}, tolerance=5.0),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": x, "y": y, "z": alt},
-                 {"op": "photo", "drone": d.id}]],
-        flight_m=_diagonal_m(view),
-        steps=3,
-    )
-
-
-def _inspect_target(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    (t,) = pick(rng, _inspectable(view, 1), 1)
-    alt = view.cruise_altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Inspect {t.name} with {d.name}: the target lies at {_xy(t)}. Fly over it and take "
-            f"a photo while the drone is above the target's centre.",
-            f"Send {d.name} to {t.name}, around {_xy(t)}, and photograph the target from "
-            f"directly overhead.",
-            f"Use {d.name} to get a picture of {t.name}, which is at {_xy(t)}: reach the target "
-            f"and take the photo above its middle.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=d.id),
-            leaf("target_in_photo_taken_by_drone", drone_id=d.id, target_id=t.id),
-        ),
-        oracle=[[{"op": "reach", "drone": d.id, "target": t.id, "altitude_m": alt},
-                 {"op": "photo", "drone": d.id}]],
-        flight_m=_diagonal_m(view),
-        steps=3,
-    )
-
-
 def _inspect_two_targets(view: SessionView, rng: random.Random) -> TaskDraft:
     (d,) = pick(rng, view.drones, 1)
     first, second = _nearest_first(d.position_m, pick(rng, _inspectable(view, 2), 2))
@@ -131,31 +86,11 @@ def _inspect_two_targets(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _observe_and_hover(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    alt = rng.randint(15, 30)
-    hold_s = rng.randint(5, 20)
-    x, y = view.free_point(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Fly {d.name} to {fmt_xy(x, y)} at {alt} m and hover there for {hold_s} seconds "
-            f"to observe the area.",
-            f"Position {d.name} over {fmt_xy(x, y)} at an altitude of {alt} metres and hold it "
-            f"still for {hold_s} s as an observation post.",
-            f"{d.name}: go to {fmt_xy(x, y)}, {alt} m up, and keep watch from a steady hover "
-            f"lasting {hold_s} seconds.",
-        ],
-        checks=all_of(
-            leaf("drone_has_visited_position", drone_id=d.id, x=x, y=y, z=float(alt),
-                 tolerance=3.0),
-            leaf("drone_has_hovered", drone_id=d.id, min_duration=float(hold_s - 1)),
-        ),
-        oracle=[[{"op": "goto", "drone": d.id, "x": x, "y": y, "z": alt},
-                 {"op": "hover", "drone": d.id, "duration_s": hold_s}]],
-        flight_m=_diagonal_m(view),
-        hover_s=float(hold_s),
-        steps=3,
-    )
+def hold_check(view: SessionView, rng: random.Random, values: dict[str, Any],
+               entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of observe_and_hover.json: the hover the check asks for, a second short of the
+    one the text asks for."""
+    return {"min_hold": values["hold_s"] - 1}
 
 
 def _photo_series(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -188,27 +123,11 @@ def _photo_series(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 # ------------------------------------------------------------------ area coverage
-def _area_sweep(view: SessionView, rng: random.Random) -> TaskDraft:
-    (d,) = pick(rng, view.drones, 1)
-    (t,) = pick(rng, view.areas, 1)
-    alt = view.cruise_altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Use {d.name} to search {t.name} (centred near {_xy(t)}) completely: fly over it "
-            f"in a pattern that covers at least 95 % of its surface.",
-            f"{d.name} alone must sweep the whole of {t.name} around {_xy(t)}, leaving no more "
-            f"than 5 % of the area unsearched (95 % coverage or better).",
-            f"Cover {t.name}, located around {_xy(t)}, with {d.name}: at least 95 % of the "
-            f"area has to be flown over and searched.",
-        ],
-        checks=all_of(
-            leaf("target_is_reached_by_drone", target_id=t.id, drone_id=d.id),
-            leaf("target_is_fully_searched", target_id=t.id, coverage_threshold=0.95),
-        ),
-        oracle=[[{"op": "sweep", "drones": [d.id], "target": t.id, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view) + _sweep_m(t, d.task_radius_m),
-        steps=3,
-    )
+def sweep_length(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of area_sweep.json: the rough length of a sweep of the area (budget)."""
+    return {"flight": _sweep_m(entities["area_1"], entities["drone_1"].task_radius_m)}
+
 
 
 def _team_area_sweep(view: SessionView, rng: random.Random) -> TaskDraft:
@@ -322,47 +241,27 @@ def _search_progress(view: SessionView, rng: random.Random) -> TaskDraft:
     )
 
 
-def _sweep_with_photos(view: SessionView, rng: random.Random) -> TaskDraft:
-    team = pick(rng, view.drones, 3)
-    (t,) = pick(rng, view.areas, 1)
-    alt = view.cruise_altitude(rng)
+def team_sweep_length(view: SessionView, rng: random.Random, values: dict[str, Any],
+                      entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of sweep_with_photos.json: each drone's share of the sweep (budget)."""
+    team = [entities[f"drone_{k}"] for k in (1, 2, 3)]
     radius = min(d.task_radius_m for d in team)
-    return TaskDraft(
-        phrasings=[
-            f"Sweep {t.name} (centred near {_xy(t)}) with {_names(team)} until at least 85 % of "
-            f"it is searched, and have each of the three drones take at least one photo while "
-            f"over the area.",
-            f"{_names(team)} must jointly search {t.name} around {_xy(t)} to 85 % coverage or "
-            f"more; every one of them also takes a photo above the area.",
-            f"Coordinated sweep: cover no less than 85 % of {t.name} near {_xy(t)} using "
-            f"{_names(team)}, each drone photographing the area at least once from above.",
-        ],
-        checks=all_of(
-            leaf("target_searched_area_percentage", target_id=t.id, expected_percentage=0.85),
-            *(leaf("drone_has_taken_photo", drone_id=d.id, min_count=1) for d in team),
-        ),
-        oracle=[[{"op": "sweep", "drones": [d.id for d in team], "target": t.id,
-                  "altitude_m": alt}],
-                [{"op": "photo", "drone": d.id} for d in team]],
-        flight_m=_diagonal_m(view) + 1.2 * _sweep_m(t, radius) / len(team),
-        steps=12,
-    )
+    return {"flight": 1.2 * _sweep_m(entities["area_1"], radius) / len(team)}
+
 
 
 TEMPLATES = (
-    Template("photo_at_point", "search", "easy", _photo_at_point),
-    Template("inspect_target", "search", "medium", _inspect_target),
+    load_template(FILES / "photo_at_point.json"),
+    load_template(FILES / "inspect_target.json"),
     Template("inspect_two_targets", "search", "hard", _inspect_two_targets),
-    Template("observe_and_hover", "search", "medium", _observe_and_hover),
+    load_template(FILES / "observe_and_hover.json"),
     Template("photo_series", "search", "medium", _photo_series),
-    Template("area_sweep", "search", "hard", _area_sweep, area_targets=1,
-             families=_AREA_FAMILIES),
+    load_template(FILES / "area_sweep.json"),
     Template("team_area_sweep", "search", "hard", _team_area_sweep, drones=2, area_targets=1,
              families=_AREA_FAMILIES),
     Template("two_area_search", "search", "hard", _two_area_search, drones=2, area_targets=2,
              families=_AREA_FAMILIES),
     Template("search_progress", "search", "hard", _search_progress, area_targets=1,
              families=_AREA_FAMILIES),
-    Template("sweep_with_photos", "search", "hard", _sweep_with_photos, drones=3,
-             area_targets=1, families=_AREA_FAMILIES),
+    load_template(FILES / "sweep_with_photos.json"),
 )

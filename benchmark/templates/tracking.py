@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import math
 import random
+from typing import Any
 
+from benchmark.template_files.loader import load_template
 from benchmark.templates.base import (
     SessionView,
     TaskDraft,
@@ -21,6 +23,7 @@ from benchmark.templates.base import (
     leaf,
     pick,
 )
+from benchmark.templates.common import FILES
 from benchmark.templates.common import diagonal_m as _diagonal_m
 from benchmark.templates.common import names as _names
 from benchmark.validators.targets import TRACKING_WINDOW_S
@@ -65,32 +68,21 @@ def _altitude(rng: random.Random) -> int:
 
 
 # ------------------------------------------------------------------ one drone, one target
-def _follow(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
-    seconds = rng.choice((20, 30, 40, 60))
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Find {_where(target)} with {drone.name} and follow it for at least {seconds} s, "
-            f"flying at {alt} m and staying within your task radius of it.",
-            f"{drone.name} must track the moving target {target.name} for {seconds} seconds "
-            f"without losing it. It moves around {fmt_xy(*_middle(target))}; fly at {alt} m.",
-            f"Tracking job: keep {target.name}, which moves around "
-            f"{fmt_xy(*_middle(target))}, within {drone.name}'s task radius for {seconds} s "
-            f"(altitude {alt} m).",
-        ],
-        checks=leaf("moving_target_tracked", target_id=target.id, drone_id=drone.id,
-                    min_duration=float(seconds + TRACKING_WINDOW_S)),
-        oracle=[[{"op": "track", "drone": drone.id, "target": target.id,
-                  "duration_s": seconds, "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=seconds + 30.0, steps=_follow_steps(seconds),
-    )
+def follow_terms(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of follow_moving_target.json: where the target moves, the tracked time the check
+    asks for, and the budget of following it."""
+    seconds = values["seconds"]
+    return {"mid": _middle(entities["target_1"]), "tracked_s": seconds + TRACKING_WINDOW_S,
+            "hold_s": seconds + 30.0, "steps": _follow_steps(seconds)}
 
 
-def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
+
+def intercept_zone(view: SessionView, rng: random.Random, values: dict[str, Any],
+                   entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of intercept_in_zone.json: a zone on the moving target's track (and its radius),
+    and where the target moves."""
+    target = entities["target_1"]
     points = track_points(target)
     if len(points) < 2:
         raise TemplateUnfit(f"{target.id} does not move")
@@ -99,44 +91,16 @@ def _intercept(view: SessionView, rng: random.Random) -> TaskDraft:
     (ax, ay), (bx, by) = points[k], points[k + 1]
     zx, zy = float(round(ax + f * (bx - ax))), float(round(ay + f * (by - ay)))
     radius = float(rng.randint(10, 15))
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Intercept {_where(target)} with {drone.name} while the target is inside the "
-            f"zone of {radius:.0f} m around {fmt_xy(zx, zy)}: it passes through the zone and "
-            f"leaves it again. Fly at {alt} m.",
-            f"{drone.name} has to reach the moving target {target.name} at a moment when it "
-            f"is within {radius:.0f} m of {fmt_xy(zx, zy)} (it moves around "
-            f"{fmt_xy(*_middle(target))}); altitude {alt} m.",
-            f"Catch {target.name} inside the {radius:.0f} m zone centred on {fmt_xy(zx, zy)} "
-            f"using {drone.name} at {alt} metres, before it moves out of the zone.",
-        ],
-        checks=leaf("moving_target_reached_in_zone", target_id=target.id, drone_id=drone.id,
-                    x=zx, y=zy, radius=radius),
-        oracle=[[{"op": "intercept", "drone": drone.id, "target": target.id,
-                  "zone": [zx, zy, radius], "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=90.0, steps=8,
-    )
+    return {"zone": (zx, zy), "radius": radius, "radius_m": f"{radius:.0f}",
+            "mid": _middle(target)}
 
 
-def _photo(view: SessionView, rng: random.Random) -> TaskDraft:
-    drone = pick(rng, view.drones, 1)[0]
-    target = pick(rng, view.movers, 1)[0]
-    alt = _altitude(rng)
-    return TaskDraft(
-        phrasings=[
-            f"Photograph the moving target {_where(target)} with {drone.name}'s camera, "
-            f"flying at {alt} m.",
-            f"Take a picture of {target.name} with {drone.name}: it does not stand still, it "
-            f"moves around {fmt_xy(*_middle(target))}. Use {alt} m altitude.",
-            f"{drone.name}: catch up with {target.name} (around {fmt_xy(*_middle(target))}) "
-            f"at {alt} m and take a photo with it in view.",
-        ],
-        checks=leaf("target_in_photo_taken_by_drone", drone_id=drone.id, target_id=target.id),
-        oracle=[[{"op": "photo_target", "drone": drone.id, "target": target.id,
-                  "altitude_m": alt}]],
-        flight_m=_diagonal_m(view), hover_s=60.0, steps=8,
-    )
+
+def track_middle(view: SessionView, rng: random.Random, values: dict[str, Any],
+                 entities: dict[str, Any]) -> dict[str, Any]:
+    """Hook of photograph_moving_target.json: the middle of the moving target's track."""
+    return {"mid": _middle(entities["target_1"])}
+
 
 
 # ------------------------------------------------------------------ teams
@@ -200,12 +164,9 @@ def _handover(view: SessionView, rng: random.Random) -> TaskDraft:
 
 
 TEMPLATES: tuple[Template, ...] = (
-    Template("follow_moving_target", _CATEGORY, "medium", _follow, moving_targets=1,
-             families=_FAMILY),
-    Template("intercept_in_zone", _CATEGORY, "medium", _intercept, moving_targets=1,
-             families=_FAMILY),
-    Template("photograph_moving_target", _CATEGORY, "easy", _photo, moving_targets=1,
-             families=_FAMILY),
+    load_template(FILES / "follow_moving_target.json"),
+    load_template(FILES / "intercept_in_zone.json"),
+    load_template(FILES / "photograph_moving_target.json"),
     Template("track_every_moving_target", _CATEGORY, "hard", _all_tracked, drones=2,
              moving_targets=2, families=_FAMILY),
     Template("hand_over_target", _CATEGORY, "hard", _handover, drones=2, moving_targets=1,

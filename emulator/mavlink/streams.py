@@ -69,6 +69,13 @@ class StreamSchedule:
         self.next_due_s = wall_now_s + np.where(finite, np.where(finite, period, 0.0) * stagger,
                                                 math.inf)
 
+    def add_vehicle(self, wall_now_s: float) -> None:
+        """One more vehicle (joining a running swarm) with the default rates, due now."""
+        period = self.default_period_s
+        self.period_s = np.vstack([self.period_s, period])
+        due = np.where(np.isfinite(period), wall_now_s, math.inf)
+        self.next_due_s = np.vstack([self.next_due_s, due])
+
     def due(self, wall_now_s: float) -> Iterator[tuple[int, np.ndarray]]:
         """(msg_id, vehicle indices) for every stream with something due; reschedules them."""
         due = self.next_due_s <= wall_now_s

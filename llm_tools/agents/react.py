@@ -8,6 +8,7 @@ from typing import Any
 
 from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.chat import ChatClient, ModelConfig
+from llm_tools.agents.transcript import Recorder
 from llm_tools.openai_adapter import ToolCall, openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
@@ -44,25 +45,30 @@ class ReactAgent:
 
     async def run(self, task: AgentTask, tools: AgentTools) -> None:
         client = ChatClient(self.config)
-        try:
-            await self._loop(client, task, tools)
-        finally:
-            await client.close()
-
-    async def _loop(self, client: ChatClient, task: AgentTask, tools: AgentTools) -> None:
-        schema = openai_tools(self.registry)
         messages: list[dict[str, Any]] = [
             {"role": "system", "content": SYSTEM_PROMPT},
             {"role": "user", "content": task_message(task.text, tools.drone_ids)},
         ]
+        record = Recorder(tools)
+        try:
+            await self._loop(client, tools, messages, record)
+        finally:
+            record(messages)
+            await client.close()
+
+    async def _loop(self, client: ChatClient, tools: AgentTools,
+                    messages: list[dict[str, Any]], record: Recorder) -> None:
+        schema = openai_tools(self.registry)
         nudges = 0
         stop = f"stopped: the budget of {self.max_steps} model turns is spent"
         for _ in range(self.max_steps):
+            record(messages)
             message, usage = await client.complete(messages, schema)
             tools.add_tokens(usage["prompt"], usage["completion"],
                              client.config.cost_usd(usage))
             calls = parse_tool_calls(message)
             messages.append(assistant_message(message, calls))
+            record(messages, usage)
             if calls:
                 # Several calls in one answer run side by side (one thread each: drones fly
                 # together); a call to a drone still busy with another is refused.
@@ -74,6 +80,7 @@ class ReactAgent:
                 for call, result in zip(calls, results, strict=True):
                     messages.append({"role": "tool", "tool_call_id": call.id,
                                      "content": json.dumps(result, separators=(",", ":"))})
+                record(messages)
                 if tools.finished:
                     return
             elif nudges >= MAX_NUDGES:

@@ -18,6 +18,7 @@ from agent_contract import AgentTask, AgentTools
 from llm_tools.agents.blackboard import Blackboard, StepRecord
 from llm_tools.agents.chat import ChatClient, ModelConfig
 from llm_tools.agents.react import assistant_message
+from llm_tools.agents.transcript import record_messages, unrecorded_from
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
@@ -222,8 +223,10 @@ class WorkflowAgent:
     async def _ask(self, client: ChatClient, tools: AgentTools,
                    messages: list[dict[str, Any]],
                    schema: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+        record_messages(tools, messages, unrecorded_from(messages))
         message, usage = await client.complete(messages, schema or [])
         tools.add_tokens(usage["prompt"], usage["completion"], client.config.cost_usd(usage))
+        record_messages(tools, [assistant_message(message, parse_tool_calls(message))], 0, usage)
         return message
 
     # --------------------------------------------------------------- observe
@@ -331,7 +334,9 @@ class WorkflowAgent:
                 messages.append({"role": "tool", "tool_call_id": call.id,
                                  "content": json.dumps(result, separators=(",", ":"))})
             if tools.finished or self._out_of_budget(tools):
-                return
+                break
+        # The last turn's tool results, which no further question carries into the transcript.
+        record_messages(tools, messages, unrecorded_from(messages))
 
 
 def _joins(batch: list[PlanStep], step: PlanStep) -> bool:

@@ -1,10 +1,13 @@
 // The run inspector: runs -> tasks (filterable), a task's page (text, replay of its window, the
-// agent's tool calls on the same timeline, the check tree); the compare view is in compare.js.
+// agent's tool calls on the same timeline, an LLM agent's transcript under it (transcript.js),
+// the check tree); the compare view is in compare.js.
 
 import { getJson, pageUrl } from "./api.js";
 import { checkTree, coverageOverlay } from "./checks.js";
+import { navLinks } from "./nav.js";
 import { el, fmt } from "./panel.js";
 import { ReplayPlayer, callText } from "./replay.js";
+import { transcriptPanel } from "./transcript.js";
 import { buildWorld } from "./world.js";
 
 export { showCompare } from "./compare.js";
@@ -48,7 +51,7 @@ export async function showRuns(root, runId) {
     `${r.id} (${r.agents.join(", ")}: ${r.passed}/${r.tasks} passed)`)),
     runs.length > 1 || runs[0].agents.length > 1 ? el("a", { href: pageUrl("/compare") }, "compare two runs…") : null,
     el("a", { href: pageUrl("/leaderboard") }, "leaderboard"));
-  root.replaceChildren(el("header", {}, el("h1", {}, `Runs — ${runId}`)), runLinks, filters, count, table);
+  root.replaceChildren(el("header", {}, el("h1", {}, `Runs — ${runId}`), navLinks("runs")), runLinks, filters, count, table);
   render();
 }
 
@@ -63,7 +66,7 @@ export async function showTask(root, sessionId, taskId, params) {
     `${record.tool_calls} tool calls · ${fmt(record.sim_time_s, 1)} s simulated`;
   root.replaceChildren(
     el("header", {}, el("h1", {}, `${sessionId} / ${taskId}`), verdict,
-      el("a", { href: pageUrl(`/runs/${view.run}`) }, "← all tasks")),
+      el("a", { href: pageUrl(`/runs/${view.run}`) }, "← all tasks"), navLinks()),
     ...[el("p", { class: "muted" }, facts),
     el("p", { class: "task-text", id: "task-text" }, task.text || "(task text not recorded)"),
     record.error ? el("p", { class: "bad" }, record.error) : null,
@@ -85,6 +88,8 @@ export async function showTask(root, sessionId, taskId, params) {
     Object.defineProperty(holder, "t", { get: () => player.t });
     player.seek(player.t1);
     side.append(el("h3", {}, "Tool calls"), callList(player));
+    const transcript = transcriptPanel(player, replay);
+    if (transcript) main.append(transcript);
     window.consoleView = { map: player.map, get view3d() { return player.view3d; }, player, record };
   } else {
     window.consoleView = { record };
