@@ -87,6 +87,7 @@ class VehicleSpec:
     task_radius_m: float
     battery_pct: float
     battery_capacity_mah: float
+    gimbal: bool = False  # a gimbal component (MAVLink gimbal protocol v2) on the vehicle
 
 
 @dataclass(frozen=True, slots=True)
@@ -236,8 +237,11 @@ def _drone(e: _Entity, index: int, notes: list[str]) -> VehicleSpec:
         battery_pct = 100.0 * volume / capacity
     else:
         battery_pct = min(max(e.number("battery_level", 100.0), 0.0), 100.0)
+    gimbal = e.get("gimbal", False)
+    if not isinstance(gimbal, bool):
+        e.fail("gimbal", f"must be true or false, got {_show(gimbal)}")
     return VehicleSpec(
-        id=ident, name=name, model=model, position_m=position,
+        id=ident, name=name, model=model, position_m=position, gimbal=gimbal,
         heading_deg=wrap_heading_deg(e.number("heading", 0.0)), home_m=home,
         max_speed_m_s=limits["max_speed"], max_altitude_m=limits["max_altitude"],
         perceived_radius_m=limits["perceived_radius"], task_radius_m=limits["task_radius"],

@@ -61,7 +61,8 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
                "heading": v.heading_deg, "home_position": _xyz(v.home_m),
                "max_speed": v.max_speed_m_s, "max_altitude": v.max_altitude_m,
                "perceived_radius": v.perceived_radius_m, "task_radius": v.task_radius_m,
-               "battery_level": v.battery_pct, "battery_capacity": v.battery_capacity_mah}
+               "battery_level": v.battery_pct, "battery_capacity": v.battery_capacity_mah,
+               **({"gimbal": True} if v.gimbal else {})}
               for v in scenario.vehicles]
     return {"name": scenario.name, "task_type": scenario.task_type,
             "safety_margin_m": world.safety_margin_m,

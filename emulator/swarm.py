@@ -16,7 +16,6 @@ import numpy as np
 
 from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
-from emulator.flight.modes import FlightMode
 from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch, WatchBoard
 from emulator.mavlink.frames import FramePart, frame_batch
@@ -464,8 +463,7 @@ class Swarm:
     def tick_links(self, wall_now_s: float) -> None:
         """The links' wall-clock duties: mission item retries, the offboard failsafe."""
         for link in self.links:
-            if (link.missions.uploading or link.ap.mode is FlightMode.OFFBOARD) \
-                    and link.k not in self.left:
+            if link.needs_tick and link.k not in self.left:
                 link.tick(wall_now_s)
 
     def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:

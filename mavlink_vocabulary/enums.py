@@ -98,6 +98,7 @@ class MavType(IntEnum):
     GENERIC = 0
     QUADROTOR = 2
     GCS = 6
+    GIMBAL = 26
     CAMERA = 30
 
 
@@ -115,6 +116,7 @@ class MavComponent(IntEnum):
     ALL = 0
     AUTOPILOT1 = 1
     CAMERA = 100
+    GIMBAL = 154
     MISSIONPLANNER = 190
 
 
@@ -269,6 +271,9 @@ class CameraCapFlags(IntFlag):
 
     CAPTURE_VIDEO = 1
     CAPTURE_IMAGE = 2
+    HAS_MODES = 4
+    CAN_CAPTURE_IMAGE_IN_VIDEO_MODE = 8
+    HAS_VIDEO_STREAM = 256
 
 
 class GpsFixType(IntEnum):

@@ -199,13 +199,30 @@ def offboard_episode(draw: st.DrawFn) -> list:
             draw(_command(target, 400, 1.0)), setpoint]
 
 
+@st.composite
+def pilot_episode(draw: st.DrawFn) -> list:
+    """Joystick input and a stick mode, or a follow target and follow mode, or video mode
+    and a recording; arm on the way."""
+    target = draw(st.sampled_from(SYSTEMS))
+    sticks = draw(message("MANUAL_CONTROL", target=target))
+    fix = draw(message("FOLLOW_TARGET"))
+    camera = [draw(message("COMMAND_LONG", target_system=target, target_component=100,
+                           command=530, confirmation=0, param2=1.0)),
+              draw(message("COMMAND_LONG", target_system=target, target_component=100,
+                           command=st.sampled_from((2500, 2501, 2502, 2503)), confirmation=0))]
+    mode = draw(st.sampled_from(((3.0, 0.0), (2.0, 0.0), (4.0, 8.0))))
+    return [sticks, fix, draw(_command(target, 176, 1.0, *mode)),
+            draw(_command(target, 400, 1.0)), sticks, fix, *camera]
+
+
 def storms(max_parts: int) -> st.SearchStrategy[list]:
     """A list of messages: single ones of every type and the episodes above."""
     singles = st.one_of(*(message(name) for name in (*sorted(HANDLED_MESSAGES),
                                                     *IGNORED_MESSAGES)))
     commands = st.one_of(message("COMMAND_LONG"), message("COMMAND_INT"))
     parts = st.one_of(singles.map(lambda m: [m]), commands.map(lambda m: [m]),
-                      flight_episode(), mission_episode(), offboard_episode())
+                      flight_episode(), mission_episode(), offboard_episode(),
+                      pilot_episode())
     return st.lists(parts, min_size=4, max_size=max_parts).map(
         lambda chunks: [m for chunk in chunks for m in chunk])
 
@@ -217,7 +234,8 @@ def sweep(draw: st.DrawFn, target: int, kind: str) -> list:
            for command in sorted(HANDLERS)]
     for name in (*sorted(HANDLED_MESSAGES), *IGNORED_MESSAGES):
         cls = mavlink.mavlink_map[getattr(mavlink, f"MAVLINK_MSG_ID_{name}")]
-        fixed = {"target_system": target} if "target_system" in cls.fieldnames else {}
+        fixed = {"target_system": target} if "target_system" in cls.fieldnames else \
+            {"target": target} if "target" in cls.fieldnames else {}
         out.append(draw(message(name, **fixed)))
     return draw(st.permutations(out))
 
@@ -234,6 +252,8 @@ BASELINES: dict[int, tuple[float, ...]] = {
     224: (0.0,), 300: (0.0, 0.0), 400: (1.0,), 410: (), 511: (33.0, 1e5), 512: (33.0,),
     520: (1.0,), 521: (1.0,), 522: (), 525: (), 527: (), 530: (0.0, 0.0),
     2000: (0.0, 0.0, 1.0), 2001: (), 420: (4.0, 0.0, 0.0),
+    1000: (-30.0, 10.0), 1001: (-2.0, -2.0),
+    2500: (0.0, 1.0), 2501: (0.0,), 2502: (1.0,), 2503: (1.0,), 2504: (1.0,), 2505: (1.0,),
 }
 SWEEP_VALUES = tuple(dict.fromkeys((*ABSURD_FLOATS, *FLOORS)))
 

@@ -17,6 +17,7 @@ from dataclasses import replace
 from typing import Any
 
 import httpx
+import numpy as np
 import pytest
 
 from console.cli import swarm_console
@@ -63,6 +64,15 @@ def live() -> Iterator[tuple[Swarm, str]]:
 def _truth(swarm: Swarm, drone: str) -> tuple[float, float, float]:
     x, y, z = swarm.fleet.dyn.position_m[swarm.fleet.index_by_id[drone]]
     return float(x), float(y), float(z)
+
+
+def _settled(swarm: Swarm, drones: tuple[str, ...], timeout_s: float = 60.0) -> None:
+    """Wait until `drones` are still (what an earlier test of the module set going is over)."""
+    deadline = time.monotonic() + timeout_s
+    rows = [swarm.fleet.index_by_id[d] for d in drones]
+    while max(float(np.linalg.norm(swarm.fleet.dyn.velocity_m_s[k])) for k in rows) > 0.05:
+        assert time.monotonic() < deadline, "the drones did not come to rest"
+        time.sleep(0.1)
 
 
 def _row(page: Any, drone: str, text: str, timeout_s: float = 60.0) -> str:
@@ -204,6 +214,7 @@ def test_selection_commands_are_checked_whole_before_anything_is_sent(
     swarm, url = live
     post = f"{url}/api/live/swarm/command"
     headers = {"X-API-Key": KEY}
+    _settled(swarm, ("d1", "d2", "d3", "d4"))
     before = {d: _truth(swarm, d) for d in ("d1", "d2", "d3", "d4")}
     unknown = httpx.post(post, json={"drone_ids": ["d2", "d9"], "tool": "hold"},
                          headers=headers)

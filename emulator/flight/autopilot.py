@@ -19,9 +19,11 @@ from emulator.flight.battery import BATTERY_CRITICAL, BATTERY_EMERGENCY, BATTERY
 from emulator.flight.camera import ImageCapture, capture_image
 from emulator.flight.failures import VehicleFailures
 from emulator.flight.fleet_view import FleetView
+from emulator.flight.follow_target import FollowTarget
 from emulator.flight.geofence_plans import GeofencePlans
 from emulator.flight.limits import SpeedKind, check_home, check_speed, check_yaw_rate
 from emulator.flight.listener import AutopilotListener
+from emulator.flight.manual_control import MANUAL_MODES, ManualControl
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.offboard import OffboardControl
 from emulator.flight.orbit import OrbitControl
@@ -44,6 +46,8 @@ class Autopilot(Vehicle):
         self.mission = MissionRunner(self)
         self.offboard = OffboardControl(self)
         self.orbit = OrbitControl(self)
+        self.manual = ManualControl(self)
+        self.follow = FollowTarget(self)
         self.geofence = GeofencePlans(self)
         self.failures = VehicleFailures(self)
 
@@ -110,9 +114,16 @@ class Autopilot(Vehicle):
         self.refresh_busy()
 
     def on_velocity_step(self, dt_s: float) -> None:
-        """After every physics step flown by velocity: orbit or offboard set the next one."""
-        if self.state.mode is FlightMode.ORBIT:
+        """After every physics step flown by velocity: the mode sets the next one."""
+        mode = self.state.mode
+        if mode is FlightMode.ORBIT:
             self.orbit.on_step()
+        elif mode in MANUAL_MODES:
+            self.manual.on_step(dt_s)
+            self.offboard.check_fence()
+        elif mode is FlightMode.FOLLOW_TARGET:
+            self.follow.on_step(dt_s)
+            self.offboard.check_fence()
         else:
             self.offboard.on_step(dt_s)
 
@@ -167,6 +178,8 @@ class Autopilot(Vehicle):
             self.mission.start_or_resume()
         elif self.mode is FlightMode.OFFBOARD:
             self.offboard.apply()
+        elif self.mode in MANUAL_MODES:
+            self.manual.apply()
 
     def disarm(self, *, force: bool = False) -> None:
         if not self.armed:
@@ -308,8 +321,12 @@ class Autopilot(Vehicle):
             self.takeoff(None)
         elif mode is FlightMode.OFFBOARD:
             self.offboard.enter(wall_now_s)
+        elif mode in MANUAL_MODES:
+            self.manual.enter(mode, wall_now_s)
+        elif mode is FlightMode.FOLLOW_TARGET:
+            self.follow.enter()
         else:
-            raise CommandRefused(f"Mode {mode.label} refused: no manual control input")
+            raise CommandRefused(f"Mode {mode.label} refused: only posctl/altctl flown")
 
     # ------------------------------------------------------------------ camera
     def take_photo(self) -> ImageCapture:

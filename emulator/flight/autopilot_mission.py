@@ -261,7 +261,9 @@ class MissionRunner:
         self._execute(item.seq + 1)
 
     def _pass_over(self, item: MissionItem) -> None:
-        """A gimbal or camera item with nothing to act on here (PAYLOAD_COMMANDS)."""
+        """A gimbal or camera item (PAYLOAD_COMMANDS): the payload acts on it, if it can,
+        and the mission goes on."""
+        self.ap.listener.on_payload_item(item)
         self._execute(item.seq + 1)
 
 

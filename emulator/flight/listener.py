@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Protocol
 
 from emulator.flight.camera import ImageCapture
+from emulator.flight.mission import MissionItem
 
 __all__ = ["AutopilotListener", "SilentListener"]
 
@@ -17,6 +18,7 @@ class AutopilotListener(Protocol):
     def on_mission_current(self) -> None: ...
     def on_home_changed(self) -> None: ...
     def on_image_captured(self, capture: ImageCapture) -> None: ...
+    def on_payload_item(self, item: MissionItem) -> None: ...
     def on_state_changed(self) -> None: ...
     def on_operator_reset(self) -> None: ...
 
@@ -37,6 +39,9 @@ class SilentListener:
         pass
 
     def on_image_captured(self, capture: ImageCapture) -> None:
+        pass
+
+    def on_payload_item(self, item: MissionItem) -> None:
         pass
 
     def on_state_changed(self) -> None:

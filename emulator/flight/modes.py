@@ -25,6 +25,7 @@ class FlightMode(Enum):
     MISSION = (_MAIN_AUTO, 4)
     RTL = (_MAIN_AUTO, 5)
     LAND = (_MAIN_AUTO, 6)
+    FOLLOW_TARGET = (_MAIN_AUTO, 8)
     ORBIT = (_MAIN_POSCTL, 1)  # PX4 reports orbit as POSCTL's ORBIT sub mode
 
     @property

@@ -21,7 +21,7 @@ from typing import NamedTuple
 from emulator.flight import dynamics as dy
 from emulator.flight.attitude_control import attitude_acceleration_enu
 from emulator.flight.limits import check_target
-from emulator.flight.modes import FlightMode, LandedState
+from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
@@ -96,11 +96,7 @@ class OffboardControl:
         if not ap.in_air:
             if not rising:
                 return
-            ap.fleet.airborne[k] = True
-            ap.state.landed_state = LandedState.IN_AIR
-            ap.cancel_timer()
-            ap.update_charging()
-            ap.event("takeoff", altitude_m=vec[2] if sp.kind == "position" else None)
+            ap.lift_off(vec[2] if sp.kind == "position" else None)
         if sp.kind == "position":
             if vec[2] <= GROUND_SETPOINT_M:  # on the ground: go there and descend to touchdown
                 ap.descend_and_land((vec[0], vec[1]))

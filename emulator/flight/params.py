@@ -57,6 +57,14 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("MC_YAWRATE_MAX", 200.0, 5.0, 1800.0, "offboard yaw-rate set-point limit (deg/s)"),
     _p("MC_ORBIT_RAD_MAX", 1000.0, 1.0, 10000.0, "largest orbit radius (m)"),
     _p("MC_ORBIT_YAW_MOD", 0, 0, 4, "orbit yaw behaviour when none is given", is_int=True),
+    _p("FLW_TGT_HT", 8.0, 8.0, 120.0, "follow-target height above home or the target (m)"),
+    _p("FLW_TGT_DST", 8.0, 1.0, 100.0, "follow-target horizontal distance (m)"),
+    _p("FLW_TGT_FA", 180.0, -180.0, 180.0, "follow angle from the target's course (deg, "
+       "0 front, 90 right, 180 behind)"),
+    _p("FLW_TGT_RS", 0.1, 0.0, 1.0, "follow-target estimate lag (s): 0 follows each fix"),
+    _p("FLW_TGT_ALT_M", 0, 0, 2, "follow-target altitude: 0 above home, 1 terrain (flat: "
+       "as 0), 2 above the target", is_int=True),
+    _p("FLW_TGT_MAX_VEL", 5.0, 0.0, 20.0, "speed circling the target to the follow angle (m/s)"),
     _p("NAV_ACC_RAD", 2.0, 0.05, 200.0, "acceptance radius of waypoints and goto (m)"),
     _p("RTL_RETURN_ALT", 30.0, 0.0, 150.0, "minimum altitude for the return leg of RTL (m)"),
     _p("COM_DISARM_LAND", 2.0, -1.0, 20.0, "auto-disarm delay after landing (s, -1 off)"),
@@ -86,7 +94,16 @@ PARAM_DEFINITIONS: tuple[ParamDefinition, ...] = (
     _p("CAL_ACC0_ID", 1310988, 0, 2**31 - 1, "accelerometer calibration id", is_int=True),
     _p("CAL_GYRO0_ID", 1310988, 0, 2**31 - 1, "gyro calibration id", is_int=True),
     _p("CAL_MAG0_ID", 197388, 0, 2**31 - 1, "magnetometer calibration id", is_int=True),
-    _p("COM_RC_IN_MODE", 4, 0, 4, "RC input mode (4 = none needed)", is_int=True),
+    _p("COM_RC_IN_MODE", 3, 0, 4, "manual control source: 0 RC only, 1 joystick (MAVLink) "
+       "only, 2 RC and joystick, 3 RC or joystick keep first, 4 stick input disabled",
+       is_int=True),
+    _p("COM_RC_LOSS_T", 0.5, 0.0, 35.0, "manual control loss timeout (wall s)"),
+    _p("NAV_RCL_ACT", 2, 0, 3, "manual control loss action in POSCTL/ALTCTL: 0 centre the "
+       "sticks, 1 hold, 2 return, 3 land", is_int=True),
+    _p("MPC_VEL_MANUAL", 10.0, 1.0, 20.0, "POSCTL horizontal speed at full stick (m/s)"),
+    _p("MPC_MAN_TILT_MAX", 35.0, 1.0, 60.0, "ALTCTL tilt at full stick (deg)"),
+    _p("MPC_MAN_Y_MAX", 150.0, 0.0, 400.0, "yaw rate at full stick (deg/s)"),
+    _p("MPC_HOLD_DZ", 0.1, 0.0, 0.9, "stick deadzone around the centre (fraction)"),
     _p("COM_DL_LOSS_T", 10.0, 5.0, 300.0, "data link loss time-out (simulated s)"),
     _p("NAV_DLL_ACT", 0, 0, 3, "data link loss action: 0 none, 1 hold, 2 return, 3 land",
        is_int=True),

@@ -228,6 +228,14 @@ class Vehicle:
                 st.goal_pending = True  # reported by touchdown instead
                 self.refresh_busy()
 
+    def lift_off(self, altitude_m: float | None) -> None:
+        """Leave the ground under direct control (offboard, sticks): airborne from now on."""
+        self.fleet.airborne[self.k] = True
+        self.state.landed_state = LandedState.IN_AIR
+        self.cancel_timer()
+        self.update_charging()
+        self.event("takeoff", altitude_m=altitude_m)
+
     def brake_and_hold(self) -> None:
         """Stop where braking ends (PX4's hold) and stay there."""
         dyn, k = self.fleet.dyn, self.k

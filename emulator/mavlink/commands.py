@@ -207,8 +207,14 @@ def _get_home(v: Vehicle, a: CommandArgs) -> Reply:
     return Reply.accepted(SendOnce(MessageId.HOME_POSITION))
 
 
+def _gimbal(v: Vehicle, a: CommandArgs) -> Reply:
+    if v.gimbal is None:
+        return Reply(MavResult.UNSUPPORTED)  # no gimbal on this vehicle
+    return v.gimbal.handle_command(v.ap, a, v.command_peer)
+
+
 def _camera(v: Vehicle, a: CommandArgs) -> Reply:
-    return v.camera.handle_command(v.ap, a)
+    return v.camera.handle_command(v.ap, a, v.wall_now_s)
 
 
 # MAV_CMD_INJECT_FAILURE: FAILURE_UNIT -> what emulator.flight.failures models
@@ -270,6 +276,14 @@ HANDLERS: dict[MavCmd, Handler] = {
     MavCmd.REQUEST_STORAGE_INFORMATION: _camera,
     MavCmd.REQUEST_CAMERA_CAPTURE_STATUS: _camera,
     MavCmd.SET_CAMERA_MODE: _camera,
+    MavCmd.DO_GIMBAL_MANAGER_PITCHYAW: _gimbal,
+    MavCmd.DO_GIMBAL_MANAGER_CONFIGURE: _gimbal,
+    MavCmd.VIDEO_START_CAPTURE: _camera,
+    MavCmd.VIDEO_STOP_CAPTURE: _camera,
+    MavCmd.VIDEO_START_STREAMING: _camera,
+    MavCmd.VIDEO_STOP_STREAMING: _camera,
+    MavCmd.REQUEST_VIDEO_STREAM_INFORMATION: _camera,
+    MavCmd.REQUEST_VIDEO_STREAM_STATUS: _camera,
 }
 
 

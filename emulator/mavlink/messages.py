@@ -28,6 +28,7 @@ from mavlink_vocabulary import (
 )
 
 __all__ = [
+    "MAV_AUTOPILOT_INVALID",
     "MAV_AUTOPILOT_PX4",
     "MAV_TYPE_QUADROTOR",
     "MODE_FLAG_ARMED",
@@ -44,6 +45,7 @@ __all__ = [
     "attitude",
     "autopilot_version",
     "battery_status",
+    "component_heartbeat",
     "extended_sys_state",
     "global_position_int",
     "gps_raw_int",
@@ -60,6 +62,7 @@ __all__ = [
 # them into numpy arrays.
 MAV_TYPE_QUADROTOR = int(MavType.QUADROTOR)
 MAV_AUTOPILOT_PX4 = int(MavAutopilot.PX4)
+MAV_AUTOPILOT_INVALID = int(MavAutopilot.INVALID)
 GRAVITY_M_S2 = 9.80665
 
 MODE_FLAG_CUSTOM = int(MavModeFlag.CUSTOM_MODE_ENABLED)
@@ -97,6 +100,14 @@ def _e7(deg: float) -> int:
 def _geo(ap: Autopilot, p: tuple[float, float, float]) -> tuple[int, int, int]:
     lat, lon, alt = ap.fleet.world.origin.to_geodetic(*p)
     return _e7(lat), _e7(lon), round(alt * 1000.0)
+
+
+def component_heartbeat(ap: Autopilot, mav_type: int) -> mavlink.MAVLink_message:
+    """The heartbeat of one of the vehicle's other components (camera, gimbal). Its base and
+    custom mode are the vehicle's mode: MAVSDK's follow_me plugin reads every heartbeat of
+    the system, and one without the follow-target mode would make it stop following."""
+    return mavlink.MAVLink_heartbeat_message(mav_type, MAV_AUTOPILOT_INVALID, MODE_FLAG_CUSTOM,
+                                             ap.mode.custom_mode, STATE_ACTIVE, MAVLINK_VERSION)
 
 
 def heartbeat(ap: Autopilot) -> mavlink.MAVLink_message:

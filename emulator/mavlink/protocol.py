@@ -42,6 +42,10 @@ MAX_BATCH_BYTES = 1200  # stays below any loopback or Ethernet MTU
 Address = tuple[str, int]
 # broadcasts of these are for a ground station, never for a vehicle
 _NOT_FOR_VEHICLES = frozenset({MessageId.PING, MessageId.REQUEST_DATA_STREAM})
+# messages whose target system is not in a field named target_system
+_TARGET_FIELDS = {MessageId.MANUAL_CONTROL: "target"}
+# messages with no target system that every vehicle behind the socket hears
+_FOR_EVERY_VEHICLE = frozenset({MessageId.FOLLOW_TARGET})
 log = logging.getLogger("mavswarm.protocol")
 
 
@@ -100,11 +104,14 @@ class NetworkProtocol:
             self._refresh_targets()
         links = self.links
         for m in self.decoder.decode(data):
-            target = getattr(m, "target_system", None)
+            msg_id = m.get_msgId()
+            target = getattr(m, _TARGET_FIELDS.get(msg_id, "target_system"), None)
             if target is None:
-                continue
+                if msg_id not in _FOR_EVERY_VEHICLE:
+                    continue
+                target = 0
             if target == 0:
-                if m.get_msgId() in _NOT_FOR_VEHICLES:
+                if msg_id in _NOT_FOR_VEHICLES:
                     continue
                 for link in links.values():
                     self._deliver(link, m, now)

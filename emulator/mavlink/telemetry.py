@@ -137,7 +137,11 @@ class FleetTelemetry:
                 msgs.MAVLINK_VERSION)
 
     def _camera_heartbeat(self, ks: np.ndarray) -> Sequence[object]:
-        return (MAV_TYPE_CAMERA, MAV_AUTOPILOT_INVALID, 0, 0, MavState.ACTIVE, msgs.MAVLINK_VERSION)
+        # the vehicle's mode, as the camera's own heartbeat says (see messages.component_mode)
+        aps = self.fleet.autopilots
+        custom = [aps[k].mode.custom_mode for k in ks.tolist()]
+        return (MAV_TYPE_CAMERA, MAV_AUTOPILOT_INVALID, msgs.MODE_FLAG_CUSTOM, custom,
+                MavState.ACTIVE, msgs.MAVLINK_VERSION)
 
     def _sys_status(self, ks: np.ndarray) -> Sequence[object]:
         f = self.fleet

@@ -9,50 +9,41 @@ touches a socket. Messages are dispatched by their `MessageId`.
 
 from __future__ import annotations
 
-import math
-import struct
 from collections.abc import Callable, Iterable
 
 from emulator.flight.autopilot import Autopilot, ImageCapture
-from emulator.flight.params import ParamError, ParamStore
+from emulator.flight.manual_control import MANUAL_MODES
+from emulator.flight.mission import MissionItem
+from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import Severity
 from emulator.mavlink import messages as msgs
+from emulator.mavlink import param_protocol
 from emulator.mavlink.camera import CAMERA_COMMANDS, CAMERA_MESSAGES, CameraComponent
 from emulator.mavlink.codec import Encoder, mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.command_dedup import STATEFUL_COMMANDS, CommandDedup, command_key
 from emulator.mavlink.commands import execute_command
 from emulator.mavlink.ftp import FtpServer
+from emulator.mavlink.gimbal import GIMBAL_COMPONENT_ID, GIMBAL_MESSAGES, GimbalComponent
 from emulator.mavlink.imu import highres_imu
 from emulator.mavlink.log_transfer import LOG_MESSAGES, LogTransfer
 from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
+from emulator.mavlink.payload_items import payload_item_reply
+from emulator.mavlink.pilot_input import apply_follow_target, apply_manual_control
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
-from mavlink_vocabulary import MavComponent, MavParamType, MavResult, MessageId
+from mavlink_vocabulary import MavComponent, MavResult, MessageId
 
 __all__ = ["HANDLED_MESSAGES", "VehicleLink"]
 
-_INT_TYPES = frozenset({MavParamType.UINT8, MavParamType.INT8, MavParamType.UINT16,
-                        MavParamType.INT16, MavParamType.UINT32, MavParamType.INT32})
 AUTOPILOT_COMPONENT_ID = MavComponent.AUTOPILOT1
 CAMERA_COMPONENT_ID = MavComponent.CAMERA
 MIN_STREAM_INTERVAL_S = 0.01  # streams are capped at 100 Hz whatever a client asks
-# MAVLink FTP is not offered: every request gets a NAK(UnknownCommand) so clients fall back
-
-
-def _bytewise_int(value: float) -> int:
-    return struct.unpack("<i", struct.pack("<f", value))[0]
-
-
-def _bytewise_float(value: int) -> float:
-    return struct.unpack("<f", struct.pack("<i", value))[0]
-
-
 _OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
                            MessageId.GLOBAL_POSITION_INT, MessageId.LOCAL_POSITION_NED,
                            MessageId.HOME_POSITION)
-# what a vehicle sends on request (MAV_CMD_REQUEST_MESSAGE), besides the camera's messages
+
 
 class VehicleLink:
     """MAVLink side of vehicle `ap` (system id k + 1)."""
@@ -69,6 +60,10 @@ class VehicleLink:
             CAMERA_COMPONENT_ID: Encoder(self.system_id, CAMERA_COMPONENT_ID),
         }
         self.camera = CameraComponent()
+        self.gimbal = GimbalComponent() if ap.spec.gimbal else None  # the session asks
+        if self.gimbal is not None:
+            self._encoders[GIMBAL_COMPONENT_ID] = Encoder(self.system_id, GIMBAL_COMPONENT_ID)
+        self.command_peer = (0, 0)  # who sent the command being handled
         self.missions = MissionTransfer(ap)
         self.logs = LogTransfer(ap)
         self.ftp = FtpServer(self.logs.files)
@@ -104,17 +99,22 @@ class VehicleLink:
 
     def send_stream(self, msg_id: int) -> None:
         if msg_id == CAMERA_HEARTBEAT:
-            self.send(self.camera.heartbeat(), CAMERA_COMPONENT_ID)
+            self.send(self.camera.heartbeat(self.ap), CAMERA_COMPONENT_ID)
             return
         message = self.build(msg_id)
         if message is not None:
             self.send(message)
 
-    def can_send_once(self, msg_id: int) -> bool:
-        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS  # each can be sent once
+    def can_send_once(self, msg_id: int) -> bool:  # each can be sent once
+        return msg_id in CAMERA_MESSAGES or msg_id in _BUILDERS or (
+            self.gimbal is not None and msg_id in GIMBAL_MESSAGES)
 
     def send_once(self, msg_id: int) -> None:
-        if msg_id in CAMERA_MESSAGES:
+        if self.gimbal is not None and (msg_id in GIMBAL_MESSAGES or msg_id == -1):
+            message = self.gimbal.build(self.ap, msg_id)
+            if message is not None:
+                self.send(message, self.gimbal.component_of(msg_id))
+        elif msg_id in CAMERA_MESSAGES:
             message = self.camera.build(self.ap, msg_id)
             if message is not None:
                 self.send(message, CAMERA_COMPONENT_ID)
@@ -153,6 +153,12 @@ class VehicleLink:
     def on_image_captured(self, capture: ImageCapture) -> None:
         self.send(self.camera.image_captured(self.ap, capture), CAMERA_COMPONENT_ID)
 
+    def on_payload_item(self, item: MissionItem) -> None:
+        """A mission's gimbal or camera item, reached: the gimbal or camera acts on it."""
+        reply = payload_item_reply(self, item)
+        if reply is not None:
+            self._answer(None, None, reply, AUTOPILOT_COMPONENT_ID)
+
     def on_state_changed(self) -> None:
         """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
         self.send(msgs.heartbeat(self.ap))
@@ -173,21 +179,43 @@ class VehicleLink:
         if handler is not None:
             handler(self, m)
 
+    @property
+    def needs_tick(self) -> bool:
+        """Whether `tick` has a wall-clock duty now (an upload, a set-point or stick link, a
+        recording's capture status)."""
+        return (self.missions.uploading or self.ap.mode in _LINK_WATCHED_MODES
+                or self.camera.video.status_due_wall_s is not None or self.gimbal is not None)
+
     def tick(self, wall_now_s: float) -> None:
         self.wall_now_s = wall_now_s
         self.send_all(self.missions.tick(wall_now_s))
         self.ap.offboard.check_link(wall_now_s)
+        self.ap.manual.check_link(wall_now_s)
+        self.ap.follow.check_link(wall_now_s)
+        if self.camera.video.status_due(wall_now_s):  # a recording's capture status
+            self.send_once(MessageId.CAMERA_CAPTURE_STATUS)
+        if self.gimbal is not None:
+            for msg_id in self.gimbal.due(wall_now_s):
+                self.send_once(msg_id)
 
     def _peer(self, m) -> tuple[int, int]:
         return m.get_srcSystem(), m.get_srcComponent()
 
     def _on_command(self, m, args: CommandArgs) -> None:
         target_component = getattr(m, "target_component", MavComponent.ALL)
+        if target_component == GIMBAL_COMPONENT_ID and self.gimbal is not None:
+            wanted = self.gimbal.device_request(args)  # the gimbal device answers
+            result = MavResult.UNSUPPORTED if wanted is None else MavResult.ACCEPTED
+            self._ack(m, args.command, result, target_component)
+            if wanted is not None:
+                self.send_once(wanted)
+            return
         if target_component not in _COMMAND_COMPONENTS:
             return  # for a component this vehicle does not have: not ours to answer
         if target_component == CAMERA_COMPONENT_ID and args.command not in CAMERA_COMMANDS:
             self._answer(m, args.command, Reply(MavResult.UNSUPPORTED), target_component)
             return
+        self.command_peer = self._peer(m)
         if args.command not in STATEFUL_COMMANDS:
             self._answer(m, args.command, execute_command(self, args), target_component)
             return
@@ -205,9 +233,11 @@ class VehicleLink:
         self._answer(m, args.command, reply, target_component)
         self.dedup.answered(self._peer(m), key, step, self.wall_now_s, reply.result)
 
-    def _answer(self, m, command: int, reply: Reply, target_component: int) -> None:
-        """The ACK, the reason as a STATUSTEXT, then what follows an accepted command."""
-        self._ack(m, command, reply.result, target_component)
+    def _answer(self, m, command: int | None, reply: Reply, target_component: int) -> None:
+        """The ACK (none for a mission item), the reason as a STATUSTEXT, then what follows
+        an accepted command."""
+        if command is not None:
+            self._ack(m, command, reply.result, target_component)
         if reply.reason:
             self.statustext(Severity.WARNING if reply.result else Severity.INFO, reply.reason)
         if reply.result != MavResult.ACCEPTED:
@@ -221,8 +251,8 @@ class VehicleLink:
                 follow_up.run()
 
     def _ack(self, m, command: int, result: int, target_component: int) -> None:
-        component = CAMERA_COMPONENT_ID if target_component == CAMERA_COMPONENT_ID \
-            else AUTOPILOT_COMPONENT_ID
+        component = target_component if target_component in (
+            CAMERA_COMPONENT_ID, GIMBAL_COMPONENT_ID) else AUTOPILOT_COMPONENT_ID
         src_system, src_component = self._peer(m)
         self.send(mavlink.MAVLink_command_ack_message(
             command, result, 0, 0, src_system, src_component
@@ -235,49 +265,22 @@ class VehicleLink:
         self._on_command(m, CommandArgs.from_int(m))
 
     # -------------------------------------------------------------- parameters
-    def _param_value(self, name: str) -> mavlink.MAVLink_message:
-        store = self.ap.params
-        d = ParamStore.definition(name)
-        value = store[name]
-        if d.is_int:
-            wire, ptype = _bytewise_float(int(value)), MavParamType.INT32
-        else:
-            wire, ptype = value, MavParamType.REAL32
-        return mavlink.MAVLink_param_value_message(
-            name.encode(), wire, ptype, len(store), ParamStore.index_of(name)
-        )
-
     def _param_request_list(self, m) -> None:
-        for name in self.ap.params:
-            self.send(self._param_value(name))
+        self.send_all(param_protocol.param_list(self.ap))
 
     def _param_request_read(self, m) -> None:
-        try:
-            name = m.param_id if m.param_index < 0 else ParamStore.name_at(m.param_index)
-            ParamStore.definition(name)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, str(error))
-            return
-        self.send(self._param_value(name))
+        self._param_answer(param_protocol.param_read(self.ap, m))
 
     def _param_set(self, m) -> None:
         self.dedup.forget()
-        name = m.param_id
-        try:
-            d = ParamStore.definition(name)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, str(error))
-            return
-        value = m.param_value
-        if m.param_type in _INT_TYPES:
-            value = float(_bytewise_int(value))
-        elif d.is_int and math.isfinite(value) and value == int(value):
-            value = float(int(value))
-        try:
-            self.ap.set_param(name, value)
-        except ParamError as error:
-            self.statustext(Severity.WARNING, f"Param rejected: {error}")
-        self.send(self._param_value(name))  # the echo carries the value now in force
+        self._param_answer(param_protocol.param_set(self.ap, m))
+
+    def _param_answer(self, answer: param_protocol.Answer) -> None:
+        problem, value = answer
+        if problem:
+            self.statustext(Severity.WARNING, problem)
+        if value is not None:
+            self.send(value)
 
     # ---------------------------------------------------------------- missions
     def _mission_count(self, m) -> None:
@@ -315,8 +318,8 @@ class VehicleLink:
             self.warned.add(complaint.key)
             self.statustext(Severity.WARNING, complaint.text)
 
-    def _offboard_setpoint(self, m) -> None:
-        self._complain(SETPOINT_APPLIERS[m.get_msgId()](self.ap, m, self.wall_now_s))
+    def _streamed_input(self, m) -> None:
+        self._complain(_STREAMED_INPUT[m.get_msgId()](self.ap, m, self.wall_now_s))
 
     def _ping(self, m) -> None:
         if m.target_system == self.system_id:  # broadcast pings are not answered
@@ -328,6 +331,14 @@ class VehicleLink:
             now_ns = int(self.ap.now_s * 1e9)
             self.send(mavlink.MAVLink_timesync_message(now_ns, m.ts1))
 
+    def _gimbal_setpoint(self, m) -> None:
+        if self.gimbal is None:
+            return
+        aim = (self.gimbal.on_set_pitchyaw if m.get_msgId() == MessageId.GIMBAL_MANAGER_SET_PITCHYAW
+               else self.gimbal.on_set_attitude)
+        problem = aim(self.ap, m, self._peer(m))
+        self._complain(Complaint(problem.split(":")[0], problem) if problem else None)
+
     def _log_request(self, m) -> None:
         self.send_all(self.logs.handle(m))
 
@@ -338,6 +349,11 @@ class VehicleLink:
                 0, src_system, src_component, list(reply)))
 
 
+# modes whose input a link watches (its loss is a failsafe)
+_LINK_WATCHED_MODES = frozenset({FlightMode.OFFBOARD, FlightMode.FOLLOW_TARGET, *MANUAL_MODES})
+# set-points and stick input: streamed, never answered (a problem is reported once)
+_STREAMED_INPUT = {**SETPOINT_APPLIERS, MessageId.MANUAL_CONTROL: apply_manual_control,
+                   MessageId.FOLLOW_TARGET: apply_follow_target}
 _COMMAND_COMPONENTS = frozenset({MavComponent.ALL, AUTOPILOT_COMPONENT_ID, CAMERA_COMPONENT_ID})
 
 _BUILDERS: dict[int, Callable[[VehicleLink], mavlink.MAVLink_message]] = {
@@ -370,11 +386,13 @@ _DISPATCH: dict[MessageId, Callable[[VehicleLink, mavlink.MAVLink_message], None
     MessageId.MISSION_REQUEST: VehicleLink._mission_request,
     MessageId.MISSION_CLEAR_ALL: VehicleLink._mission_clear_all,
     MessageId.MISSION_SET_CURRENT: VehicleLink._mission_set_current,
-    **{msg_id: VehicleLink._offboard_setpoint for msg_id in SETPOINT_APPLIERS},
+    **{msg_id: VehicleLink._streamed_input for msg_id in _STREAMED_INPUT},
     MessageId.PING: VehicleLink._ping,
     MessageId.TIMESYNC: VehicleLink._timesync,
     MessageId.FILE_TRANSFER_PROTOCOL: VehicleLink._file_transfer,
     **{msg_id: VehicleLink._log_request for msg_id in LOG_MESSAGES},
+    MessageId.GIMBAL_MANAGER_SET_PITCHYAW: VehicleLink._gimbal_setpoint,
+    MessageId.GIMBAL_MANAGER_SET_ATTITUDE: VehicleLink._gimbal_setpoint,
 }
 
 # the names of the messages a vehicle acts on or answers
