@@ -5,7 +5,9 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import time
-from collections.abc import Sequence
+import weakref
+from collections.abc import Callable, Sequence
+from typing import Any
 
 from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 from mavsdk.asyncio.exceptions import MavsdkConnectionError
@@ -17,6 +19,59 @@ from mavlink_gateway.mavsdk_log import set_mavsdk_log
 __all__ = ["FleetConnection", "FleetError"]
 
 DISCOVERY_TIMEOUT_S = 15.0
+# How long close() waits for MAVSDK calls still running on worker threads (a command's own
+# retries end within seconds) before it destroys MAVSDK.
+CALLS_DRAIN_S = 30.0
+
+
+_MAVSDK_MODULES = frozenset({"mavsdk"})
+
+
+class _CallPool(concurrent.futures.ThreadPoolExecutor):
+    """The loop's default executor while fleets are open on it: MAVSDK's asyncio binding runs
+    every blocking call on it. It knows which MAVSDK calls are still running (not the other
+    work of the loop, a server's, say), so a fleet can let them end before MAVSDK is destroyed
+    under them (a primitive cancelled or timed out leaves its call running on a worker
+    thread)."""
+
+    def __init__(self, workers: int) -> None:
+        super().__init__(workers, thread_name_prefix="mavsdk-call")
+        self.workers = workers
+        self._running: set[concurrent.futures.Future[Any]] = set()
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any,
+               **kwargs: Any) -> concurrent.futures.Future[Any]:
+        future = super().submit(fn, *args, **kwargs)
+        if getattr(fn, "__module__", None) in _MAVSDK_MODULES or \
+                str(getattr(fn, "__module__", "")).startswith("mavsdk."):
+            self._running.add(future)
+            future.add_done_callback(self._running.discard)
+        return future
+
+    async def drain(self, timeout_s: float) -> None:
+        """Wait until every MAVSDK call submitted so far has returned (at most
+        `timeout_s`)."""
+        running = [asyncio.wrap_future(f) for f in list(self._running)]
+        if running:
+            await asyncio.wait(running, timeout=timeout_s)
+
+
+_call_pools: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, _CallPool] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _call_pool(loop: asyncio.AbstractEventLoop, workers: int) -> _CallPool:
+    """The loop's call pool, installed as its default executor (one per loop, enlarged by
+    replacing it when a bigger fleet connects; the one replaced ends once idle)."""
+    pool = _call_pools.get(loop)
+    if pool is None or pool.workers < workers:
+        if pool is not None:
+            pool.shutdown(wait=False)
+        pool = _CallPool(workers)
+        loop.set_default_executor(pool)
+        _call_pools[loop] = pool
+    return pool
 
 
 class FleetError(RuntimeError):
@@ -29,8 +84,10 @@ class FleetConnection:
     Use `async with await FleetConnection.connect(url, profiles, origin) as fleet:`.
     """
 
-    def __init__(self, mavsdk: Mavsdk, drones: dict[str, DroneLink]) -> None:
+    def __init__(self, mavsdk: Mavsdk, drones: dict[str, DroneLink],
+                 calls: _CallPool | None = None) -> None:
         self._mavsdk = mavsdk
+        self._calls = calls
         self.drones = drones
         self._url = ""
         self._origin: GeoFrame | None = None
@@ -43,11 +100,8 @@ class FleetConnection:
         """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles.
         `landed_state_hz`: the EXTENDED_SYS_STATE rate asked of every drone (None: its
         own)."""
-        loop = asyncio.get_running_loop()
         # MAVSDK runs each blocking call on the default executor: size it for the fleet.
-        loop.set_default_executor(
-            concurrent.futures.ThreadPoolExecutor(max(32, 2 * len(profiles) + 8))
-        )
+        calls = _call_pool(asyncio.get_running_loop(), max(32, 2 * len(profiles) + 8))
         set_mavsdk_log()  # MAVSDK's own log lines: dropped unless this process asked for them
         mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         try:
@@ -57,9 +111,10 @@ class FleetConnection:
                 raise FleetError(f"cannot open the MAVLink connection {url!r}: {error}") from None
             drones = await _attach(mavsdk, url, profiles, origin, timeout_s, landed_state_hz)
         except BaseException:
+            await calls.drain(CALLS_DRAIN_S)
             mavsdk.destroy()
             raise
-        fleet = cls(mavsdk, drones)
+        fleet = cls(mavsdk, drones, calls)
         fleet._url, fleet._origin, fleet._landed_state_hz = url, origin, landed_state_hz
         return fleet
 
@@ -85,8 +140,13 @@ class FleetConnection:
             await link.close()
 
     async def close(self) -> None:
+        """End every DroneLink's subscriptions, let the MAVSDK calls still running on worker
+        threads return, then destroy MAVSDK (its threads, sockets and every plugin)."""
         for link in self.drones.values():
             await link.close()
+        current = _call_pools.get(asyncio.get_running_loop())
+        for pool in {p for p in (self._calls, current) if p is not None}:
+            await pool.drain(CALLS_DRAIN_S)
         self._mavsdk.destroy()
 
     async def __aenter__(self) -> FleetConnection:

@@ -7,11 +7,14 @@ line and drops it, so nothing is printed; on, there is no subscriber and MAVSDK 
 it always does. The binding's Python logger (``mavsdk``) follows the same switch.
 `FleetConnection.connect` applies the switch before it creates MAVSDK, so
 every process that talks MAVLink through the gateway is quiet unless it asked otherwise.
+
+Nothing is undone at exit: the subscriber is called on MAVSDK's threads, and those end with
+their MAVSDK instance (`FleetConnection.close`, or the binding's own exit hook for one left
+open), before the interpreter finalises.
 """
 
 from __future__ import annotations
 
-import atexit
 import logging
 import threading
 
@@ -50,17 +53,3 @@ def set_mavsdk_log(enabled: bool | None = None) -> None:
             mavsdk.log_subscribe(_drop)
         _applied = _enabled
 
-
-def _unsubscribe_at_exit() -> None:
-    """Take the subscriber away before the interpreter shuts down: MAVSDK's threads go on
-    logging (a heartbeat timing out, say), and a call into a finalised interpreter would
-    crash the process."""
-    global _applied
-    with _lock:
-        if _applied is False:
-            logging.getLogger("mavsdk").setLevel(logging.CRITICAL + 1)
-            mavsdk.log_unsubscribe()
-            _applied = None
-
-
-atexit.register(_unsubscribe_at_exit)

@@ -17,6 +17,7 @@ import numpy as np
 
 from emulator.flight.camera import ImageCapture
 from emulator.flight.listener import AutopilotListener
+from emulator.flight.mission import MissionItem
 from emulator.flight.modes import LandedState
 from emulator.swarm import Swarm
 from mqtt_bus.payloads import DroneSample, photo_event, statustext_event
@@ -48,6 +49,9 @@ class _Tee:
 
     def on_mission_current(self) -> None:
         self.link.on_mission_current()
+
+    def on_payload_item(self, item: MissionItem) -> None:
+        self.link.on_payload_item(item)
 
     def on_home_changed(self) -> None:
         self.link.on_home_changed()

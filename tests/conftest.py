@@ -1,5 +1,6 @@
 """Shared fixtures: free UDP ports, running swarms, a MAVSDK client that finds them, a
-headless Chromium for the console pages, and Hypothesis draws that depend on the seed alone."""
+headless Chromium for the console pages, and Hypothesis draws that are the same whatever the
+session collected (tests/hypothesis_draws.py)."""
 
 from __future__ import annotations
 
@@ -17,22 +18,34 @@ from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
 from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path
-from tests.hypothesis_draws import seed_only_draws
-from tests.ports import unused_udp_port
+from tests.hypothesis_draws import import_project_source, load_profile
+from tests.ports import drop_registry, unused_udp_port
 
 _executor_size: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
     weakref.WeakKeyDictionary()
 )
 
 
-@pytest.fixture(autouse=True)
-def hypothesis_seed_only_draws() -> Iterator[None]:
-    """Every test runs inside `seed_only_draws()` (tests/hypothesis_draws.py): a @given test,
-    or one nested in a test's body, draws the same examples for its seed (or derandomized)
-    whatever other test files the session collected and whatever literals the project's
-    source holds."""
-    with seed_only_draws():
-        yield
+load_profile()  # before the test modules are imported: their @settings build on it
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """The whole project is imported before the first test, so Hypothesis's pool of source
+    literals is the same whatever test files were collected (tests/hypothesis_draws.py)."""
+    import_project_source()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A test that flies with MAVSDK or drives Chromium takes seconds: it is slow too, so
+    `-m "not slow"` (the fast tier) leaves it out."""
+    for item in items:
+        if item.get_closest_marker("mavsdk") or item.get_closest_marker("browser"):
+            item.add_marker(pytest.mark.slow)
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    drop_registry()  # the xdist workers' record of the ports handed out (tests/ports.py)
 
 
 @pytest.fixture
@@ -119,23 +132,3 @@ def browser() -> Iterator[Any]:
         launched = playwright.chromium.launch(executable_path=path, args=CHROMIUM_ARGS)
         yield launched
         launched.close()
-
-
-_exit_status: list[int] = []
-
-
-def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
-    _exit_status.append(int(exitstatus))
-
-
-@pytest.hookimpl(trylast=True)
-def pytest_unconfigure(config: pytest.Config) -> None:
-    """Leave without interpreter finalisation once pytest is done: MAVSDK's native threads,
-    still running in this process, can crash a finalising interpreter (a segfault after
-    every test has passed). The exit status is pytest's own."""
-    import os
-    import sys
-    if _exit_status and not hasattr(sys, "_called_from_xdist"):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(_exit_status[-1])

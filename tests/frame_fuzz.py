@@ -1,17 +1,24 @@
 """A seeded generator of hostile MAVLink datagrams, cheap enough for millions of frames.
 
+The suite's one MAVLink frame fuzzer (tests/test_fuzz.py over real UDP, tests/memory_fuzz.py
+in memory, tests/test_codec.py, benchmarks/protocol_fuzz.py); its values come from
+tests/mavlink_values.py, which the Hypothesis strategies share.
+
 A corpus of valid frames is encoded once with pymavlink: every message type a vehicle handles
 (and a few it ignores), with random field values that are often absurd (NaN, infinities,
-extreme integers, garbage strings, unknown commands, frames and masks). Each frame drawn from
-it is then sent as it is or mutated at the byte level: its payload scrambled with the
-checksum made valid again (a valid frame carrying absurd values), truncated, its checksum
-broken, its length byte changed, its message id changed to one nobody knows, or replaced by
-junk. Several frames go in one datagram. The same seed gives the same datagrams.
+extreme integers, garbage strings, unknown commands, frames and masks) and sometimes
+meaningful (positions near the origin, sensible altitudes and velocities, modes), plus
+commands that make vehicles move. Each frame drawn from it is then sent as it is or mutated
+at the byte level: its payload scrambled or resized with the checksum made valid again (a
+valid frame carrying absurd values), its message id changed to another handled type (checksum
+valid) or to one nobody knows, bits flipped, bytes inserted or deleted, header flags set,
+truncated, its checksum broken, its length byte changed, or replaced by junk. Several frames
+go in one datagram (`datagram`), or a mixed one with duplicates and junk between frames
+(`mixed_datagram`). The same seed gives the same datagrams.
 
 State-changing traffic that would make a vehicle unfit to fly afterwards by design (failure
-injection and its parameters, the simulated battery endurance) is left out, as in
-tests/test_fuzz.py: the storm must not break a vehicle, and a vehicle told to fail is not
-broken.
+injection and its parameters, the simulated battery endurance) is left out: the storm must
+not break a vehicle, and a vehicle told to fail is not broken.
 """
 
 from __future__ import annotations
@@ -24,12 +31,21 @@ from collections import Counter
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from emulator.flight.params import PARAM_DEFINITIONS
 from emulator.geo import DEFAULT_ORIGIN
-from emulator.mavlink.commands import HANDLERS
 from mavlink_vocabulary import MavCmd
+from tests.mavlink_values import (
+    ALT0_M,
+    COMMANDS,
+    FAULT_PARAMS,
+    INT_RANGES,
+    LAT0_E7,
+    LON0_E7,
+    PARAM_NAMES,
+    SPECIAL_FLOATS,
+    int_edges,
+)
 
-__all__ = ["FAULT_PARAMS", "MUTATIONS", "FrameFuzzer"]
+__all__ = ["FAULT_PARAMS", "MUTATIONS", "READ_ONLY", "FrameFuzzer"]
 
 # weights of the message types in the corpus
 TYPES = {
@@ -41,25 +57,17 @@ TYPES = {
     "FILE_TRANSFER_PROTOCOL": 2, "REQUEST_DATA_STREAM": 1, "HEARTBEAT": 1, "MISSION_ACK": 1,
     "SET_MODE": 1,
 }
-FAULT_PARAMS = ("COM_DL_LOSS_T", "NAV_DLL_ACT", "SYS_FAILURE_EN", "SIM_HOVER_ENDUR")
-PARAM_NAMES = [d.name.encode() for d in PARAM_DEFINITIONS if d.name not in FAULT_PARAMS]
-COMMANDS = [*sorted(c for c in HANDLERS if c != MavCmd.INJECT_FAILURE),
-            MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_UNLIM, 183, 185, 246, 31000]
-F32_MAX = 3.4028234663852886e38
-SPECIAL_FLOATS = [
-    math.nan, math.inf, -math.inf, 0.0, -0.0, 1.0, -1.0, 2.0, 3.0, 4.0, 6.0, 0.5, 10.0, 100.0,
-    1e6, -1e6, 1e30, -1e30, F32_MAX, -F32_MAX, 1.4e-45, 21196.0, 2**31, 4294967295.0, 65535.0,
-]
-INT_RANGES = {
-    "uint8_t": (0, 255), "int8_t": (-128, 127), "uint16_t": (0, 65535),
-    "int16_t": (-32768, 32767), "uint32_t": (0, 2**32 - 1), "int32_t": (-(2**31), 2**31 - 1),
-    "uint64_t": (0, 2**64 - 1), "int64_t": (-(2**63), 2**63 - 1),
-}
-LAT0 = round(DEFAULT_ORIGIN.latitude_deg * 1e7)
-LON0 = round(DEFAULT_ORIGIN.longitude_deg * 1e7)
+# What may reach a vehicle as a broadcast without changing it: requests.
+READ_ONLY = frozenset({
+    "PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "MISSION_REQUEST_LIST",
+    "MISSION_REQUEST_INT", "MISSION_REQUEST", "PING", "REQUEST_DATA_STREAM",
+    "FILE_TRANSFER_PROTOCOL", "MISSION_ACK",
+})
+LAT0, LON0 = LAT0_E7, LON0_E7
 # (mutation, weight): what happens to a frame drawn from the corpus
 MUTATIONS = (("valid", 40), ("scrambled", 15), ("truncated", 10), ("bad_crc", 10),
-             ("bad_length", 10), ("unknown_id", 10), ("junk", 5))
+             ("bad_length", 10), ("unknown_id", 10), ("junk", 5), ("bit_flips", 6),
+             ("spliced", 6), ("resized", 5), ("other_type", 5), ("header_flags", 4))
 HEADER_V2 = 10
 CORPUS_SIZE = 8192
 UNKNOWN_IDS = (3, 9, 13, 14, 300, 9999, 60000, 0xFFFFFF)  # ids the dialect does not define
@@ -73,12 +81,12 @@ class FrameFuzzer:
         self.rng = random.Random(seed)
         self.systems = systems
         self.mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
-        classes = {name: mavlink.mavlink_map[getattr(mavlink, f"MAVLINK_MSG_ID_{name}")]
-                   for name in TYPES}
-        names = list(TYPES)
-        weights = [TYPES[n] for n in names]
-        self.corpus = [self._frame(classes[name])
-                       for name in self.rng.choices(names, weights, k=CORPUS_SIZE)]
+        self._classes = {name: mavlink.mavlink_map[getattr(mavlink, f"MAVLINK_MSG_ID_{name}")]
+                         for name in TYPES}
+        self._names = list(TYPES)
+        weights = [TYPES[n] for n in self._names]
+        self.corpus = [self._frame(self._classes[name])
+                       for name in self.rng.choices(self._names, weights, k=CORPUS_SIZE)]
         for i in range(0, CORPUS_SIZE, DRIVING_EVERY):  # commands that make vehicles move
             self.corpus[i] = self._driving_command()
         self._kinds = [m for m, _ in MUTATIONS]
@@ -102,12 +110,12 @@ class FrameFuzzer:
         rng = self.rng
         r = rng.random()
         if r < 0.3:
-            return rng.choice([lo, hi, 0, 1, min(hi, 2), max(lo, -1), hi // 2])
+            return rng.choice(int_edges(ftype))
         if r < 0.6:
             return rng.randint(max(lo, -5), min(hi, 10))
         return rng.randint(lo, hi)
 
-    def _value(self, name: str, ftype: str, length: int) -> object:
+    def _value(self, name: str, ftype: str, length: int, type_name: str) -> object:
         rng = self.rng
         if ftype == "char":
             if name == "param_id" and rng.random() < 0.75:
@@ -143,11 +151,26 @@ class FrameFuzzer:
             return float(value)
         if ftype in INT_RANGES:
             return self._int(ftype)
+        return self._meaningful_float(name, type_name)
+
+    def _meaningful_float(self, name: str, type_name: str) -> float:
+        """Now and then a float that gets past the range checks: a position near the
+        origin, a sensible altitude or velocity; otherwise any float."""
+        rng = self.rng
+        if type_name in ("COMMAND_LONG", "MISSION_ITEM") and rng.random() < 0.5 and \
+                name in ("param5", "param6", "x", "y"):
+            lat = name in ("param5", "x")
+            base = DEFAULT_ORIGIN.latitude_deg if lat else DEFAULT_ORIGIN.longitude_deg
+            return base + rng.uniform(-0.002, 0.002)
+        if name in ("z", "alt", "param7") and rng.random() < 0.5:
+            return rng.choice([rng.uniform(0, 150), ALT0_M + rng.uniform(-20, 150)])
+        if name in ("vx", "vy", "vz") and rng.random() < 0.5:
+            return rng.uniform(-60.0, 60.0)
         return self._float()
 
     def _frame(self, cls: type[mavlink.MAVLink_message]) -> bytes:
         lengths = dict(zip(cls.ordered_fieldnames, cls.array_lengths, strict=True))
-        values = [self._value(name, ftype, lengths[name])
+        values = [self._value(name, ftype, lengths[name], cls.msgname)
                   for name, ftype in zip(cls.fieldnames, cls.fieldtypes, strict=True)]
         message = cls(*values)
         data = message.pack(self.mav)
@@ -206,10 +229,46 @@ class FrameFuzzer:
         if kind == "unknown_id":
             msg_id = rng.choice(UNKNOWN_IDS)
             return data[:7] + msg_id.to_bytes(3, "little") + data[10:]
+        if kind == "bit_flips":
+            flipped = bytearray(data)
+            for _ in range(rng.randint(1, 6)):
+                bit = rng.randrange(len(flipped) * 8)
+                flipped[bit // 8] ^= 1 << (bit % 8)
+            return bytes(flipped)
+        if kind == "spliced":  # bytes inserted or deleted somewhere
+            at = rng.randrange(len(data))
+            if rng.random() < 0.5:
+                return data[:at] + rng.randbytes(rng.randint(1, 5)) + data[at:]
+            return data[:at] + data[at + rng.randint(1, 5):]
+        if kind == "resized":  # another payload length, checksum valid
+            payload = data[HEADER_V2:-2]
+            size = rng.randint(0, 255)
+            payload = payload[:size] + rng.randbytes(max(0, size - len(payload)))
+            return _with_crc(data[:1] + bytes([size]) + data[2:HEADER_V2] + payload)
+        if kind == "other_type":  # another handled message id, checksum valid
+            msg_id = self._classes[rng.choice(self._names)].id
+            return _with_crc(data[:7] + msg_id.to_bytes(3, "little") + data[10:-2])
+        if kind == "header_flags":  # signed, unknown incompatibility or compat flags
+            flagged = _with_crc(data[:2] + bytes([rng.choice([0x01, 0x02, 0x80, 0xFF]),
+                                                  rng.getrandbits(8)]) + data[4:-2])
+            return flagged + rng.randbytes(13) if rng.random() < 0.5 else flagged
         return rng.randbytes(rng.randint(1, 40))  # junk
 
     def datagram(self, frames: int) -> bytes:
         return b"".join(self.frames(frames))
+
+    def mixed_datagram(self) -> tuple[bytes, int]:
+        """One datagram of 1 to 8 frames, some of them twice, now and then with junk between
+        them; and its number of parts."""
+        rng = self.rng
+        r = rng.random()
+        count = 1 if r < 0.35 else 2 if r < 0.55 else rng.randint(3, 8)
+        parts: list[bytes] = []
+        for frame in self.frames(count):
+            parts.extend([frame, frame] if rng.random() < 0.1 else [frame])
+        if rng.random() < 0.05:
+            parts.insert(rng.randrange(len(parts) + 1), rng.randbytes(rng.randint(1, 40)))
+        return b"".join(parts), len(parts)
 
 
 def _with_crc(frame_without_crc: bytes) -> bytes:

@@ -1,62 +1,64 @@
-"""Hypothesis draws that depend on the seed alone, not on what else the session imported.
+"""Hypothesis draws that are the same on every run, whatever test files a session collected.
 
-Since 6.131 Hypothesis sometimes draws a literal found in the source of the project's modules
-that are imported at the time (`sys.modules`, its "local constants"). The pool therefore
-changes with the test files collected in the same session (tests/test_compat_client.py
-imports the benchmark server and its constants) and with any edit of the project's source,
-and a derandomized or seeded @given function draws other examples. Inside
-`seed_only_draws()` that pool is empty, so the examples depend on the seed and the
-Hypothesis version only. The pool is an internal of Hypothesis (6.170 has no setting for
-it): if it moves, this fails loudly (AttributeError) instead of silently drawing
-context-dependent examples again.
+Two things decide what a @given test draws:
 
-tests/conftest.py runs every test of the suite inside `seed_only_draws()` (its autouse
-fixture `hypothesis_seed_only_draws`), so no test needs to enter it itself;
-`source_constant_draws()` gives a block Hypothesis's own pool back, for the test that shows
-the difference.
+* its random seed: the suite's settings profile `mavswarm` is derandomized (a test's seed
+  comes from its own source) with no example database, so a run never replays what an
+  earlier one found; a test that needs other draws takes `@seed(n)`, and a regression found
+  once is kept as an `@example`;
+* Hypothesis's pool of literals: now and then it draws a literal found in the source of the
+  project modules imported at the time (not in test files). `import_project_source()`
+  imports every module of the project's packages before the first test, so the pool is the
+  same whole-project pool whatever the session collected or imported on its way.
+
+tests/conftest.py loads the profile and imports the project once collection is done
+(`pytest_collection_finish`). An edit of the project's source may change the pool and so the
+draws, as an edit of a test changes its derandomized seed.
 """
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Callable, Iterator
+import importlib
+import pkgutil
+import tomllib
+from pathlib import Path
 
-from hypothesis.internal.conjecture import providers
-from hypothesis.internal.constants_ast import Constants
+from hypothesis import settings
 
-__all__ = ["seed_only_draws", "seed_only_draws_active", "source_constant_draws"]
+__all__ = ["PROFILE", "import_project_source", "load_profile", "project_packages"]
 
-_HYPOTHESIS_LOCAL_CONSTANTS = providers._get_local_constants
+PROFILE = "mavswarm"
+ROOT = Path(__file__).resolve().parent.parent
 
-
-def _no_local_constants() -> Constants:
-    return Constants()
-
-
-@contextlib.contextmanager
-def _local_constants_from(collect: Callable[[], Constants]) -> Iterator[None]:
-    outer = providers._get_local_constants
-    cache = providers.CONSTANTS_CACHE.cache  # (type, constraints) -> (global, local) pools
-    providers._get_local_constants = collect
-    cache.clear()
-    try:
-        yield
-    finally:
-        providers._get_local_constants = outer
-        cache.clear()
+settings.register_profile(
+    PROFILE,
+    derandomize=True,
+    database=None,
+    deadline=None,
+    print_blob=True,
+)
 
 
-def seed_only_draws() -> contextlib.AbstractContextManager[None]:
-    """Hypothesis draws no constant of the project's source inside the block."""
-    return _local_constants_from(_no_local_constants)
+def load_profile() -> None:
+    """Make the suite's profile the default of every @given test."""
+    settings.load_profile(PROFILE)
 
 
-def source_constant_draws() -> contextlib.AbstractContextManager[None]:
-    """Hypothesis draws constants of the imported project source inside the block (its
-    default, undone by `seed_only_draws()`)."""
-    return _local_constants_from(_HYPOTHESIS_LOCAL_CONSTANTS)
+def project_packages() -> list[str]:
+    """The project's packages, as pyproject.toml's [tool.mypy] lists them."""
+    with (ROOT / "pyproject.toml").open("rb") as f:
+        return list(tomllib.load(f)["tool"]["mypy"]["files"])
 
 
-def seed_only_draws_active() -> bool:
-    """Whether Hypothesis draws no constant of the project's source here."""
-    return providers._get_local_constants is _no_local_constants
+def import_project_source() -> list[str]:
+    """Import every module of the project's packages (not `__main__`); their names."""
+    names: list[str] = []
+    for package in project_packages():
+        module = importlib.import_module(package)
+        names.append(package)
+        for info in pkgutil.walk_packages(module.__path__, f"{package}."):
+            if info.name.rsplit(".", 1)[-1] == "__main__":
+                continue
+            importlib.import_module(info.name)
+            names.append(info.name)
+    return names

@@ -39,6 +39,7 @@ from emulator.mavlink.commands import HANDLERS
 from emulator.mavlink.vehicle_link import HANDLED_MESSAGES
 from mavlink_vocabulary import MavCmd, MavFrame, MavMissionType
 from tests.mavlink_client import mavlink
+from tests.mavlink_values import ABSURD_FLOATS, ALT0_M, INT_RANGES, UNKNOWN_COMMANDS, int_edges
 
 __all__ = ["BASELINES", "IGNORED_MESSAGES", "SYSTEMS", "TARGETS", "plausible_missions", "storms",
            "sweep", "value_sweep"]
@@ -46,22 +47,12 @@ __all__ = ["BASELINES", "IGNORED_MESSAGES", "SYSTEMS", "TARGETS", "plausible_mis
 SYSTEMS = (1, 2, 3)
 TARGETS = (0, *SYSTEMS)
 IGNORED_MESSAGES = ("HEARTBEAT", "SET_MODE", "REQUEST_DATA_STREAM", "MISSION_ACK")
-F32_MAX = 3.4028234663852886e38
-ABSURD_FLOATS = (
-    math.nan, math.inf, -math.inf, F32_MAX, -F32_MAX, 1.4e-45, -1.4e-45, 0.0, -0.0,
-    1.0, -1.0, -2.0, 2.0, 3.0, 4.0, 6.0, 1e30, -1e30, 2.0**31, -(2.0**31), 4294967295.0,
-)
 FLOORS = tuple(sorted({float(d.minimum) for d in PARAM_DEFINITIONS}))
 PARAM_NAMES = tuple(d.name.encode() for d in PARAM_DEFINITIONS
                     if d.name not in ("SIM_HOVER_ENDUR", "SYS_FAILURE_EN"))
-INT_RANGES = {
-    "uint8_t": (0, 255), "int8_t": (-128, 127), "uint16_t": (0, 65535),
-    "int16_t": (-32768, 32767), "uint32_t": (0, 2**32 - 1), "int32_t": (-(2**31), 2**31 - 1),
-    "uint64_t": (0, 2**64 - 1), "int64_t": (-(2**63), 2**63 - 1),
-}
-COMMANDS = (*sorted(HANDLERS), 16, 17, 21, 22, 183, 185, 246, 31000)
+COMMANDS = (*sorted(HANDLERS), *UNKNOWN_COMMANDS, MavCmd.NAV_LAND, MavCmd.NAV_TAKEOFF)
 LAT0, LON0 = DEFAULT_ORIGIN.latitude_deg, DEFAULT_ORIGIN.longitude_deg
-ALT0 = DEFAULT_ORIGIN.altitude_amsl_m
+ALT0 = ALT0_M
 NEAR_DEG = 0.003  # about 330 m
 
 absurd_floats = st.one_of(st.sampled_from(ABSURD_FLOATS), st.floats(width=32))
@@ -73,8 +64,7 @@ near_lon = st.floats(LON0 - NEAR_DEG, LON0 + NEAR_DEG)
 
 def integers(ftype: str) -> st.SearchStrategy[int]:
     lo, hi = INT_RANGES[ftype]
-    edges = sorted({lo, hi, 0, min(1, hi), max(-1, lo), hi // 2})
-    return st.one_of(st.sampled_from(edges), st.integers(lo, hi))
+    return st.one_of(st.sampled_from(int_edges(ftype)), st.integers(lo, hi))
 
 
 def _e7(degrees: st.SearchStrategy[float], ftype: str) -> st.SearchStrategy[int]:

@@ -1,13 +1,53 @@
 """The one port allocator of the test suite: free loopback ports, never the same one twice
-in a test session (so parallel swarms and servers never collide)."""
+in a test session (so parallel swarms and servers never collide).
+
+Under pytest-xdist every worker is a process of its own, so the ports handed out are also
+written to a registry file of the test run (named after xdist's run id, locked while read
+and written): a port one worker handed out (and a swarm binds a moment later) is never the
+one another worker is given meanwhile."""
 
 from __future__ import annotations
 
+import fcntl
+import os
 import socket
+import tempfile
+from pathlib import Path
 
-__all__ = ["unused_tcp_port", "unused_udp_port"]
+__all__ = ["drop_registry", "unused_tcp_port", "unused_udp_port"]
 
 _handed_out: set[tuple[int, int]] = set()
+
+
+def _registry() -> Path | None:
+    """The file the xdist workers of this run share (None outside xdist)."""
+    run = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+    return Path(tempfile.gettempdir()) / f"mavswarm-test-ports-{run}" if run else None
+
+
+def _claim(kind: int, port: int) -> bool:
+    """Hand `port` out unless this run already did, in this process or another worker."""
+    if (kind, port) in _handed_out:
+        return False
+    registry = _registry()
+    if registry is not None:
+        key = f"{kind}:{port}"
+        with registry.open("a+") as f:
+            fcntl.flock(f, fcntl.LOCK_EX)
+            f.seek(0)
+            if key in f.read().split():
+                return False
+            f.write(f"{key}\n")
+    _handed_out.add((kind, port))
+    return True
+
+
+def drop_registry() -> None:
+    """Remove the run's registry (a worker whose session ended: a worker still running then
+    starts a new one, and its own ports it remembers itself)."""
+    registry = _registry()
+    if registry is not None:
+        registry.unlink(missing_ok=True)
 
 
 def _unused(kind: int, host: str) -> int:
@@ -15,8 +55,7 @@ def _unused(kind: int, host: str) -> int:
         with socket.socket(socket.AF_INET, kind) as s:
             s.bind((host, 0))
             port = s.getsockname()[1]
-        if (kind, port) not in _handed_out:
-            _handed_out.add((kind, port))
+        if _claim(kind, port):
             return port
     raise RuntimeError("no unused port found")
 

@@ -101,6 +101,7 @@ def test_an_installed_entry_point_is_listed_and_runs(tmp_path: Path) -> None:
     assert {r["tool_calls"] for r in _records(tmp_path / "noop")} == {0}
 
 
+@pytest.mark.slow
 def test_bad_specs_are_one_line_and_exit_2_before_anything_starts(tmp_path: Path) -> None:
     plugins = write_plugins(tmp_path)
     (tmp_path / "crashes.py").write_text("raise ImportError('needs torch')\n")

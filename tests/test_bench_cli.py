@@ -36,6 +36,7 @@ def test_run_then_report(tmp_path: Path) -> None:
     assert "Task Pass Rate" in report.stdout and (tmp_path / "rep" / "report.md").exists()
 
 
+@pytest.mark.slow
 def test_bad_arguments_say_what_is_wrong(tmp_path: Path) -> None:
     agent = _mavswarm("bench", "run", "--agent", "gpt-9")
     assert agent.returncode == 2 and "gpt-9" in agent.stderr

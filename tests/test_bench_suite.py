@@ -14,6 +14,7 @@ from benchmark.suite import SESSIONS_DIR, suite_paths
 from benchmark.validators import endpoints_used, leaf_count
 
 
+@pytest.mark.slow
 def test_the_full_suite_loads_and_covers_the_endpoints() -> None:
     paths, limit = suite_paths("full")
     assert limit is None and len(paths) == 125
@@ -62,6 +63,7 @@ def test_verified_generation_reproduces_a_shipped_session() -> None:
 
 
 @pytest.mark.parametrize("family", ["target_tracking", "resilience"])
+@pytest.mark.slow
 def test_every_tracking_and_resilience_session_redraws_from_its_seed(family: str) -> None:
     """Every first draw of the 25 sessions of these families passed the oracle (faults
     striking, for resilience), so drawing alone gives the shipped files."""

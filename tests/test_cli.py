@@ -16,6 +16,7 @@ from tests.cli_fixtures import MAVSWARM, read_until, start_up
 from tests.ports import unused_udp_port
 
 
+@pytest.mark.slow
 def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
     api, gcs, bind = unused_udp_port(), unused_udp_port(), unused_udp_port()
     truth = tmp_path / "run.truth.npz"
@@ -60,6 +61,7 @@ def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
          "include the GCS port 14550"),
     ],
 )
+@pytest.mark.slow
 def test_bad_options_give_a_clear_error(args: list[str], message: str):
     proc = subprocess.run([*MAVSWARM, "up", *args],
                           capture_output=True, text=True, timeout=30)

@@ -61,6 +61,7 @@ def _quiet_up(*extra: str) -> list[str]:
             str(unused_udp_port()), "--api-port", "0", "--gcs-port", "0", *extra]
 
 
+@pytest.mark.slow
 def test_a_swarm_too_big_for_this_machine_is_refused_with_the_limits(tmp_path: Path) -> None:
     proc = _mavswarm(*_quiet_up("--drones", "100000"), cwd=tmp_path)
     cores = len(os.sched_getaffinity(0))
@@ -127,11 +128,13 @@ def test_a_busy_port_is_one_line_for_every_server(tmp_path: Path) -> None:
     (["mqtt-bridge", "--mavlink", "bogus", "--mqtt", "mqtt://127.0.0.1:1"],
      ["cannot open the MAVLink connection 'bogus'"]),
 ])
+@pytest.mark.slow
 def test_missing_files_and_bad_values_are_one_line(tmp_path: Path, args: list[str],
                                                    needles: list[str]) -> None:
     _one_line_error(_mavswarm(*args, cwd=tmp_path), *needles)
 
 
+@pytest.mark.slow
 def test_a_report_of_no_records_is_an_error(tmp_path: Path) -> None:
     torn = tmp_path / "results.jsonl"
     torn.write_text('{"key": "s/t01/noop/0", "pass')  # a killed run's only, torn line
@@ -145,6 +148,7 @@ def test_a_report_of_no_records_is_an_error(tmp_path: Path) -> None:
     ("[1, 2]", "the top level must be a JSON object"),
     (json.dumps({**small_session([]), "tasks": []}), "the session has no tasks"),
 ])
+@pytest.mark.slow
 def test_a_session_file_with_nothing_to_run_is_said_once(tmp_path: Path, text: str,
                                                          needle: str) -> None:
     session = tmp_path / "edited.json"

@@ -145,6 +145,7 @@ def test_compare_json_has_the_generated_schemas_shape(tmp_path: Path) -> None:
     assert html.read_text().startswith("<!DOCTYPE html>")
 
 
+@pytest.mark.slow
 def test_compare_command_line(tmp_path: Path) -> None:
     a, b = _runs(tmp_path)
     out = tmp_path / "cmp"

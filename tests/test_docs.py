@@ -79,6 +79,7 @@ def mkdocs_build(root: Path, site: Path) -> subprocess.CompletedProcess[str]:
 
 
 @needs_mkdocs
+@pytest.mark.slow
 def test_the_documentation_site_builds_strictly(tmp_path: Path) -> None:
     built = mkdocs_build(ROOT, tmp_path / "site")
     assert built.returncode == 0, built.stdout + built.stderr
@@ -89,6 +90,7 @@ def test_the_documentation_site_builds_strictly(tmp_path: Path) -> None:
 
 
 @needs_mkdocs
+@pytest.mark.slow
 def test_the_strict_build_refuses_a_broken_link_and_a_page_outside_the_nav(
         tmp_path: Path) -> None:
     copy = tmp_path / "repo"

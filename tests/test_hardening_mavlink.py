@@ -24,10 +24,10 @@ hypothesis examples, one burst each. Invariants:
   (in-range values are configuration) and it is landed and disarmed, arms, takes off, flies
   one waypoint and lands there, per the ground truth `swarm.recorder`.
 
-Hypothesis draws in synchronous @given functions (derandomized or seeded, no database, and
-no constants taken from the project's imported source, tests/hypothesis_draws.py: the same
-frames on every run, whatever other test files the session collected) that collect their
-examples; the async test sends them.
+Hypothesis draws in synchronous @given functions (derandomized or seeded, no database, the
+whole project imported first, tests/hypothesis_draws.py: the same frames on every run,
+whatever other test files the session collected) that collect their examples; the async
+test sends them.
 """
 
 from __future__ import annotations
@@ -54,7 +54,6 @@ from tests.flight_check import (
     recover_and_fly,
     wait_truth,
 )
-from tests.hypothesis_draws import seed_only_draws
 from tests.mavlink_client import MavClient, mavlink, running_swarm, send_datagram
 from tests.mavlink_strategies import (
     BASELINES,
@@ -104,6 +103,7 @@ def limits(swarm, k: int) -> tuple:
 
 
 # ------------------------------------------------------------------ speeds
+@pytest.mark.slow
 async def test_change_speed_outside_the_airframe_range_is_denied() -> None:
     """DO_CHANGE_SPEED 1.4e-45 m/s was accepted and kept: ARM and TAKEOFF were then
     accepted and the vehicle stayed on the ground for good."""
@@ -337,9 +337,8 @@ async def test_storm_of_absurd_frames_leaves_every_vehicle_able_to_fly() -> None
     values = value_sweep()
     bursts: list[list] = [values[i:i + 100] for i in range(0, len(values), 100)]
     bursts.append(plausible_missions())  # a mission flown, whatever the storm's uploads drew
-    with seed_only_draws():  # the same frames whatever else the session collected
-        _collect_sweeps(bursts)
-        _collect_storm(bursts)
+    _collect_sweeps(bursts)  # the same frames whatever else the session collected
+    _collect_storm(bursts)  # (tests/hypothesis_draws.py)
     sent = [m for burst in bursts for m in burst]
     # the storm covers every handled message type, every command, every address
     assert {m.get_type() for m in sent} >= HANDLED_MESSAGES

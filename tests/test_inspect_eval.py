@@ -200,6 +200,7 @@ def test_an_inspect_solver_plays_a_task_with_the_registry_tools(
     assert tool_results[0]["status"] == "ok"
 
 
+@pytest.mark.slow
 def test_tasks_that_cannot_run_score_incorrect_with_the_reason(tmp_path: Path) -> None:
     broken = small_session(["takeoff_hold"])
     broken["tasks"][0]["checks"] = {"endpoint": "no_such_check", "parameters": {}}
@@ -241,6 +242,7 @@ def test_tools_are_the_registrys() -> None:
         assert d.parallel is False
 
 
+@pytest.mark.slow
 def test_family_and_suite_tasks_hold_their_tasks() -> None:
     easy = area_search(level="easy")
     assert len(easy.dataset) == 5 * 20

@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.cli_fixtures import ROOT
 from tests.import_layers import LAYERS, crossings
 
@@ -49,6 +51,7 @@ def test_a_planted_violation_is_found(tmp_path: Path) -> None:
                      ("mavlink_gateway/up.py", 2, "emulator.geo")]
 
 
+@pytest.mark.slow
 def test_loading_the_agent_side_loads_no_benchmark_or_emulator_module() -> None:
     code = ("import json, sys\n"
             f"for m in {list(AGENT_SIDE)!r}: __import__(m)\n"

@@ -113,6 +113,7 @@ async def test_a_key_is_sent_as_a_bearer_token_and_no_key_sends_no_authorization
         "Bearer sk-test", None, "Bearer sk-from-env"]
 
 
+@pytest.mark.slow
 async def test_server_errors_are_retried_then_end_in_a_model_error() -> None:
     with server([(500, "upstream hiccup"), ANSWER]) as llm:
         message, _ = await _complete(llm.base_url, retries=2)
@@ -130,6 +131,7 @@ async def test_a_refused_request_is_not_retried() -> None:
     assert len(llm.bodies) == 1
 
 
+@pytest.mark.slow
 async def test_unusable_answers_are_asked_again_then_end_in_a_model_error() -> None:
     with server([(200, "not json"), (200, "[1, 2]"), ANSWER]) as llm:
         message, _ = await _complete(llm.base_url, retries=2)

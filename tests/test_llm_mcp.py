@@ -108,6 +108,7 @@ async def test_calls_without_a_running_task_are_errors() -> None:
     assert "take_off" in _payload(unknown)["message"]
 
 
+@pytest.mark.slow
 async def test_stdio_server_in_a_subprocess() -> None:
     code = ("import anyio; from llm_tools import default_registry; "
             "from llm_tools.mcp_server import serve_stdio; "

@@ -186,6 +186,7 @@ def test_plans_are_deterministic() -> None:
         assert first == a.plan(start, goal) == b.plan(start, goal)
 
 
+@pytest.mark.slow
 def test_random_worlds_every_leg_is_clear() -> None:
     planned = 0
     for seed in range(20):

@@ -76,6 +76,7 @@ async def fly_away(client: MavClient, system: int, north_m: float) -> None:
     assert ack.result == 0
 
 
+@pytest.mark.slow
 async def test_bad_frames_are_dropped_and_counted_while_the_swarm_flies_on() -> None:
     rng = random.Random(1234)
     async with running_swarm(3, speed=10.0) as (swarm, client):
@@ -190,6 +191,7 @@ async def test_mavlink1_frames_are_understood_like_px4() -> None:
 
 
 @pytest.mark.parametrize("kind", ["datagram_per_frame", "burst"])
+@pytest.mark.slow
 async def test_a_flood_of_valid_requests_does_not_stop_the_flight(kind: str) -> None:
     async with running_swarm(2, speed=10.0) as (swarm, client):
         await fly_away(client, 1, 120.0)

@@ -115,6 +115,7 @@ async def test_invalid_parameters_are_denied_with_a_statustext_and_change_nothin
         assert state(swarm, 1) == before
 
 
+@pytest.mark.slow
 async def test_command_int_reposition_flies_there() -> None:
     async with running_swarm(2, speed=10.0) as (swarm, client):
         await arm_and_take_off(client, 1)
@@ -196,6 +197,7 @@ def rate_hz(client: MavClient, name: str, system: int, since: int) -> float:
     return (len(stamps) - 1) / (stamps[-1] - stamps[0])
 
 
+@pytest.mark.slow
 async def test_set_message_interval_changes_the_measured_rate() -> None:
     async with running_swarm(2) as (_swarm, client):
         start = len(client.received)

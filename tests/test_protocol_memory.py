@@ -181,6 +181,7 @@ def test_frames_for_unknown_systems_and_broadcast_pings_are_not_answered() -> No
     assert link.network.stats.peers == {CLIENT}
 
 
+@pytest.mark.slow
 def test_a_seeded_fuzz_storm_leaves_every_vehicle_answering_and_flying() -> None:
     n = 3
     link = MemoryLink(scenario=default_scenario(n))

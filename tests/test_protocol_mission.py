@@ -72,6 +72,7 @@ async def test_upload_download_and_clear() -> None:
         assert swarm.fleet.autopilots[0].mission.total == 0
 
 
+@pytest.mark.slow
 async def test_stalled_upload_is_re_requested_then_cancelled_keeping_the_old_mission() -> None:
     async with running_swarm(1) as (swarm, client):
         old = mission(client, 1, [(0, 20, 10)])
@@ -207,6 +208,7 @@ async def test_fence_and_rally_lists_start_empty_apart_from_the_mission() -> Non
         assert swarm.fleet.autopilots[0].mission.total == len(items)
 
 
+@pytest.mark.slow
 async def test_flown_mission_reports_each_item_reached_and_progress() -> None:
     async with running_swarm(2, speed=20.0) as (swarm, client):
         items = mission(client, 1, [(0, 40, 10), (30, 40, 15)], land=True)

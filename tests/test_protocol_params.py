@@ -175,6 +175,7 @@ async def _cruise_ground_speed(client: MavClient, system: int, north_m: float) -
     return max(speeds)
 
 
+@pytest.mark.slow
 async def test_param_set_real32_echoes_and_changes_the_flight() -> None:
     async with running_swarm(2, speed=10.0) as (swarm, client):
         ap1, ap2 = swarm.fleet.autopilots[:2]
@@ -195,6 +196,7 @@ async def test_param_set_real32_echoes_and_changes_the_flight() -> None:
         assert 7.0 <= fast <= 8.5, fast
 
 
+@pytest.mark.slow
 async def test_param_set_int32_uses_px4_bytewise_encoding() -> None:
     async with running_swarm(1) as (swarm, client):
         ap = swarm.fleet.autopilots[0]

@@ -74,6 +74,7 @@ async def test_the_reference_example_files_start_a_swarm(path: Path) -> None:
     await _flies(path)
 
 
+@pytest.mark.slow
 def test_up_starts_a_reference_file_and_says_what_it_mapped(tmp_path: Path) -> None:
     path = write_json(tmp_path / "ref.json", _airborne_reference())
     proc = start_up("--session", str(path), "--stepped", "--bind-host", "127.0.0.1",

@@ -8,6 +8,8 @@ import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from benchmark.report import write_report
 from benchmark.report_html import inspector_link
 from tests.cli_fixtures import MAVSWARM
@@ -23,6 +25,7 @@ def _two_runs(tmp_path: Path) -> tuple[Path, Path]:
     return a, b
 
 
+@pytest.mark.slow
 def test_several_runs_are_reported_apart(tmp_path: Path) -> None:
     a, b = _two_runs(tmp_path)  # both folders are named "oracle": ids oracle and oracle+
     out = tmp_path / "rep"

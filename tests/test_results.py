@@ -193,6 +193,7 @@ def _append_worker(path: str, worker: int, barrier: Any) -> None:
     log.close()
 
 
+@pytest.mark.slow
 def test_concurrent_appends_from_processes_keep_every_line_intact(tmp_path: Path) -> None:
     path = tmp_path / "results.jsonl"
     context = multiprocessing.get_context("spawn")

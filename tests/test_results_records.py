@@ -121,6 +121,7 @@ def _mangled(draw: st.DrawFn) -> tuple[int, bytes]:
 
 @FUZZ
 @given(mangled=_mangled())
+@pytest.mark.slow
 def test_fuzzed_lines_never_crash_never_add_a_task_and_name_their_line(
         tmp_path_factory: pytest.TempPathFactory, mangled: tuple[int, bytes]) -> None:
     index, line = mangled

@@ -82,6 +82,7 @@ def test_session_seed_is_sha256_of_the_key() -> None:
     assert all(0 <= s < 2**53 for s in seeds)
 
 
+@pytest.mark.slow
 def test_same_key_gives_identical_json(worlds: dict[tuple[str, str, int], Session]) -> None:
     for key in [("area_search", "easy", 1), ("area_assignment_and_patrol", "hard", 4),
                 ("target_assignment", "extreme", 2)]:
@@ -410,6 +411,7 @@ def test_drones_start_clustered_at_one_corner_base(
     assert len(corners_used) == 4
 
 
+@pytest.mark.slow
 def test_generated_worlds_load_and_drones_can_climb_out(
         worlds: dict[tuple[str, str, int], Session]) -> None:
     for key, w in worlds.items():

@@ -231,6 +231,7 @@ def test_needs_follow_the_session() -> None:
 
 # ------------------------------------------------------------------ every template
 @pytest.mark.parametrize("key", sorted(BY_KEY))
+@pytest.mark.slow
 def test_builds_on_every_fitting_session(key: str) -> None:
     template = BY_KEY[key]
     fitting = [v for v in views() if template.fits(v)]

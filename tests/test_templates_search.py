@@ -186,6 +186,7 @@ def test_fits_follow_the_families() -> None:
             assert BY_KEY[k].fits(view), (k, view.family)
 
 
+@pytest.mark.slow
 def test_builds_rarely_unfit(key: str) -> None:
     builds = _builds(key)
     assert len(builds) >= 4 * len(SEEDS)
@@ -255,6 +256,7 @@ def test_oracle_uses_known_ops_and_ids(key: str) -> None:
         assert draft.steps >= 1 and draft.flight_m >= 0.0 and draft.hover_s >= 0.0
 
 
+@pytest.mark.slow
 def test_visited_points_and_straight_legs_are_clear(key: str) -> None:
     for view, seed, draft in _builds(key):
         where: dict[str, tuple[float, float, float]] = {}

@@ -113,6 +113,7 @@ def test_run_in_a_terminal_shows_a_progress_bar(session: Path, tmp_path: Path) -
     assert "Task Pass Rate" in plain
 
 
+@pytest.mark.slow
 def test_generate_prints_lines_when_piped_and_a_bar_in_a_terminal(tmp_path: Path) -> None:
     args = ("bench", "generate", "--no-verify", "--only", "area_search-easy-1")
     piped = _piped(*args, "--out", str(tmp_path / "a"))

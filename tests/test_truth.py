@@ -257,6 +257,7 @@ def test_event_equality_survives_json() -> None:
     assert event.data["fence"]["ids"] == (1, 2)
 
 
+@pytest.mark.slow
 def test_memory_bounded_for_idle_swarm_over_an_hour() -> None:
     n, steps = 250, 180_000
     rec = TruthRecorder(_ids(n))
@@ -299,6 +300,7 @@ def _recordings(draw: st.DrawFn) -> tuple[int, float, list[tuple[float, list[boo
 
 @settings(max_examples=150, deadline=None)
 @given(recording=_recordings(), data=st.data())
+@pytest.mark.slow
 def test_trajectory_matches_naive_reference(
     recording: tuple[int, float, list[tuple[float, list[bool], bool]]], data: st.DataObject
 ) -> None:

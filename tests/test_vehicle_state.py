@@ -9,6 +9,8 @@ import ast
 import math
 from pathlib import Path
 
+import pytest
+
 from emulator.flight.autopilot import Autopilot
 from emulator.flight.fleet import Fleet
 from emulator.flight.mission import Cmd, MissionItem
@@ -191,6 +193,7 @@ def _reaches_in(path: Path, private: set[str]) -> list[str]:
     return found
 
 
+@pytest.mark.slow
 def test_no_module_uses_a_private_member_of_the_autopilot_or_its_parts() -> None:
     private = _private_members()
     assert {"_set_goal", "_stopped_by", "_setpoint", "_ap"} <= private

@@ -203,6 +203,7 @@ _coordinate = st.one_of(st.integers(-35, 35).map(float),
 @given(st.lists(st.tuples(_coordinate, _coordinate, st.sampled_from([0.0, 4.9, 5.0, 7.0, 12.0,
                                                                       20.0, 20.5, 99.0])),
                 min_size=1, max_size=40))
+@pytest.mark.slow
 def test_inside_obstacles_matches_per_point_shapely(
     points: list[tuple[float, float, float]],
 ) -> None:
@@ -456,6 +457,7 @@ def _check_flown_part(x0: float, y0: float, z0: float, x1: float, y1: float, z1:
 
 @settings(max_examples=100, deadline=None)
 @given(_xy, _xy, _z, _xy, _xy, _z)
+@pytest.mark.slow
 def test_flown_part_never_enters_a_protected_volume(
     x0: float, y0: float, z0: float, x1: float, y1: float, z1: float
 ) -> None:
@@ -465,6 +467,7 @@ def test_flown_part_never_enters_a_protected_volume(
 @settings(max_examples=100, deadline=None)
 @given(st.integers(0, len(_RANDOM_OBSTACLES) - 1), st.floats(0.0, 1.0), st.floats(0.02, 3.0),
        _z, st.floats(0.0, 2.0 * math.pi), st.floats(1.0, 200.0), _z)
+@pytest.mark.slow
 def test_moves_starting_close_to_an_obstacle(
     k: int, along: float, offset_m: float, z0: float, heading_rad: float, length_m: float,
     z1: float,

@@ -6,6 +6,7 @@
 
 import { getJson, pageUrl } from "./api.js";
 import { checkTree } from "./checks.js";
+import { navLinks } from "./nav.js";
 import { el } from "./panel.js";
 import { ReplayPlayer } from "./replay.js";
 import { buildWorld } from "./world.js";
@@ -114,8 +115,7 @@ export async function showCompare(root, params) {
         el("td", {}, byB.has(key(r)) ? el("a", { class: "side-by-side", href: pageUrl("/compare", { a, b, session: r.session, task: r.task, trial: r.trial }) }, "side by side") : ""))));
   }
   const t = report.pairs[0].overall;
-  root.replaceChildren(el("header", {}, el("h1", {}, "Compare"), el("a", { href: pageUrl("/leaderboard") }, "leaderboard"),
-    el("a", { href: pageUrl(`/runs/${side(a).console_run}`) }, "runs")),
+  root.replaceChildren(el("header", {}, el("h1", {}, "Compare"), navLinks("compare")),
   el("div", { class: "filters" }, "A ", chooser("a", a), " B ", chooser("b", b)),
   el("p", { id: "compare-summary" }, `A passes ${rowsA.filter((r) => r.passed).length}/${rowsA.length}, B passes ${rowsB.filter((r) => r.passed).length}/${rowsB.length}; ` +
     `${rowsA.filter(differs).length} tasks differ (${t.fail_to_pass} fail→pass, ${t.pass_to_fail} pass→fail, McNemar p = ${pText(t.mcnemar_p)})`),

@@ -8,6 +8,7 @@
 
 import { getAnswer, getJson, postJson, postText } from "./api.js";
 import { Map2D } from "./map2d.js";
+import { navLinks } from "./nav.js";
 import { el } from "./panel.js";
 import { buildWorld, shapeOutline } from "./world.js";
 
@@ -58,7 +59,7 @@ export async function showEditor(root) {
   const toolSel = el("select", { id: "editor-tool", onchange: (e) => { state.tool = e.target.value; } },
     ["select", "add drone", ...TARGET_KINDS.map((k) => `add target ${k}`), ...OBSTACLE_KINDS.map((k) => `add obstacle ${k}`)].map((t) => el("option", { value: t }, t)));
   root.replaceChildren(
-    el("header", {}, el("h1", {}, "Scenario editor")),
+    el("header", {}, el("h1", {}, "Scenario editor"), navLinks("editor")),
     el("div", { class: "filters" }, "start from ", source, shipped, fileInput, upload, family, level, index,
       el("button", { id: "start-load", onclick: () => start() }, "load"), undoButton, redoButton),
     el("main", { class: "live" },

@@ -3,6 +3,7 @@
 // a column to sort by it (again to reverse); rows on another suite than the first are marked.
 
 import { getJson, pageUrl } from "./api.js";
+import { navLinks } from "./nav.js";
 import { el } from "./panel.js";
 
 const pct = (v) => `${(v * 100).toFixed(1)} %`;
@@ -49,8 +50,7 @@ export async function showLeaderboard(root) {
         COLUMNS.map((c) => c.interval ? intervalCell(c.interval(r)) : el("td", {}, c.text ? c.text(r) : c.get(r))),
         el("td", {}, r.id === best.id ? "" : el("a", { href: pageUrl("/compare", { a: best.id, b: r.id }) }, `compare with ${best.id}`)))));
   }
-  root.replaceChildren(el("header", {}, el("h1", {}, "Leaderboard"), el("a", { href: pageUrl("/compare") }, "compare"),
-    el("a", { href: pageUrl("/runs") }, "runs")),
+  root.replaceChildren(el("header", {}, el("h1", {}, "Leaderboard"), navLinks("leaderboard")),
   el("p", { class: "muted" }, `${rows.length} runs. Intervals: 95 % bootstrap over whole sessions (tasks of a session share its world). ` +
     "Rows on another suite than the first are shaded: their rates are over other tasks."),
   table);
