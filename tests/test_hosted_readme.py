@@ -1,5 +1,5 @@
-"""The Python client the README shows for hosted runs, run as it is written (its code block
-cut from README.md), plays a hosted run to the end."""
+"""The Python client the hosted-runs page shows, run as it is written (its code block
+cut from docs/agents/hosted.md), plays a hosted run to the end."""
 
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
 
 def readme_client() -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "docs" / "agents" / "hosted.md").read_text(encoding="utf-8")
     found = re.search(r"<!-- hosted-client -->\n```python\n(.*?)```", text, re.S)
-    assert found is not None, "README.md has no hosted-client block"
+    assert found is not None, "docs/agents/hosted.md has no hosted-client block"
     return found.group(1)
 
 
