@@ -1,6 +1,6 @@
 """The agent protocol: what an agent receives for one task, what it may be built from, and the
 one method it implements. This is the public API plug-in agents are written against
-(`mavswarm bench run --agent package.module:Name`, README "Bring your own agent").
+(`mavswarm bench run --agent package.module:Name`, docs/agents/plugins.md).
 
 An agent is any object with an ``async def run(self, task: AgentTask, tools: AgentTools)``:
 

@@ -59,10 +59,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--agent", default="oracle", metavar="SPEC",
                      help="oracle (default), noop, react, workflow, an installed plug-in's "
                           "name, package.module:Name or path/to/file.py:Name (an agent, its "
-                          "class or a factory: README 'Bring your own agent'); NAME:per-drone "
+                          "class or a factory: docs/agents/plugins.md); NAME:per-drone "
                           "gives each drone its own instance. `mavswarm bench agents` lists them; "
                           "external: host the run for an agent outside this process "
-                          "(README 'Hosted runs')")
+                          "(docs/agents/hosted.md)")
     run.add_argument("--agent-timeout-s", type=float, default=600.0, metavar="S",
                      help="stop an agent that makes no tool call and lets no simulated time "
                           "pass for S wall seconds (hung); its task ends as agent_error "
@@ -171,7 +171,7 @@ def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_draw_arguments(gen: argparse.ArgumentParser) -> None:
-    """A researcher's draw: README 'Drawing your own suite'."""
+    """A researcher's draw: docs/benchmark/own-tasks.md."""
     gen.add_argument("--seed", default="", metavar="SECRET",
                      help="draw a private split: the shipped suite's distribution, other "
                           "sessions nobody draws again without SECRET")

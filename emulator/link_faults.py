@@ -291,7 +291,7 @@ class LinkGate:
 # ------------------------------------------------------------------ command line
 def add_link_arguments(parser: Any) -> None:
     """The link fault options of `mavswarm up` and `mavswarm bench run`."""
-    g = parser.add_argument_group("link faults (every vehicle; see README 'Faults')")
+    g = parser.add_argument_group("link faults (every vehicle; see docs/faults.md)")
     g.add_argument("--link-loss", type=float, default=None, metavar="RATE",
                    help="fraction of MAVLink frames lost, 0-1")
     g.add_argument("--link-latency-ms", type=float, default=None, metavar="MS",

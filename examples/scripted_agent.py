@@ -4,8 +4,8 @@ agent finishes.
 
     mavswarm bench run --agent examples/scripted_agent.py:ScriptedAgent --suite smoke
 
-It is written against the agent protocol alone (`agent_contract`, README "Bring your own
-agent"): `run(task, tools)`, the tools' outcomes, and `tools.concurrently` to fly the drones
+It is written against the agent protocol alone (`agent_contract`, docs/agents/plugins.md):
+`run(task, tools)`, the tools' outcomes, and `tools.concurrently` to fly the drones
 side by side under the lockstep clock. With ``:per-drone`` each drone gets its own instance,
 whose `tools.drone_ids` holds that drone only.
 """

@@ -25,7 +25,7 @@ def add_mqtt_arguments(parser: argparse.ArgumentParser, *, session: bool = True)
     """--mqtt URL [--mqtt-osd-hz HZ] [--mqtt-session NAME] on a command's parser."""
     parser.add_argument("--mqtt", metavar="URL", default=None,
                         help="publish on an MQTT broker: mqtt://[user:pass@]host[:port]"
-                             "[/prefix] (TLS: mqtts://..., ?ca=FILE); see README 'MQTT bus'")
+                             "[/prefix] (TLS: mqtts://..., ?ca=FILE); see docs/mqtt.md")
     parser.add_argument("--mqtt-osd-hz", type=float, default=2.0, metavar="HZ",
                         help="--mqtt: telemetry (osd) rate per drone, wall-clock Hz "
                              "(default 2)")

@@ -5,7 +5,7 @@ comes from the topic. Tools are the agent tools that act on one drone, with the 
 schemas, validation, statuses and messages (the same as REST, MCP and OpenAI tools). A
 request that cannot be parsed, names an unknown drone or tool, or contradicts its topic gets
 an error reply and changes nothing. Who may publish a request is the broker's business: the
-bus only listens where its ACL lets operators write (see README "MQTT bus").
+bus only listens where its ACL lets operators write (see docs/mqtt.md).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 whether the run is over. Units post their notices from whatever thread the backend hands
 them over in; every change is applied in the endpoint's event loop, where `/next` waits on it.
 
-`/next` semantics (README "Hosted runs"): a task on offer is handed out at once, to one
+`/next` semantics (docs/agents/hosted.md): a task on offer is handed out at once, to one
 caller only. With none on offer, the call waits for one while fewer tasks are out than
 sessions can be hosted at once (`--workers`, or fewer once fewer units are left); when that
 many are out already, it answers 409 (after a short grace, so an agent asking right after its

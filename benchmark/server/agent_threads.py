@@ -1,5 +1,5 @@
-"""The threads of a served agent's control, for the lockstep clock (README "Serving live
-sessions").
+"""The threads of a served agent's control, for the lockstep clock (docs/agents/tools.md,
+"Serving live sessions").
 
 Under `--clock lockstep` (the default of `serve` and `mcp`) a served task's clock runs only while
 every thread of its agent waits on the world, as in `bench run`: each thread is a `Thinker`

@@ -1,6 +1,6 @@
 """Link faults of a live session at run time (operators and admins): read and change the loss,
 latency with jitter, duplication, reordering and outage windows of every vehicle's link, per
-direction (emulator.link_faults; README "Faults").
+direction (emulator.link_faults; docs/faults.md).
 
     GET /sessions/{id}/link-faults                 the settings in force
     PUT /sessions/{id}/link-faults                 replace them (a session file's

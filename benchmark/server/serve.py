@@ -154,7 +154,7 @@ async def serve_rest(session_paths: Sequence[str | Path], *, host: str = DEFAULT
     `role[:session]=key` strings (or ApiKey); with none, keys are generated and printed to
     `out` (stdout by default) with the URL. `open_access` lets requests without a key act as
     the agent of the one session served (MultiUAV-Plat clients send none). `mqtt`: every
-    session started here also goes on that broker (README "MQTT bus"). `extend(app, hub,
+    session started here also goes on that broker (docs/mqtt.md). `extend(app, hub,
     keys)` adds routes of a layer above (the web console) and may return what to call with
     the base URL once the server listens. `clock`: lockstep (default) or stepped;
     `keys_per_drone`: generated agent keys are one per drone (per-drone agents)."""
