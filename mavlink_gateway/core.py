@@ -335,8 +335,10 @@ class GatewayCore:
 
     @staticmethod
     async def _hold(link: DroneLink) -> bool:
-        """Switch an airborne drone to HOLD (it brakes and stays); True if it was sent."""
-        if link.flight_state == "on_ground":
+        """Switch an airborne drone to HOLD (it brakes and stays); True if it was sent. An
+        armed drone is held even where telemetry still says it is on the ground: early in a
+        take-off the climb has begun before telemetry tells it."""
+        if link.flight_state == "on_ground" and not link.armed:
             return False
         try:
             await link.action.hold()

@@ -105,12 +105,8 @@ async def test_hold_on_the_ground_does_nothing_and_the_default_still_refuses_a_b
         assert s.ap("d1").position_m[0] < 800.0
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param("take_off", marks=pytest.mark.xfail(
-        strict=False, reason="known defect: on a stepped clock running flat out, a hold early in "
-        "the take-off climb can reach the gateway while its telemetry still says on_ground; no "
-        "HOLD then reaches the vehicle, which climbs on to the take-off altitude")),
-    "land", "return_home", "move_along_path", "hover"])
+@pytest.mark.parametrize("name", ["take_off", "land", "return_home", "move_along_path",
+                                  "hover"])
 async def test_hold_interrupts_every_kind_of_goal(name: str):
     async with gateway_session(tiny_scenario([vehicle(1)])) as s:
         gw, ap = s.gw, s.ap("d1")
