@@ -7,25 +7,19 @@ command (a drone on the ground refuses it, and no marker appears)."""
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import math
 import re
 import time
 from collections.abc import Iterator
-from dataclasses import replace
 from typing import Any
 
 import httpx
 import numpy as np
 import pytest
 
-from console.cli import swarm_console
-from emulator.clock import ClockConfig
-from emulator.scenario import default_scenario
-from emulator.swarm import PortPlan, Swarm
-from tests.browser_fixtures import LoopThread, map_view, open_page, screen_of, shot
-from tests.ports import unused_tcp_port, unused_udp_port
+from emulator.swarm import Swarm
+from tests.browser_fixtures import map_view, open_page, screen_of, shot
+from tests.console_server import swarm_with_console
 
 pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
 
@@ -36,29 +30,8 @@ SPOTS = [(0.0, 0.0), (30.0, 0.0), (0.0, 30.0), (30.0, 30.0)]
 @pytest.fixture(scope="module")
 def live() -> Iterator[tuple[Swarm, str]]:
     """Four drones 30 m apart, 5x real time, with the console of `up --web`."""
-    base = default_scenario(4)
-    vehicles = tuple(replace(v, position_m=(x, y, 0.0), home_m=(x, y, 0.0))
-                     for v, (x, y) in zip(base.vehicles, SPOTS, strict=True))
-    scenario = replace(base, vehicles=vehicles)
-    loop = LoopThread()
-    stack = contextlib.AsyncExitStack()
-
-    async def start() -> tuple[Swarm, str]:
-        ports = PortPlan(bind_host="127.0.0.1", bind_port=unused_udp_port(), api_port=0,
-                         gcs_port=0)
-        swarm = await stack.enter_async_context(
-            Swarm(scenario, clock=ClockConfig(speed=5.0), ports=ports))
-        ready: asyncio.Future[str] = asyncio.get_running_loop().create_future()
-        await stack.enter_async_context(swarm_console(
-            swarm, port=unused_tcp_port(), key=KEY,
-            on_ready=lambda url, _key: ready.set_result(url)))
-        return swarm, await asyncio.wait_for(ready, 30)
-
-    try:
-        yield loop.run(start())
-    finally:
-        loop.run(stack.aclose())
-        loop.close()
+    with swarm_with_console(SPOTS, KEY) as served:
+        yield served
 
 
 def _truth(swarm: Swarm, drone: str) -> tuple[float, float, float]:
