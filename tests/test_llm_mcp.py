@@ -12,7 +12,6 @@ from typing import Any
 
 import mcp_types as types
 import pytest
-import uvicorn
 from mcp import Client, StdioServerParameters
 
 from agent_contract import AgentTask, AgentTools
@@ -22,6 +21,7 @@ from benchmark.session_file import session_from_dict
 from llm_tools import OUTPUT_SCHEMA, default_registry
 from llm_tools.mcp_server import build_server, call_result, streamable_http_app
 from mavlink_gateway import Gateway
+from tests.asgi_fixtures import listening
 from tests.bench_fixtures import small_session
 
 BUDGET = TaskBudget(tool_calls=50, sim_time_s=600.0)
@@ -42,20 +42,9 @@ def _payload(result: types.CallToolResult) -> dict[str, Any]:
 
 @contextlib.asynccontextmanager
 async def _http_url(app: Any) -> AsyncIterator[str]:
-    """Serve an ASGI app with uvicorn on a free local port, in this event loop."""
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning",
-                                           lifespan="on"))
-    task = asyncio.create_task(server.serve())
-    while not server.started:
-        if task.done():
-            task.result()
-        await asyncio.sleep(0.01)
-    port = server.servers[0].sockets[0].getsockname()[1]
-    try:
-        yield f"http://127.0.0.1:{port}/mcp"
-    finally:
-        server.should_exit = True
-        await task
+    """Serve an ASGI app on a free local port, in this event loop: its MCP endpoint."""
+    async with listening(app) as url:
+        yield f"{url}/mcp"
 
 
 @contextlib.asynccontextmanager

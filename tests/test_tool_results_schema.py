@@ -5,15 +5,12 @@ surface's list of result statuses is the gateway's `Status` plus "error", from o
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import json
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import httpx
 import pytest
-import uvicorn
 from jsonschema import Draft202012Validator
 from mcp import Client
 from openai.types.chat import ChatCompletionMessage
@@ -29,28 +26,11 @@ from llm_tools.mcp_server import streamable_http_app
 from llm_tools.registry import ToolRegistry, served_registry
 from mavlink_gateway import Gateway, Outcome, Status
 from mqtt_bus.schemas import SCHEMAS
+from tests.asgi_fixtures import listening
 from tests.bench_fixtures import small_session
 
 AGENT_KEY = "key-agent"
 Call = Callable[[str, dict[str, Any]], Awaitable[dict[str, Any]]]
-
-
-@contextlib.asynccontextmanager
-async def _listening(app: Any) -> AsyncIterator[str]:
-    """Serve an ASGI app with uvicorn on a free local port in this event loop: its base URL."""
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning",
-                                           lifespan="on"))
-    task = asyncio.create_task(server.serve())
-    while not server.started:
-        if task.done():
-            task.result()
-        await asyncio.sleep(0.01)
-    port = server.servers[0].sockets[0].getsockname()[1]
-    try:
-        yield f"http://127.0.0.1:{port}"
-    finally:
-        server.should_exit = True
-        await task
 
 
 def _every_call(gateway: Gateway, registry: ToolRegistry) -> list[tuple[str, dict[str, Any]]]:
@@ -131,7 +111,7 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
         hub = Hub()
         hub.add_session(live)
         hub.add_key(AGENT_KEY, Role.AGENT, session.id)
-        async with _listening(create_app(hub)) as url, httpx.AsyncClient(
+        async with listening(create_app(hub)) as url, httpx.AsyncClient(
                 base_url=url, headers={"X-API-Key": AGENT_KEY}, timeout=60.0) as http:
             listed = (await http.get(f"/sessions/{session.id}/tools")).json()
             assert {t["name"]: t["output_schema"] for t in listed} == {
@@ -148,7 +128,7 @@ async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
         # MCP: Streamable HTTP, the official client (which checks structured content against
         # each tool's output schema itself and raises when it does not validate).
         current = [_tools(gateway)]
-        async with _listening(streamable_http_app(served, lambda: current[0])) as url, \
+        async with listening(streamable_http_app(served, lambda: current[0])) as url, \
                 Client(f"{url}/mcp") as client:
             listed = {t.name: t.output_schema for t in (await client.list_tools()).tools}
             assert listed == {spec.name: spec.output_schema for spec in served.specs()}
