@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from agent_contract import Agent, AgentOptions, AgentTask, AgentTools
 
 if TYPE_CHECKING:
-    from benchmark.session_file import Session
+    from benchmark.authoring.session_file import Session
 
 __all__ = ["BUILTIN_AGENTS", "ENTRY_POINT_GROUP", "LLM_AGENTS", "PER_DRONE", "RESERVED",
            "AgentListing", "AgentSpec", "AgentSpecError", "check_spec", "listing",

@@ -24,12 +24,12 @@ from pathlib import Path
 from typing import Any
 
 from benchmark.agent_plugins import ENTRY_POINT_GROUP
-from benchmark.backends import BACKENDS
-from benchmark.episode import CLOCKS
-from benchmark.hosted import EXTERNAL
-from benchmark.hosted.options import add_hosted_arguments
-from benchmark.report_html import DEFAULT_INSPECTOR_URL
-from benchmark.suite import SUITES, suite_paths
+from benchmark.authoring.suite import SUITES, suite_paths
+from benchmark.reporting.report_html import DEFAULT_INSPECTOR_URL
+from benchmark.running.backends import BACKENDS
+from benchmark.running.episode import CLOCKS
+from benchmark.running.hosted import EXTERNAL
+from benchmark.running.hosted.options import add_hosted_arguments
 from emulator.link_faults import add_link_arguments, link_faults_from_args
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 
@@ -191,13 +191,14 @@ def _add_draw_arguments(gen: argparse.ArgumentParser) -> None:
 
 
 def _generate(args: argparse.Namespace) -> int:
-    from benchmark.progress import ProgressBar
-    from benchmark.suite import Draw, generate_suite
+    from benchmark.authoring.suite import Draw
+    from benchmark.running.generation import generate_suite
+    from benchmark.running.progress import ProgressBar
     draw = Draw(secret=args.seed, families=tuple(args.families), levels=tuple(args.levels),
                 sessions_per_cell=args.sessions_per_cell, tasks=args.tasks_per_session,
                 templates=tuple(args.templates), replace=args.replace_templates)
     if args.world is not None:
-        from benchmark.world_tasks import generate_world_file
+        from benchmark.running.generation import generate_world_file
         print(f"wrote {generate_world_file(args.world, args.out, draw, not args.no_verify)}")
         return 0
     with ProgressBar("sessions", pass_rate=False) as bar:
@@ -214,12 +215,12 @@ def _generate(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from benchmark.agent_plugins import check_spec
-    from benchmark.metrics import summarize
-    from benchmark.orchestrator import RunPlan, check_session_files, run_benchmark
-    from benchmark.progress import ProgressBar
-    from benchmark.report import metrics_table, write_report
-    from benchmark.report_html import check_inspector_url
-    from benchmark.results import read_records
+    from benchmark.reporting.report import metrics_table, write_report
+    from benchmark.reporting.report_html import check_inspector_url
+    from benchmark.running.orchestrator import RunPlan, check_session_files, run_benchmark
+    from benchmark.running.progress import ProgressBar
+    from benchmark.running.results import read_records
+    from benchmark.scoring.metrics import summarize
     if args.agent != EXTERNAL:
         check_spec(args.agent)  # a bad --agent is one line, before anything starts
     if not args.agent_timeout_s > 0:
@@ -256,7 +257,7 @@ def _run(args: argparse.Namespace) -> int:
     else:
         from mqtt_bus import BenchBus
         run_name = re.sub(r"[^A-Za-z0-9_.:-]", "-", out.resolve().name)[:64] or "run"
-        from benchmark.results import ResultsError, read_task_records
+        from benchmark.running.results import ResultsError, read_task_records
         try:  # a resumed run first publishes what the file already holds
             earlier = (read_task_records(plan.results_path) if plan.results_path.exists()
                        else [])
@@ -287,8 +288,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _run_hosted(args: argparse.Namespace) -> int:
-    """--agent external: `_run` with the hosted run's endpoint around it (benchmark/hosted)."""
-    from benchmark.hosted.run import hosting
+    """--agent external: `_run` with the hosted run's endpoint around it
+    (benchmark/running/hosted)."""
+    from benchmark.running.hosted.run import hosting
     sessions = args.sessions or suite_paths(args.suite)[0]
     with hosting(workers=args.workers, units=args.trials * len(sessions), host=args.host,
                  port=args.port) as on_message:
@@ -303,14 +305,14 @@ def _link_faults_json(args: argparse.Namespace) -> dict[str, Any] | None:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from benchmark.fingerprint import check_poolable
-    from benchmark.metrics import summarize
-    from benchmark.report import metrics_table, write_report
-    from benchmark.report_html import check_inspector_url
-    from benchmark.report_runs import load_report_runs, write_runs_report
+    from benchmark.authoring.fingerprint import check_poolable
+    from benchmark.reporting.report import metrics_table, write_report
+    from benchmark.reporting.report_html import check_inspector_url
+    from benchmark.reporting.report_runs import load_report_runs, write_runs_report
+    from benchmark.scoring.metrics import summarize
     check_inspector_url(args.inspector_url)
     runs = load_report_runs(args.results)
-    # one suite unless asked (benchmark.fingerprint), though each run is reported apart
+    # one suite unless asked (benchmark.authoring.fingerprint), though each run is reported apart
     check_poolable([r for run in runs for r in run.records], allow_mixed=args.allow_mixed)
     out = args.out or runs[0].source.parent
     if len(runs) == 1:
@@ -329,9 +331,9 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from benchmark.compare import compare_paths, write_compare
-    from benchmark.compare.markdown import p_value, pct_interval
-    from benchmark.report_html import check_inspector_url
+    from benchmark.reporting.compare import compare_paths, write_compare
+    from benchmark.reporting.compare.markdown import p_value, pct_interval
+    from benchmark.reporting.report_html import check_inspector_url
     check_inspector_url(args.inspector_url)
     report = compare_paths(args.runs, baseline=args.baseline, intersect=args.intersect,
                            resamples=args.resamples, seed=args.seed)
@@ -364,7 +366,7 @@ def _agents(args: argparse.Namespace) -> int:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from benchmark.importer import import_session_file
+    from benchmark.authoring.importer import import_session_file
     taken: set[str] = set()
     for path in args.files:
         written, notes = import_session_file(path, args.out, taken=taken)
@@ -376,8 +378,8 @@ def _import(args: argparse.Namespace) -> int:
 
 def run_bench(args: argparse.Namespace) -> int:
     """Run a parsed `mavswarm bench` command; bad input is printed, exit 2."""
-    from benchmark.results import ResultsError
-    from benchmark.session_file import SessionFileError
+    from benchmark.authoring.session_file import SessionFileError
+    from benchmark.running.results import ResultsError
     hosted = getattr(args, "agent", None) == EXTERNAL
     handlers = {"generate": _generate, "run": _run_hosted if hosted else _run,
                 "report": _report, "import": _import, "agents": _agents, "compare": _compare}

@@ -10,10 +10,10 @@ an operator or admin key (`X-API-Key` header or `key` query parameter) unless th
 opened for local files only (console.auth: 401, 403; the WebSocket closes with 4401, 4403,
 4404). Bodies are bounded and parsed as on the agent surfaces (llm_tools.body_limit: 413 over
 1 MiB, 422 naming the field); session files are read from the session folders only
-(benchmark.session_folders).
+(benchmark.authoring.session_folders).
 
 `/leaderboard` ranks every (run, agent) served (`/api/leaderboard`, with intervals);
-`/api/compare?a=RUN&b=RUN` pairs two of them (benchmark.compare) for the compare view.
+`/api/compare?a=RUN&b=RUN` pairs two of them (benchmark.reporting.compare) for the compare view.
 """
 
 
@@ -29,8 +29,8 @@ from fastapi.responses import HTMLResponse, JSONResponse, Response
 from starlette.concurrency import run_in_threadpool
 from starlette.websockets import WebSocketDisconnect
 
+from benchmark.authoring.session_folders import SessionFolders, SessionPathError
 from benchmark.server.link_routes import LinkTarget, add_link_api
-from benchmark.session_folders import SessionFolders, SessionPathError
 from console.auth import ConsoleAuth, close_code
 from console.editor import (
     EditorError,

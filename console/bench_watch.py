@@ -1,7 +1,7 @@
 """`mavswarm bench run --web`: the console follows the sessions a benchmark run is flying.
 
 Sessions run wherever the backend puts them (this process, worker processes, Ray nodes) and
-publish live frames to the driver (`benchmark.live_channel`); `LiveBoard` keeps the latest
+publish live frames to the driver (`benchmark.running.live_channel`); `LiveBoard` keeps the latest
 frame of each, and the console, served from a thread of the driver, shows any of them (with
 several workers, the home page lists them to pick one). Watching takes no commands: hands-on
 commands would change the run's results.

@@ -20,12 +20,12 @@ from pathlib import Path
 from typing import Any
 
 from benchmark import cli as bench_cli
-from benchmark.replay_data import session_world
+from benchmark.authoring.session_folders import SessionFolders
+from benchmark.running.replay_data import session_world
 from benchmark.server import Hub
 from benchmark.server.link_routes import LinkTarget, session_link_target
 from benchmark.server.operator_rule import served_refusal
 from benchmark.server.serve import ApiKey, serve_asgi
-from benchmark.session_folders import SessionFolders
 from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
 from console.bench_watch import LiveBoard, serve_in_thread

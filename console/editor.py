@@ -5,7 +5,7 @@ is answered, naming the entity (`drones[2]`, ...) so the page can mark it, and n
 written.
 
 Session files are opened from the server's session folders only
-(benchmark.session_folders; the route reads them), or uploaded in a request's body; either
+(benchmark.authoring.session_folders; the route reads them), or uploaded in a request's body; either
 way `editable_session` turns the parsed JSON into what the page edits.
 """
 
@@ -20,10 +20,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from benchmark.importer import import_session
-from benchmark.scenarios import FAMILIES, LEVELS, SESSION_INDICES
-from benchmark.scenarios.generator import generate_world
-from benchmark.session_file import (
+from benchmark.authoring.importer import import_session
+from benchmark.authoring.scenarios import FAMILIES, LEVELS, SESSION_INDICES
+from benchmark.authoring.scenarios.generator import generate_world
+from benchmark.authoring.session_file import (
     SCHEMA,
     SessionFileError,
     dump_session,
@@ -65,7 +65,7 @@ def blank_session(width_m: float = 600.0, height_m: float = 600.0) -> dict[str, 
 
 def start_choices() -> dict[str, Any]:
     """What a generated level to start from is picked among: the benchmark's families
-    (benchmark.scenarios.families), levels and session indices."""
+    (benchmark.authoring.scenarios.families), levels and session indices."""
     return {"families": list(FAMILIES), "levels": list(LEVELS),
             "indices": list(SESSION_INDICES)}
 

@@ -4,7 +4,7 @@
     GET /api/editor/shipped/{id}     that session as the editor edits it (404: not shipped)
 
 A shipped session is named by its id, never by a path, and read from the shipped suite's
-folder only, as every session file is read (benchmark.session_folders). Saving under a
+folder only, as every session file is read (benchmark.authoring.session_folders). Saving under a
 shipped session's id is refused (console.editor.save_session).
 """
 
@@ -14,8 +14,8 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
-from benchmark.session_folders import SessionFolders, SessionPathError
-from benchmark.suite import SESSIONS_DIR
+from benchmark.authoring.session_folders import SessionFolders, SessionPathError
+from benchmark.authoring.suite import SESSIONS_DIR
 from console.editor import editable_session
 from console.shipped import edited_id, shipped_listing, shipped_path
 from llm_tools.input_limits import preview

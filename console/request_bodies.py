@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from benchmark.session_folders import MAX_SESSION_PATH_CHARS
+from benchmark.authoring.session_folders import MAX_SESSION_PATH_CHARS
 from llm_tools.input_limits import MAX_NAME_CHARS
 
 __all__ = ["CommandBody", "EditorSaveBody"]

@@ -2,7 +2,8 @@
 each task's replay data where `bench run` stored it) and ground-truth files.
 
 A results folder holds `results.jsonl` and, from runs that keep replays, `replay/` (see
-`benchmark.replay_data`). Older results have no `replay/`: their tasks still list, with a note
+`benchmark.running.replay_data`). Older results have no `replay/`: their tasks still list, with a
+note
 that no replay was recorded.
 """
 
@@ -14,16 +15,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from benchmark.compare.build import build_compare, summarize_run
-from benchmark.compare.runs import Run, runs_of_records
-from benchmark.replay_data import (
+from benchmark.reporting.compare.build import build_compare, summarize_run
+from benchmark.reporting.compare.runs import Run, runs_of_records
+from benchmark.running.replay_data import (
     encode_window,
     read_json_gz,
     replay_path,
     session_world,
     world_path,
 )
-from benchmark.results import ResultsError, read_records
+from benchmark.running.results import ResultsError, read_records
 from emulator.truth import TruthLog
 
 __all__ = ["NO_REPLAY_NOTE", "ReplayIndex", "ResultsRun", "TruthReplay", "open_paths"]

@@ -9,8 +9,8 @@ import re
 from pathlib import Path
 from typing import Any
 
-from benchmark.scenarios import all_session_keys, session_id
-from benchmark.suite import SESSIONS_DIR
+from benchmark.authoring.scenarios import all_session_keys, session_id
+from benchmark.authoring.suite import SESSIONS_DIR
 
 __all__ = ["edited_id", "shipped_ids", "shipped_listing", "shipped_path"]
 

@@ -10,10 +10,10 @@ import random
 from pathlib import Path
 from typing import Any
 
-from benchmark.generate import build_task
-from benchmark.scenarios import generate_world
-from benchmark.session_file import dump_session, session_from_dict
-from benchmark.templates import SessionView, template
+from benchmark.authoring.generate import build_task
+from benchmark.authoring.scenarios import generate_world
+from benchmark.authoring.session_file import dump_session, session_from_dict
+from benchmark.authoring.templates import SessionView, template
 
 __all__ = ["reference_session", "small_session", "write_json"]
 

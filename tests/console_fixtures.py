@@ -13,10 +13,10 @@ from typing import Any
 import httpx
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.episode import swarm_gateway
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
 from benchmark.server import Hub, LiveSession, Role, create_app
 from benchmark.server.session_runner import first_task
-from benchmark.session_file import session_from_dict
 from console.cli import console_for_hub
 from tests.bench_fixtures import small_session
 from tests.rest_fixtures import KEYS

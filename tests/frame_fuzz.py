@@ -1,7 +1,7 @@
 """A seeded generator of hostile MAVLink datagrams, cheap enough for millions of frames.
 
 The suite's one MAVLink frame fuzzer (tests/test_fuzz.py over real UDP, tests/memory_fuzz.py
-in memory, tests/test_codec.py, benchmarks/protocol_fuzz.py); its values come from
+in memory, tests/test_codec.py, perf/protocol_fuzz.py); its values come from
 tests/mavlink_values.py, which the Hypothesis strategies share.
 
 A corpus of valid frames is encoded once with pymavlink: every message type a vehicle handles

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.episode import run_session
-from benchmark.session_file import load_session
+from benchmark.authoring.session_file import load_session
+from benchmark.running.episode import run_session
 from llm_tools.registry import default_registry
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT

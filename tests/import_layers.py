@@ -17,7 +17,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["LAYERS", "Crossing", "crossings", "imports_of"]
+__all__ = ["LAYERS", "TIERS", "Crossing", "crossings", "imports_of", "tier_crossings"]
 
 _BOTTOM = frozenset({"mavlink_vocabulary"})
 LAYERS: dict[str, frozenset[str]] = {
@@ -33,6 +33,21 @@ LAYERS: dict[str, frozenset[str]] = {
                           "mqtt_bus", "benchmark"},
     "mavswarm": _BOTTOM | {"emulator", "mavlink_gateway", "agent_contract", "llm_tools",
                            "mqtt_bus", "benchmark", "console"},
+}
+
+# Inside a package, its parts in tiers: a part (a subpackage or a module) imports parts of its
+# own tier or of the tiers before it, never a later one. The benchmark: scoring knows nothing of
+# tasks being written, authoring nothing of runs, runs (and the server that runs sessions live)
+# nothing of reports; `cli` assembles them.
+TIERS: dict[str, tuple[frozenset[str], ...]] = {
+    "benchmark": (
+        frozenset({"scoring"}),
+        frozenset({"authoring"}),
+        frozenset({"oracle", "agents", "agent_plugins"}),
+        frozenset({"running", "server"}),
+        frozenset({"reporting"}),
+        frozenset({"cli", "__init__"}),
+    ),
 }
 
 
@@ -78,4 +93,37 @@ def crossings(root: Path, layers: Mapping[str, frozenset[str]] = LAYERS) -> list
                 top = module.split(".")[0]
                 if top in layers and top != package and top not in allowed:
                     found.append(Crossing(str(path.relative_to(root)), line, package, module))
+    return found
+
+
+def _part(module: str, package: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if parts[0] == package and len(parts) > 1 else None
+
+
+def tier_crossings(root: Path, tiers: Mapping[str, tuple[frozenset[str], ...]] = TIERS
+                   ) -> list[Crossing]:
+    """Every import inside one of `tiers`' packages from a part into a part of a later tier
+    (`from package import part` counts as importing that part)."""
+    found = []
+    for package, order in tiers.items():
+        rank = {part: k for k, group in enumerate(order) for part in group}
+        for path in sorted((root / package).rglob("*.py")):
+            relative = path.relative_to(root / package)
+            own = relative.parts[0].removesuffix(".py")
+            if own not in rank:
+                found.append(Crossing(str(path.relative_to(root)), 0, package,
+                                      f"{package}.{own} (in no tier)"))
+                continue
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            for line, module in imports_of(path.read_text(encoding="utf-8")):
+                part = _part(module, package)
+                if part is not None and rank.get(part, -1) > rank[own]:
+                    found.append(Crossing(str(path.relative_to(root)), line, package, module))
+            for node in ast.walk(tree):
+                if isinstance(node, ast.ImportFrom) and node.module == package and not node.level:
+                    for alias in node.names:
+                        if rank.get(alias.name, -1) > rank[own]:
+                            found.append(Crossing(str(path.relative_to(root)), node.lineno,
+                                                  package, f"{package}.{alias.name}"))
     return found

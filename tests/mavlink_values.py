@@ -2,7 +2,7 @@
 edges of every integer type, parameter names, command ids and the session origin.
 
 tests/frame_fuzz.py (the seeded frame generator behind tests/test_fuzz.py,
-tests/memory_fuzz.py and benchmarks/protocol_fuzz.py) and tests/mavlink_strategies.py (the
+tests/memory_fuzz.py and perf/protocol_fuzz.py) and tests/mavlink_strategies.py (the
 Hypothesis strategies of tests/test_hardening_mavlink.py) both take their number ranges from
 here, so a value added here reaches every fuzzer.
 """

@@ -1,5 +1,5 @@
 """A fuzz storm on a swarm's MAVLink network in memory, then proof that every vehicle still
-answers and flies (used by tests/test_protocol_memory.py and benchmarks/protocol_fuzz.py).
+answers and flies (used by tests/test_protocol_memory.py and perf/protocol_fuzz.py).
 
 The storm feeds datagrams of tests/frame_fuzz.py straight into the network's
 `receive_datagram`, takes what the swarm answers (undecoded), and runs one 20 ms turn of the

@@ -11,9 +11,9 @@ from typing import Any
 import httpx
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
 from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import session_from_dict
 from tests.bench_fixtures import small_session
 
 __all__ = ["KEYS", "Served", "as_role", "served"]

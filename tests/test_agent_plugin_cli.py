@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.suite import suite_paths
+from benchmark.authoring.suite import suite_paths
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM
 from tests.plugin_fixtures import write_plugins

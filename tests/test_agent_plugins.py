@@ -22,10 +22,10 @@ from benchmark.agent_plugins import (
     make_agent,
     parse_spec,
 )
-from benchmark.backends import Unit
-from benchmark.orchestrator import RunPlan, run_benchmark, run_unit
-from benchmark.results import read_records
-from benchmark.session_file import Session, session_from_dict
+from benchmark.authoring.session_file import Session, session_from_dict
+from benchmark.running.backends import Unit
+from benchmark.running.orchestrator import RunPlan, run_benchmark, run_unit
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.plugin_fixtures import write_plugins
 from tests.scripted_llm import call, scripted_llm

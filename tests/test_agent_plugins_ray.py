@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM
 from tests.plugin_fixtures import write_plugins

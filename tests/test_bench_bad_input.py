@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.episode import run_session
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
-from benchmark.session_file import SessionFileError, load_session, session_from_dict
+from benchmark.authoring.session_file import SessionFileError, load_session, session_from_dict
+from benchmark.running.episode import run_session
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from tests.bench_fixtures import reference_session, small_session, write_json
 
 

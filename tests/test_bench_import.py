@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.importer import SessionImportError, import_session, import_session_file
-from benchmark.session_file import load_session
+from benchmark.authoring.importer import SessionImportError, import_session, import_session_file
+from benchmark.authoring.session_file import load_session
 from tests.bench_fixtures import reference_session
 
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]

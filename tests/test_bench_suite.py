@@ -7,11 +7,11 @@ from collections import Counter
 
 import pytest
 
-from benchmark.generate import generate_session
-from benchmark.scenarios import LEVELS, SESSION_INDICES, all_session_keys, session_id
-from benchmark.session_file import dump_session, load_session
-from benchmark.suite import SESSIONS_DIR, suite_paths
-from benchmark.validators import endpoints_used, leaf_count
+from benchmark.authoring.scenarios import LEVELS, SESSION_INDICES, all_session_keys, session_id
+from benchmark.authoring.session_file import dump_session, load_session
+from benchmark.authoring.suite import SESSIONS_DIR, suite_paths
+from benchmark.running.generation import generate_session
+from benchmark.scoring.validators import endpoints_used, leaf_count
 
 
 @pytest.mark.slow

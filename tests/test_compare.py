@@ -13,8 +13,8 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from benchmark.compare import CompareError, compare_paths, compare_schema, write_compare
-from benchmark.compare.runs import task_fingerprint
+from benchmark.reporting.compare import CompareError, compare_paths, compare_schema, write_compare
+from benchmark.reporting.compare.runs import task_fingerprint
 from tests.cli_fixtures import MAVSWARM
 from tests.compare_fixtures import record, write_results
 

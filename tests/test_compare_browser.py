@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from benchmark.compare import compare_paths, write_compare
+from benchmark.reporting.compare import compare_paths, write_compare
 from tests.browser_fixtures import open_page, shot
 from tests.cli_fixtures import MAVSWARM, read_until
 from tests.compare_fixtures import record, write_results

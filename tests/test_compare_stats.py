@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import binomtest
 
-from benchmark.compare.stats import ClusterBootstrap, mcnemar_exact_p
+from benchmark.reporting.compare.stats import ClusterBootstrap, mcnemar_exact_p
 
 
 def test_mcnemar_exact_p_of_small_tables_by_hand() -> None:

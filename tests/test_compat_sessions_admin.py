@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from benchmark.server.compat_screenshot import OBSTACLE, STATION
+from benchmark.server.compat.screenshot import OBSTACLE, STATION
 from tests.compat_fixtures import KEYS, PlatClient, plat_server, plat_world
 
 pytestmark = pytest.mark.mavsdk

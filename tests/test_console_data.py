@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from benchmark.replay_data import (
+from benchmark.running.replay_data import (
     TOLERANCE_M,
     decode_paths,
     encode_window,

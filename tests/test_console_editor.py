@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from benchmark.scenarios import FAMILIES, LEVELS
-from benchmark.session_file import load_session
+from benchmark.authoring.scenarios import FAMILIES, LEVELS
+from benchmark.authoring.session_file import load_session
 from tests.browser_fixtures import (
     map_view,
     open_page,

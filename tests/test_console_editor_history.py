@@ -14,8 +14,8 @@ from typing import Any
 import httpx
 import pytest
 
-from benchmark.scenarios import all_session_keys, session_id
-from benchmark.session_file import load_session
+from benchmark.authoring.scenarios import all_session_keys, session_id
+from benchmark.authoring.session_file import load_session
 from console.app import ConsoleState
 from console.auth import ConsoleAuth
 from tests.browser_fixtures import map_view, open_page, screen_of, shot

@@ -155,9 +155,9 @@ async def test_a_task_schedules_hidden_failures_and_link_faults_from_its_start()
     import copy
     import json
 
-    from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
+    from benchmark.authoring.session_file import session_from_dict
     from benchmark.oracle import OracleAgent
-    from benchmark.session_file import session_from_dict
+    from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
     from tests.cli_fixtures import ROOT
 
     path = ROOT / "benchmark" / "sessions" / "target_assignment-easy-1.json"

@@ -15,17 +15,17 @@ from typing import Any
 
 import pytest
 
-from benchmark.episode import base_record, error_record
-from benchmark.fingerprint import (
+from benchmark.authoring.fingerprint import (
     MixedSuitesError,
     check_poolable,
     session_fingerprint,
     suite_fingerprint_of_files,
 )
-from benchmark.generate import generate_session
-from benchmark.scenarios import FAMILIES, LEVELS, generate_world, session_seed
-from benchmark.session_file import load_session
-from benchmark.suite import SESSIONS_DIR, Draw, suite_keys
+from benchmark.authoring.scenarios import FAMILIES, LEVELS, generate_world, session_seed
+from benchmark.authoring.session_file import load_session
+from benchmark.authoring.suite import SESSIONS_DIR, Draw, suite_keys
+from benchmark.running.episode import base_record, error_record
+from benchmark.running.generation import generate_session
 
 ROOT = Path(__file__).resolve().parent.parent
 MAVSWARM = [sys.executable, "-m", "mavswarm"]

@@ -12,9 +12,9 @@ from typing import Any
 import httpx
 import pytest
 
-from benchmark.episode import run_session
-from benchmark.hosted.agent import ExternalAgent
-from benchmark.session_file import load_session
+from benchmark.authoring.session_file import load_session
+from benchmark.running.episode import run_session
+from benchmark.running.hosted.agent import ExternalAgent
 from tests.hosted_fixtures import session_file
 
 pytestmark = pytest.mark.mavsdk

@@ -15,7 +15,7 @@ from typing import Any
 import httpx
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from llm_tools.input_limits import MAX_BODY_BYTES
 from tests.cli_fixtures import MAVSWARM
 from tests.hosted_fixtures import session_file, start_host

@@ -10,9 +10,9 @@ import time
 
 import pytest
 
-from benchmark.hosted import board as board_module
-from benchmark.hosted.board import AllOut, Board, NotYet
-from benchmark.hosted.offer import BudgetView, Notice, NoticeKind, TaskOffer
+from benchmark.running.hosted import board as board_module
+from benchmark.running.hosted.board import AllOut, Board, NotYet
+from benchmark.running.hosted.offer import BudgetView, Notice, NoticeKind, TaskOffer
 
 
 def _offer(key: str, session: str = "s", task: str = "t01") -> dict:

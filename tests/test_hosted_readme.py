@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.cli_fixtures import ROOT
 from tests.hosted_fixtures import session_file, start_host
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.bench_fixtures import write_json
 from tests.compat_fixtures import PlatClient, plat_world
 from tests.hosted_fixtures import start_host

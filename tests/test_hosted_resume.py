@@ -14,7 +14,7 @@ from typing import Any
 import httpx
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.hosted_fixtures import SCRIPT, compared, in_process_records, session_file, start_host
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]

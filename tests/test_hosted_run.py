@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.hosted_fixtures import (
     CLIENT,
     SCRIPT,

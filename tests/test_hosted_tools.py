@@ -10,7 +10,7 @@ import threading
 from typing import Any
 
 from agent_contract import BudgetExhausted
-from benchmark.hosted.task_tools import HostedTools
+from benchmark.running.hosted.task_tools import HostedTools
 from mavlink_gateway import Outcome, Status
 from mavlink_gateway.pacing import Thinker, run_as, run_concurrently
 

@@ -55,7 +55,7 @@ def test_the_suite_profile_is_derandomized_without_a_database() -> None:
 
 def test_the_whole_project_is_imported_before_the_first_test() -> None:
     names = import_project_source()
-    assert {"emulator.swarm", "mavlink_gateway.fleet", "benchmark.episode"} <= set(names)
+    assert {"emulator.swarm", "mavlink_gateway.fleet", "benchmark.running.episode"} <= set(names)
     assert all(name in sys.modules for name in names)
     assert not any(name.endswith("__main__") for name in names)
 
@@ -67,7 +67,7 @@ def test_draws_do_not_depend_on_what_was_imported_first() -> None:
     imported; without that, the literals Hypothesis borrows from the imported source differ
     and so do the draws."""
     few = _draws("emulator.geo", whole=True)
-    many = _draws("benchmark.episode,mavswarm.cli,llm_tools.registry", whole=True)
+    many = _draws("benchmark.running.episode,mavswarm.cli,llm_tools.registry", whole=True)
     assert len(few) == 300 and few == many
     assert _draws("emulator.geo", whole=False) != few
 

@@ -27,9 +27,9 @@ from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
-from benchmark.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
+from benchmark.authoring.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from llm_tools import default_registry
 from llm_tools.agents.react import SYSTEM_PROMPT, task_message
 from mavswarm.cli import main as mavswarm_main
@@ -226,7 +226,7 @@ def test_tools_are_the_registrys() -> None:
     task = sessions(sessions="area_search-easy-1", task_limit=1)
     sample = task.dataset[0]
     assert sample.id == "area_search-easy-1/t01"
-    from benchmark.importer import load_any_session
+    from benchmark.authoring.importer import load_any_session
     session, _ = load_any_session(ROOT / "benchmark/sessions/area_search-easy-1.json")
     assert sample.input == task_message(session.tasks[0].text,
                                         [v.id for v in session.scenario.vehicles])

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from tests.cli_fixtures import ROOT
-from tests.import_layers import LAYERS, crossings
+from tests.import_layers import LAYERS, TIERS, crossings, tier_crossings
 
 AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools")
 
@@ -21,6 +21,31 @@ def test_every_package_imports_only_the_layers_below_it() -> None:
     assert set(LAYERS) <= {p.name for p in ROOT.iterdir() if (p / "__init__.py").exists()}
     found = crossings(ROOT)
     assert not found, "\n".join(map(str, found))
+
+
+def test_the_benchmark_parts_import_only_their_own_tier_or_earlier_ones() -> None:
+    assert {p.name.removesuffix(".py") for p in (ROOT / "benchmark").iterdir()
+            if p.suffix == ".py" or (p / "__init__.py").exists()} <= set().union(
+                *TIERS["benchmark"])
+    found = tier_crossings(ROOT)
+    assert not found, "\n".join(map(str, found))
+
+
+def test_a_planted_tier_violation_is_found(tmp_path: Path) -> None:
+    for part in ("scoring", "running", "authoring"):
+        (tmp_path / "benchmark" / part).mkdir(parents=True)
+        (tmp_path / "benchmark" / part / "__init__.py").write_text("")
+    (tmp_path / "benchmark" / "scoring" / "up.py").write_text(
+        "from benchmark.authoring.suite import Draw\n")
+    (tmp_path / "benchmark" / "authoring" / "up.py").write_text(
+        "import benchmark.scoring.metrics\ndef f():\n    from benchmark import running\n")
+    (tmp_path / "benchmark" / "running" / "fine.py").write_text(
+        "from benchmark.authoring import suite\nfrom benchmark.running import episode\n")
+    (tmp_path / "benchmark" / "stray.py").write_text("")
+    found = sorted((c.path, c.line, c.imported) for c in tier_crossings(tmp_path))
+    assert found == [("benchmark/authoring/up.py", 3, "benchmark.running"),
+                     ("benchmark/scoring/up.py", 1, "benchmark.authoring.suite"),
+                     ("benchmark/stray.py", 0, "benchmark.stray (in no tier)")]
 
 
 def test_the_layers_form_no_cycle() -> None:
@@ -39,14 +64,15 @@ def test_a_planted_violation_is_found(tmp_path: Path) -> None:
     (tmp_path / "mavlink_gateway" / "up.py").write_text(
         "import json\nfrom emulator.geo import GeoOrigin\n")
     (tmp_path / "llm_tools" / "sneaky.py").write_text(
-        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import benchmark.episode\n"
-        "def f():\n    from benchmark.validators import evaluate\n"
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+        "    import benchmark.running.episode\n"
+        "def f():\n    from benchmark.scoring.validators import evaluate\n"
         "    return __import__('emulator.truth')\n")
     (tmp_path / "emulator" / "fine.py").write_text("from . import geo\nimport numpy\n")
     (tmp_path / "benchmark" / "fine.py").write_text("import llm_tools.registry\n")
     found = sorted((c.path, c.line, c.imported) for c in crossings(tmp_path))
-    assert found == [("llm_tools/sneaky.py", 3, "benchmark.episode"),
-                     ("llm_tools/sneaky.py", 5, "benchmark.validators"),
+    assert found == [("llm_tools/sneaky.py", 3, "benchmark.running.episode"),
+                     ("llm_tools/sneaky.py", 5, "benchmark.scoring.validators"),
                      ("llm_tools/sneaky.py", 6, "emulator.truth"),
                      ("mavlink_gateway/up.py", 2, "emulator.geo")]
 

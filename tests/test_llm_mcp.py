@@ -16,8 +16,8 @@ from mcp import Client, StdioServerParameters
 
 from agent_contract import AgentTask, AgentTools
 from agent_contract.protocol import TaskBudget
-from benchmark.episode import swarm_gateway
-from benchmark.session_file import session_from_dict
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
 from llm_tools import OUTPUT_SCHEMA, default_registry
 from llm_tools.mcp_server import build_server, call_result, streamable_http_app
 from mavlink_gateway import Gateway

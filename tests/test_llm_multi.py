@@ -8,9 +8,9 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import swarm_gateway
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
 from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import session_from_dict
 from tests.bench_fixtures import small_session
 
 pytestmark = pytest.mark.mavsdk

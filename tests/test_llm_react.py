@@ -7,8 +7,8 @@ import json
 
 import pytest
 
-from benchmark.episode import run_session
-from benchmark.session_file import session_from_dict
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import run_session
 from llm_tools import default_registry, openai_tools
 from llm_tools.agents import ModelConfig, ReactAgent
 from tests.bench_fixtures import small_session

@@ -17,6 +17,7 @@ import httpx
 import pytest
 from mcp import Client, StdioServerParameters
 
+from benchmark.authoring.session_file import dump_session
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.serve import (
     ApiKey,
@@ -27,7 +28,6 @@ from benchmark.server.serve import (
     serve_mcp,
     serve_rest,
 )
-from benchmark.session_file import dump_session
 from mavswarm.cli import main
 from tests.bench_fixtures import small_session
 from tests.cli_fixtures import MAVSWARM

@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-from benchmark.episode import run_session
-from benchmark.session_file import session_from_dict
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import run_session
 from llm_tools.agents import ModelConfig, WorkflowAgent
 from llm_tools.agents.blackboard import Blackboard
 from llm_tools.agents.workflow import REASK, parse_json_object, parse_plan, parse_verdict

@@ -20,9 +20,9 @@ import pytest
 
 from agent_contract import AgentTask, AgentTools
 from agent_contract.per_drone import PerDroneTeam
-from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
+from benchmark.authoring.session_file import load_session
 from benchmark.oracle import OracleAgent
-from benchmark.session_file import load_session
+from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from llm_tools.agents import ModelConfig, ReactAgent
 from mavlink_gateway import Status
 from tests.cli_fixtures import MAVSWARM, ROOT
@@ -240,7 +240,7 @@ async def test_react_agents_with_random_model_latency_are_deterministic(per_dron
 
 
 def test_per_drone_agents_are_named_on_the_command_line() -> None:
-    from benchmark.orchestrator import AGENTS, RunPlan, make_agent
+    from benchmark.running.orchestrator import AGENTS, RunPlan, make_agent
 
     session = load_session(SESSION)
     plan = RunPlan(sessions=(), agent="react:per-drone", model="m", base_url="http://x/v1")

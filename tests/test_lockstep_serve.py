@@ -27,11 +27,11 @@ import numpy as np
 import pytest
 
 from agent_contract import AgentTask
-from benchmark.episode import swarm_gateway
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
+from benchmark.running.tool_log import LoggedTools
 from benchmark.server.hub import Hub, LiveSession
 from benchmark.server.serve import serve_mcp, serve_rest
-from benchmark.session_file import session_from_dict
-from benchmark.tool_log import LoggedTools
 from llm_tools.registry import served_registry
 from mavlink_gateway.pacing import Thinker, run_as
 from tests.cli_fixtures import ROOT
@@ -105,7 +105,7 @@ async def _in_process(data: dict[str, Any]) -> dict[str, Any]:
 
 
 def _faults(session: Any) -> Any:
-    from benchmark.episode import session_link_faults
+    from benchmark.running.episode import session_link_faults
     return session_link_faults(session)
 
 

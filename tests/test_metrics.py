@@ -8,7 +8,8 @@ from typing import Any
 
 import pytest
 
-from benchmark.metrics import (
+from benchmark.reporting.report import metrics_table, render_markdown, write_report
+from benchmark.scoring.metrics import (
     Metrics,
     breakdown,
     compute_metrics,
@@ -16,7 +17,6 @@ from benchmark.metrics import (
     pass_hat_k,
     summarize,
 )
-from benchmark.report import metrics_table, render_markdown, write_report
 
 
 def _rec(

@@ -167,7 +167,7 @@ def test_target_tracking_progress_counts_what_is_tracked_at_the_end() -> None:
 def test_multiuav_plat_target_records_give_a_moving_target_where_it_is_now() -> None:
     from types import SimpleNamespace
 
-    from benchmark.server.compat_entities import entity_records
+    from benchmark.server.compat.entities import entity_records
     fleet = _fleet_with_mover()
     for _ in range(100):  # 2 s at 4 m/s
         fleet.step()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.results import read_records
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, read_until, start_up
 from tests.mosquitto_broker import Broker

@@ -13,13 +13,13 @@ import shapely
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from benchmark.episode import run_one_task
+from benchmark.authoring.session_file import session_from_dict
 from benchmark.oracle import OracleAgent
 from benchmark.oracle.derive import Unplannable, derive_plan, plannable_endpoints
 from benchmark.oracle.pursuit import Pursuit
 from benchmark.oracle.session_oracle import oracle_for_session
-from benchmark.session_file import session_from_dict
-from benchmark.validators import ENDPOINTS, parse_tree
+from benchmark.running.episode import run_one_task
+from benchmark.scoring.validators import ENDPOINTS, parse_tree
 
 FLIGHTS = settings(derandomize=True, database=None, deadline=None, max_examples=3,
                    phases=(Phase.explicit, Phase.generate),

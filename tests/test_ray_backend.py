@@ -20,9 +20,9 @@ from typing import Any
 
 import pytest
 
-from benchmark.backends import BackendUnavailable, make_backend
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
+from benchmark.running.backends import BackendUnavailable, make_backend
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
 from tests.scripted_llm import call, scripted_llm
@@ -195,7 +195,7 @@ def test_a_node_killed_mid_run_loses_and_duplicates_no_record(
 @pytest.mark.slow
 def test_generation_on_ray_writes_the_files_a_local_generation_writes(
         cluster: Any, tmp_path: Path) -> None:
-    from benchmark.suite import generate_suite
+    from benchmark.running.generation import generate_suite
     only = ["area_search-easy-2", "target_assignment-easy-3"]
     local = generate_suite(tmp_path / "local", only=only, verify=False)
     output = _finish(_bench(cluster, "generate", "--only", *only, "--no-verify",
@@ -227,8 +227,9 @@ def test_backend_arguments_are_checked() -> None:
 
 def test_the_local_backend_imports_no_ray() -> None:
     code = ("import json, sys\n"
-            "import benchmark.cli, benchmark.orchestrator, benchmark.backends, mavswarm.cli\n"
-            "from benchmark.backends import make_backend\n"
+            "import benchmark.cli, benchmark.running.orchestrator, benchmark.running.backends\n"
+            "import mavswarm.cli\n"
+            "from benchmark.running.backends import make_backend\n"
             "make_backend('local', workers=2)\n"
             "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] == 'ray')))\n")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,

@@ -24,9 +24,9 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.episode import run_session
-from benchmark.results import read_records
-from benchmark.session_file import session_from_dict
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import run_session
+from benchmark.running.results import read_records
 from llm_tools.agents import ChatClient, ModelConfig, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT

@@ -13,7 +13,7 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from benchmark.importer import import_session
+from benchmark.authoring.importer import import_session
 from emulator.clock import ClockConfig
 from emulator.flight.params import ParamStore
 from emulator.scenario import scenario_from_dict

@@ -11,9 +11,9 @@ from typing import Any
 
 import pytest
 
-from benchmark.importer import import_session_file
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
+from benchmark.authoring.importer import import_session_file
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from benchmark.server.serve import serve_rest
 from emulator.clock import ClockConfig
 from emulator.scenario import load_scenario, scenario_from_dict

@@ -14,17 +14,17 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.failed_checks import failed_leaves
-from benchmark.metrics import summarize
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.report import write_report
-from benchmark.report_html import (
+from benchmark.reporting.report import write_report
+from benchmark.reporting.report_html import (
     DEFAULT_INSPECTOR_URL,
     check_inspector_url,
     inspector_link,
     render_html,
 )
-from benchmark.results import read_records
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
+from benchmark.scoring.failed_checks import failed_leaves
+from benchmark.scoring.metrics import summarize
 from tests.bench_fixtures import small_session, write_json
 from tests.scripted_llm import call, scripted_llm
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.report import write_report
-from benchmark.report_html import inspector_link
+from benchmark.reporting.report import write_report
+from benchmark.reporting.report_html import inspector_link
 from tests.cli_fixtures import MAVSWARM
 from tests.compare_fixtures import record, write_results
 

@@ -17,15 +17,15 @@ import numpy as np
 import pytest
 from mcp import Client
 
-from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
-from benchmark.generate import build_task
+from benchmark.authoring.generate import build_task
+from benchmark.authoring.scenarios import LEVELS, generate_world
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.authoring.templates import SessionView
+from benchmark.authoring.templates.resilience import FAULT_AFTER_S, TEMPLATES
 from benchmark.oracle import OracleAgent
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
-from benchmark.scenarios import LEVELS, generate_world
-from benchmark.session_file import session_from_dict
-from benchmark.templates import SessionView
-from benchmark.templates.resilience import FAULT_AFTER_S, TEMPLATES
+from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from llm_tools import default_registry
 from llm_tools.mcp_server import build_server
 from tests.bench_fixtures import small_session, write_json

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from benchmark.results import ResultsError, ResultsLog, read_all_records, read_records
+from benchmark.running.results import ResultsError, ResultsLog, read_all_records, read_records
 
 
 def _record(key: str, **extra: Any) -> dict[str, Any]:

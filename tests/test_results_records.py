@@ -16,9 +16,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from benchmark.episode import base_record, error_record
-from benchmark.results import ResultsError, read_task_records
-from benchmark.task_record import TaskRecord, record_key, record_problem
+from benchmark.running.episode import base_record, error_record
+from benchmark.running.results import ResultsError, read_task_records
+from benchmark.running.task_record import TaskRecord, record_key, record_problem
 from tests.bench_fixtures import small_session, write_json
 
 FUZZ = settings(derandomize=True, database=None, deadline=None, print_blob=True,
@@ -170,7 +170,7 @@ def test_resume_stops_at_a_mangled_key_and_runs_nothing(tmp_path: Path) -> None:
 
 
 def test_resume_refuses_a_record_of_a_task_the_sessions_do_not_have(tmp_path: Path) -> None:
-    from benchmark.orchestrator import RunPlan, run_benchmark
+    from benchmark.running.orchestrator import RunPlan, run_benchmark
     data = small_session(["takeoff_hold"])
     session = write_json(tmp_path / "s.json", data)
     records = _records()

@@ -19,7 +19,7 @@ import pytest
 import shapely
 from shapely import affinity
 
-from benchmark.scenarios import (
+from benchmark.authoring.scenarios import (
     FAMILIES,
     LEVELS,
     PlacementError,
@@ -29,8 +29,8 @@ from benchmark.scenarios import (
     session_id,
     session_seed,
 )
-from benchmark.scenarios.families import RESILIENCE_FIXED_TARGETS, TRACKING_TARGETS
-from benchmark.scenarios.placement import Layout, ShapeTemplate, clearance_m
+from benchmark.authoring.scenarios.families import RESILIENCE_FIXED_TARGETS, TRACKING_TARGETS
+from benchmark.authoring.scenarios.placement import Layout, ShapeTemplate, clearance_m
 from emulator.scenario import CHARGE_AMOUNT_PERIOD_S, WIND_DIRECTIONS_DEG, scenario_from_dict
 
 Session = dict[str, Any]
@@ -91,7 +91,7 @@ def test_same_key_gives_identical_json(worlds: dict[tuple[str, str, int], Sessio
 
 def test_identical_json_in_a_fresh_interpreter_with_another_hash_seed(
         worlds: dict[tuple[str, str, int], Session]) -> None:
-    code = ("import json; from benchmark.scenarios import generate_world; "
+    code = ("import json; from benchmark.authoring.scenarios import generate_world; "
             "print(json.dumps(generate_world('area_assignment_and_patrol', 'moderate', 5), "
             "sort_keys=True))")
     env = {**os.environ, "PYTHONHASHSEED": "12345"}

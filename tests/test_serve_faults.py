@@ -1,4 +1,5 @@
-"""`mavswarm serve` plays a task's hidden faults as `bench run` does (benchmark.task_faults):
+"""`mavswarm serve` plays a task's hidden faults as `bench run` does
+(benchmark.authoring.task_faults):
 scheduled in simulated time from the task's start, recorded in the ground truth, undone when an
 operator moves the session on; a scripted client flying a resilience task over serve's REST
 routes (uvicorn on a free port, real HTTP) gets the verdict the benchmark's own episode gives
@@ -17,11 +18,11 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.episode import run_session
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import run_session
 from benchmark.server import Role, create_app
 from benchmark.server.hub import LiveSession
 from benchmark.server.serve import live_hub, serve_asgi
-from benchmark.session_file import session_from_dict
 from mavlink_gateway import Outcome, Status
 from tests.bench_fixtures import small_session, write_json
 from tests.test_resilience_family import TELLING, _telling

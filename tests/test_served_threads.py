@@ -21,9 +21,9 @@ import httpx
 import pytest
 
 from agent_contract import AgentTools
+from benchmark.running.tool_log import LoggedTools
 from benchmark.server.hub import Hub, LiveSession
 from benchmark.server.serve import parse_api_key, serve_rest
-from benchmark.tool_log import LoggedTools
 from llm_tools.batch import MAX_BATCH_CALLS
 from llm_tools.mcp_server import mcp_tools
 from llm_tools.registry import OUTPUT_SCHEMA, default_registry, served_registry

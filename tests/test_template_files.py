@@ -13,10 +13,10 @@ from typing import Any
 import jsonschema
 import pytest
 
-from benchmark.generate import build_task
-from benchmark.scenarios import FAMILIES, LEVELS, generate_world
-from benchmark.session_file import session_from_dict, task_from_dict
-from benchmark.template_files import (
+from benchmark.authoring.generate import build_task
+from benchmark.authoring.scenarios import FAMILIES, LEVELS, generate_world
+from benchmark.authoring.session_file import session_from_dict, task_from_dict
+from benchmark.authoring.template_files import (
     SCHEMA_PATH,
     TemplateFile,
     TemplateFileError,
@@ -28,10 +28,10 @@ from benchmark.template_files import (
     schema_text,
     template_of,
 )
-from benchmark.template_files.model import CATEGORIES as FILE_CATEGORIES
-from benchmark.template_files.placeholders import Filler
-from benchmark.templates import CATALOGUE, basic
-from benchmark.templates.base import CATEGORIES, SessionView
+from benchmark.authoring.template_files.model import CATEGORIES as FILE_CATEGORIES
+from benchmark.authoring.template_files.placeholders import Filler
+from benchmark.authoring.templates import CATALOGUE, basic
+from benchmark.authoring.templates.base import CATEGORIES, SessionView
 
 FILES = sorted(basic.FILES.glob("*.json"))
 
@@ -261,7 +261,7 @@ def test_hooks_entity_positions_faults_and_keys_are_filled(tmp_path: Path) -> No
         entities=[{"group": "drone_1", "kind": "drone"}, {"group": "spot", "kind": "inspectable"}],
         values=[{"name": "alt", "kind": "int", "min": 10, "max": 20},
                 {"name": "extra", "kind": "hook",
-                 "call": "benchmark.templates.resilience:lossy_delivery"}],
+                 "call": "benchmark.authoring.templates.resilience:lossy_delivery"}],
         phrasings=["{drone_1_name} from {drone_1_xy} to {spot_name} at {spot_xy}, then {drop}."],
         faults={"link": {"seed": "{link_seed}", "vehicles": {"{drone_1_id}": {
             "uplink": {"loss": 0.1}}}}})

@@ -14,9 +14,9 @@ from typing import Any
 import pytest
 import shapely
 
-from benchmark.scenarios import FAMILIES, LEVELS, generate_world
-from benchmark.templates import battery, communication, delivery, navigation
-from benchmark.templates.base import (
+from benchmark.authoring.scenarios import FAMILIES, LEVELS, generate_world
+from benchmark.authoring.templates import battery, communication, delivery, navigation
+from benchmark.authoring.templates.base import (
     CATEGORIES,
     SessionView,
     TaskDraft,
@@ -25,7 +25,7 @@ from benchmark.templates.base import (
     fmt_xy,
     tour_length,
 )
-from benchmark.validators import ENDPOINTS, leaf_count, parse_tree
+from benchmark.scoring.validators import ENDPOINTS, leaf_count, parse_tree
 from emulator.scenario import scenario_from_dict
 
 TEMPLATES: tuple[Template, ...] = (*navigation.TEMPLATES, *delivery.TEMPLATES,

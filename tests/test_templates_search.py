@@ -10,9 +10,9 @@ from typing import Any
 
 import pytest
 
-from benchmark.scenarios import FAMILIES, LEVELS, generate_world
-from benchmark.templates import assignment, coordination, search
-from benchmark.templates.base import (
+from benchmark.authoring.scenarios import FAMILIES, LEVELS, generate_world
+from benchmark.authoring.templates import assignment, coordination, search
+from benchmark.authoring.templates.base import (
     CATEGORIES,
     SessionView,
     TaskDraft,
@@ -23,7 +23,7 @@ from benchmark.templates.base import (
 from emulator.scenario import scenario_from_dict
 
 try:
-    from benchmark.validators import ENDPOINTS, parse_tree
+    from benchmark.scoring.validators import ENDPOINTS, parse_tree
 except ImportError:  # the validators package is optional for these tests
     ENDPOINTS, parse_tree = None, None
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from benchmark.progress import ProgressBar, task_line
+from benchmark.running.progress import ProgressBar, task_line
 from tests.bench_fixtures import small_session, write_json
 from tests.test_terminal_output import _in_terminal
 

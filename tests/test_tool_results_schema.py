@@ -17,9 +17,9 @@ from openai.types.chat import ChatCompletionMessage
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
-from benchmark.episode import swarm_gateway
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.running.episode import swarm_gateway
 from benchmark.server import Hub, LiveSession, Role, create_app
-from benchmark.session_file import session_from_dict
 from llm_tools import OUTPUT_SCHEMA, default_registry, parse_tool_calls
 from llm_tools.batch import BATCH
 from llm_tools.mcp_server import streamable_http_app

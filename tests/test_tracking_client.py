@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from benchmark.importer import import_session
-from benchmark.session_file import session_from_dict
-from benchmark.validators import CheckContext, evaluate, parse_tree
+from benchmark.authoring.importer import import_session
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.scoring.validators import CheckContext, evaluate, parse_tree
 from mavlink_gateway import Status
 from tests.gateway_fixtures import gateway_session
 

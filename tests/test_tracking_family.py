@@ -9,11 +9,11 @@ from pathlib import Path
 import pytest
 import shapely
 
-from benchmark.orchestrator import RunPlan, run_benchmark
-from benchmark.results import read_records
-from benchmark.scenarios import LEVELS, generate_world
-from benchmark.session_file import session_from_dict
-from benchmark.templates.tracking import TEMPLATES, track_points
+from benchmark.authoring.scenarios import LEVELS, generate_world
+from benchmark.authoring.session_file import session_from_dict
+from benchmark.authoring.templates.tracking import TEMPLATES, track_points
+from benchmark.running.orchestrator import RunPlan, run_benchmark
+from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 
 KEYS = [t.key for t in TEMPLATES]

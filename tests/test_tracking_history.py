@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from benchmark.server.compat_tracking import PERIODS_KEPT, RECENT_PERIODS, tracking_entry
-from benchmark.validators.reach import Visit
+from benchmark.scoring.validators.reach import Visit
+from benchmark.server.compat.tracking import PERIODS_KEPT, RECENT_PERIODS, tracking_entry
 from tests.compat_fixtures import KEYS, PlatClient, plat_server
 
 EXAMPLE = Path(__file__).parent / "reference" / "Example_Session_Target_Tracking.json"

@@ -22,7 +22,7 @@ from agent_contract.budget import (
     BudgetedTools,
 )
 from agent_contract.protocol import AgentTask, TaskBudget
-from benchmark.replay_data import read_json_gz, replay_path
+from benchmark.running.replay_data import read_json_gz, replay_path
 from tests.bench_fixtures import small_session, write_json
 from tests.browser_fixtures import ARTIFACTS, open_page, shot
 from tests.cli_fixtures import MAVSWARM, ROOT, read_until

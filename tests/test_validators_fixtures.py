@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from benchmark.validators import CheckContext, LeafResult, evaluate, parse_tree
+from benchmark.scoring.validators import CheckContext, LeafResult, evaluate, parse_tree
 from emulator.scenario import Scenario
 from emulator.truth import TruthEvent, TruthHistory, TruthLog
 

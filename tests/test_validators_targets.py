@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from benchmark.validators import CheckContext, evaluate, parse_tree
+from benchmark.scoring.validators import CheckContext, evaluate, parse_tree
 from emulator.world import Target
 from tests.scenario_fixtures import tiny_scenario, vehicle
 from tests.test_validators_fixtures import check, context, lawnmower, log, rows

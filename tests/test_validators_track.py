@@ -8,9 +8,13 @@ import numpy as np
 import pytest
 import shapely
 
-from benchmark.validators import evaluate, parse_tree
-from benchmark.validators.geometry import Footprint, heading_delta_deg, point_segment_distance
-from benchmark.validators.track import build_track
+from benchmark.scoring.validators import evaluate, parse_tree
+from benchmark.scoring.validators.geometry import (
+    Footprint,
+    heading_delta_deg,
+    point_segment_distance,
+)
+from benchmark.scoring.validators.track import build_track
 from emulator.scenario import Scenario
 from emulator.truth import TruthLog, TruthRecorder
 from emulator.world import Target

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from benchmark.validators import (
+from benchmark.scoring.validators import (
     ENDPOINTS,
     CheckDefinitionError,
     Group,

@@ -163,7 +163,7 @@ _OWNERS = {  # module -> classes whose private members stay inside them
     "emulator/flight/failures.py": ("VehicleFailures",),
 }
 _PACKAGES = ("emulator", "mavlink_gateway", "benchmark", "mqtt_bus", "console", "mavswarm",
-             "tests", "benchmarks")
+             "tests", "perf")
 
 
 def _private_members() -> set[str]:

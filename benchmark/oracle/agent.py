@@ -1,4 +1,4 @@
-"""The oracle agent: executes a task's hidden plan (see benchmark.templates.base for the
+"""The oracle agent: executes a task's hidden plan (see benchmark.authoring.templates.base for the
 operations) through `AgentTools`, planning obstacle-free paths over the world it knows."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
 from benchmark.oracle.derive import Unplannable, derive_plan
 from benchmark.oracle.planner import NoPath, PathPlanner
 from benchmark.oracle.pursuit import Pursuit
-from benchmark.validators.tree import Node
+from benchmark.scoring.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
 

@@ -7,7 +7,7 @@ of actions (visit, reach, photograph, hover, directed legs, messages, charging, 
 intercepting moving targets), a share of a team job (covering an area, reaching targets) or a
 wish for the end state (where, how high, on the ground or in the air, facing where, at home,
 near whom). The intentions become a three-phase plan in the operations of
-`benchmark.templates.base`: (1) take-offs and each drone's actions in the tree's order,
+`benchmark.authoring.templates.base`: (1) take-offs and each drone's actions in the tree's order,
 (2) team jobs, (3) end states. A leaf the planner cannot satisfy raises `Unplannable`, which
 names the leaf's path, its endpoint and the reason.
 """
@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from benchmark.oracle.intentions import DroneIntent, Intentions, Unplannable, target_point
-from benchmark.validators.tree import Leaf, Node
+from benchmark.scoring.validators.tree import Leaf, Node
 from emulator.scenario import Scenario
 
 __all__ = ["Unplannable", "derive_plan", "plannable_endpoints"]

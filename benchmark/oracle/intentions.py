@@ -1,5 +1,5 @@
 """What a derived plan wants of each drone, gathered leaf by leaf, and how it becomes a plan
-(the operations of `benchmark.templates.base`, plus ``meet``: fly to a moving target)."""
+(the operations of `benchmark.authoring.templates.base`, plus ``meet``: fly to a moving target)."""
 
 from __future__ import annotations
 

@@ -31,7 +31,7 @@ from typing import Any, TypeVar, cast
 
 from agent_contract import AgentTask, AgentTools, tool_names
 from agent_contract.per_drone import DroneView
-from benchmark.tool_log import LoggedTools
+from benchmark.running.tool_log import LoggedTools
 from mavlink_gateway import Gateway, Outcome, Status
 from mavlink_gateway.pacing import Thinker, run_as
 

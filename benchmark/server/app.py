@@ -15,21 +15,21 @@ from benchmark.server.agent_threads import call_tool as call_as_thread
 from benchmark.server.agent_threads import read_tool
 from benchmark.server.auth import live_session, require
 from benchmark.server.checks import add_check_routes
-from benchmark.server.compat import add_compat_routes
-from benchmark.server.compat_collision import add_compat_collision_routes
-from benchmark.server.compat_drones_admin import add_compat_drone_admin_routes
-from benchmark.server.compat_environments import add_compat_environment_routes
-from benchmark.server.compat_health import add_health_routes
-from benchmark.server.compat_histories import add_compat_history_routes
-from benchmark.server.compat_lists import add_compat_list_routes
-from benchmark.server.compat_request_history import add_compat_request_history
-from benchmark.server.compat_screenshot import add_compat_screenshot_routes
-from benchmark.server.compat_session_data import add_compat_session_data_routes
-from benchmark.server.compat_sessions_admin import add_compat_session_admin_routes
-from benchmark.server.compat_tasks import add_compat_task_routes
-from benchmark.server.compat_waypoints import add_compat_waypoint_routes
-from benchmark.server.compat_world import add_compat_world_routes
-from benchmark.server.compat_world_admin import add_compat_world_admin_routes
+from benchmark.server.compat.collision import add_compat_collision_routes
+from benchmark.server.compat.commands import add_compat_routes
+from benchmark.server.compat.drones_admin import add_compat_drone_admin_routes
+from benchmark.server.compat.environments import add_compat_environment_routes
+from benchmark.server.compat.health import add_health_routes
+from benchmark.server.compat.histories import add_compat_history_routes
+from benchmark.server.compat.lists import add_compat_list_routes
+from benchmark.server.compat.request_history import add_compat_request_history
+from benchmark.server.compat.screenshot import add_compat_screenshot_routes
+from benchmark.server.compat.session_data import add_compat_session_data_routes
+from benchmark.server.compat.sessions_admin import add_compat_session_admin_routes
+from benchmark.server.compat.tasks import add_compat_task_routes
+from benchmark.server.compat.waypoints import add_compat_waypoint_routes
+from benchmark.server.compat.world import add_compat_world_routes
+from benchmark.server.compat.world_admin import add_compat_world_admin_routes
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.link_routes import add_link_routes
 from benchmark.server.openapi_roles import add_role_docs

@@ -7,11 +7,17 @@ from typing import Annotated, Any
 from fastapi import Depends, FastAPI, HTTPException, Query, Request
 from starlette.datastructures import QueryParams
 
+from benchmark.scoring.validators import (
+    ENDPOINTS,
+    CheckContext,
+    CheckDefinitionError,
+    evaluate,
+    parse_tree,
+)
+from benchmark.scoring.validators.endpoint import Endpoint
 from benchmark.server.auth import live_session, require
-from benchmark.server.compat import resolve_session
+from benchmark.server.compat.commands import resolve_session
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
-from benchmark.validators import ENDPOINTS, CheckContext, CheckDefinitionError, evaluate, parse_tree
-from benchmark.validators.endpoint import Endpoint
 from llm_tools.input_limits import preview
 
 __all__ = ["add_check_routes", "query_parameters"]

@@ -9,8 +9,8 @@ from enum import StrEnum
 from typing import Any
 
 from agent_contract import AgentTools
-from benchmark.session_file import Session, TaskSpec
-from benchmark.session_folders import SessionFolders
+from benchmark.authoring.session_file import Session, TaskSpec
+from benchmark.authoring.session_folders import SessionFolders
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
 from mavlink_gateway import Gateway
@@ -78,7 +78,8 @@ class Hub:
         """Closes a live session's swarm and gateway (`DELETE /sessions/{id}`); None where the
         server cannot stop sessions while it runs."""
         self.session_folders = SessionFolders()
-        """Where `POST /sessions/load {"path": ...}` reads files (benchmark.session_folders)."""
+        """Where `POST /sessions/load {"path": ...}` reads files
+        (benchmark.authoring.session_folders)."""
 
     def add_session(self, live: LiveSession) -> None:
         if live.id in self.sessions:

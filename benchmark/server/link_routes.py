@@ -16,7 +16,7 @@ seconds, wrong types and numbers beyond the input bounds are a 422 naming the fi
 get no route here (403): a link degraded under them is something they notice from
 telemetry and outcomes. While a benchmark task runs for the session's agent a change is
 refused (409), since it would change the task's result; a world served without tasks takes
-it. A task whose hidden part schedules faults (benchmark.task_faults) keeps them from
+it. A task whose hidden part schedules faults (benchmark.authoring.task_faults) keeps them from
 operators too: only an admin reads the link while it runs.
 """
 

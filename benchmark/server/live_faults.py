@@ -1,4 +1,5 @@
-"""The hidden faults of a live session's current task (benchmark.task_faults), put in force by
+"""The hidden faults of a live session's current task (benchmark.authoring.task_faults), put in
+force by
 `mavswarm serve` exactly as `bench run` does: scheduled from the task's start in simulated time
 when the task becomes current, and undone (failures still pending dropped, the session's own
 link faults back) when an operator moves the session on. Both are recorded in the ground truth
@@ -7,7 +8,7 @@ outcomes."""
 
 from __future__ import annotations
 
-from benchmark.episode import session_link_faults
+from benchmark.running.episode import session_link_faults
 from benchmark.server.hub import LiveSession
 
 __all__ = ["end_task_faults", "start_task_faults"]

@@ -29,8 +29,9 @@ from typing import Any, Literal, TextIO
 
 import uvicorn
 
-from benchmark.episode import CLOCKS
-from benchmark.importer import load_any_session
+from benchmark.authoring.importer import load_any_session
+from benchmark.authoring.session_file import Session
+from benchmark.running.episode import CLOCKS
 from benchmark.server import Hub, create_app
 from benchmark.server.api_keys import ApiKey, generated_keys, parse_api_key
 from benchmark.server.api_keys import add_keys as _add_keys
@@ -43,7 +44,6 @@ from benchmark.server.session_runner import (
     current_task_tools,
     first_task,
 )
-from benchmark.session_file import Session
 from emulator.reference_mapping import notes_to_show
 from llm_tools.mcp_server import serve_stdio, streamable_http_app
 from llm_tools.registry import served_registry
@@ -241,7 +241,7 @@ async def serve_mcp(session_path: str | Path, *, transport: Transport = "stdio",
 def _sessions(args: argparse.Namespace) -> list[Path]:
     if args.sessions:
         return list(args.sessions)
-    from benchmark.suite import suite_paths
+    from benchmark.authoring.suite import suite_paths
     paths, _ = suite_paths(args.suite)
     return list(paths)
 
@@ -289,7 +289,7 @@ def _add_clock(parser: argparse.ArgumentParser) -> None:
 
 
 def _guarded(run: Callable[[], None]) -> int:
-    from benchmark.session_file import SessionFileError
+    from benchmark.authoring.session_file import SessionFileError
     try:
         run()
     except (SessionFileError, ValueError, OSError) as error:

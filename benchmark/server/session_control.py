@@ -6,12 +6,12 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
-from benchmark.episode import reset_for_task
+from benchmark.authoring.session_file import TaskSpec
+from benchmark.running.episode import reset_for_task
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.live_faults import end_task_faults, start_task_faults
 from benchmark.server.session_runner import task_tools
-from benchmark.session_file import TaskSpec
 
 __all__ = ["add_session_control_routes", "next_task"]
 

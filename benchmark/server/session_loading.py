@@ -1,6 +1,6 @@
 """Operators switch what a running server serves, as the reference's session controller does:
 `POST /sessions/load` loads another session (a file in the server's session folders,
-`benchmark.session_folders`, or the session JSON in the body; MultiUAV-Plat files are
+`benchmark.authoring.session_folders`, or the session JSON in the body; MultiUAV-Plat files are
 converted as `bench import` converts them), starts its swarm and makes it current;
 `POST /sessions/{id}/set-current` makes a live session current again. The current session is
 the one the MultiUAV-Plat routes act on when no session is named, and the session of a
@@ -11,11 +11,11 @@ from typing import Annotated, Any
 
 from fastapi import Depends, FastAPI, HTTPException
 
+from benchmark.authoring.session_file import Session
+from benchmark.authoring.session_folders import SessionFolders, SessionPathError
 from benchmark.server.auth import live_session, require
 from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from benchmark.server.session_runner import first_task, session_from_json
-from benchmark.session_file import Session
-from benchmark.session_folders import SessionFolders, SessionPathError
 from llm_tools.body_limit import json_body
 from llm_tools.input_limits import MAX_SESSION_NUMBER_ABS, preview
 

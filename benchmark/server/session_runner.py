@@ -12,12 +12,12 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
-from benchmark.episode import CLOCKS, session_link_faults, swarm_gateway
-from benchmark.importer import import_session
+from benchmark.authoring.importer import import_session
+from benchmark.authoring.session_file import Session, TaskSpec, session_from_dict
+from benchmark.running.episode import CLOCKS, session_link_faults, swarm_gateway
 from benchmark.server.agent_threads import ServedTools
 from benchmark.server.hub import LiveSession
 from benchmark.server.live_faults import start_task_faults
-from benchmark.session_file import Session, TaskSpec, session_from_dict
 from mavlink_gateway import Gateway
 
 __all__ = ["FREE_FLIGHT", "SessionRunner", "current_task_tools", "first_task",

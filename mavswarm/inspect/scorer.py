@@ -1,5 +1,5 @@
 """The scorer of the inspect tasks: the task's hidden checks run on the ground truth of its
-window (`benchmark.validators`), as `bench run` runs them.
+window (`benchmark.scoring.validators`), as `bench run` runs them.
 
 The value is CORRECT when the check tree passes, else INCORRECT. The metadata holds the check
 ratio (leaves passed / leaves), the check tree (its definition, ``tree``, and every leaf's
@@ -26,8 +26,8 @@ from inspect_ai.scorer import (
 )
 from inspect_ai.solver import TaskState
 
-from benchmark.failed_checks import failed_leaves
-from benchmark.validators import CheckContext, evaluate, leaf_count, tree_to_json
+from benchmark.scoring.failed_checks import failed_leaves
+from benchmark.scoring.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from mavswarm.inspect.solver import RECORD_KEY, take_truth
 
 __all__ = ["check_ratio", "swarm_checks"]

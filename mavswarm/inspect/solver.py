@@ -1,6 +1,6 @@
 """The solver of the inspect tasks: one benchmark task flown on a swarm of its own.
 
-It runs the same episode `bench run` does (`benchmark.episode.run_one_task`: the session's
+It runs the same episode `bench run` does (`benchmark.running.episode.run_one_task`: the session's
 swarm and gateway, the operator's reset, the task's faults, the clock, the agent under its
 budget, the play-out) with the ReAct agent thinking through inspect's model. The task's record
 (finish, tool calls, simulated time, tokens; as `bench run` writes it, less the replay) goes
@@ -16,9 +16,9 @@ from typing import Any
 
 from inspect_ai.solver import Generate, Solver, TaskState, solver
 
-from benchmark.episode import CLOCKS, EpisodeOptions, run_one_task
-from benchmark.session_file import Session, TaskSpec
-from benchmark.validators import CheckContext
+from benchmark.authoring.session_file import Session, TaskSpec
+from benchmark.running.episode import CLOCKS, EpisodeOptions, run_one_task
+from benchmark.scoring.validators import CheckContext
 from emulator.truth import TruthRecorder
 from mavswarm.inspect.agent import InspectReactAgent, InspectSolverAgent
 from mavswarm.inspect.dataset import load_session

@@ -3,7 +3,7 @@
 Each sample is one benchmark task flown on a swarm of its own by the ReAct agent
 (`swarm_agent`) and scored by its hidden checks (`swarm_checks`). Parameters (``-T``):
 
-- ``clock``: "lockstep" (default) or "stepped" (see `benchmark.episode.CLOCKS`);
+- ``clock``: "lockstep" (default) or "stepped" (see `benchmark.running.episode.CLOCKS`);
 - ``max_turns``: most model turns per task (default 40);
 - ``task_limit``: only the first N tasks of each session;
 - ``level`` (family tasks): one level or several, comma-separated;
@@ -18,7 +18,7 @@ from pathlib import Path
 from inspect_ai import Task, task
 from inspect_ai.solver import Solver
 
-from benchmark.suite import suite_paths
+from benchmark.authoring.suite import suite_paths
 from mavswarm.inspect.dataset import family_paths, session_dataset, session_paths
 from mavswarm.inspect.scorer import swarm_checks
 from mavswarm.inspect.solver import swarm_agent

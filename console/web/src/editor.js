@@ -52,7 +52,7 @@ export async function showEditor(root) {
   const redoButton = el("button", { id: "redo", title: "redo (Ctrl+Y, Ctrl+Shift+Z)", onclick: () => redo() }, "redo");
   const history = { undo: [], redo: [] };
   let shippedIds = new Set();
-  // families, levels and indices come from the server (benchmark.scenarios), filled in below
+  // families, levels and indices come from the server (benchmark.authoring.scenarios), filled in below
   const family = el("select", { id: "start-family" });
   const level = el("select", { id: "start-level" });
   const index = el("input", { id: "start-index", type: "number", value: 1, min: 1 });

@@ -1,0 +1,222 @@
+"""mavswarm benchmark session files (schema ``mavswarm.session/1``).
+
+A session file is one JSON object:
+
+- ``schema``: ``"mavswarm.session/1"``; ``id``, ``name``, ``description``;
+  ``family``, ``level``, ``index``, ``seed`` (generated sessions; an imported one has
+  ``family`` = its task type, ``level`` = ``"imported"``, ``index`` 0, ``seed`` null);
+  ``task_type``; ``map_size_m`` [width, height]; ``safety_margin_m``; ``origin``
+  (latitude_deg, longitude_deg, altitude_amsl_m of x = y = 0); ``environment`` (weather,
+  temperature, humidity, wind_speed m/s, wind_direction: fixed for the whole session).
+- ``drones``, ``targets``, ``obstacles``: entity objects with the MultiUAV-Plat entity fields
+  (positions ``{x, y, z}`` in local ENU metres; see ``emulator.scenario``).
+- ``tasks``: ordered list of task objects: ``id``, ``template``, ``category``, ``difficulty``,
+  ``text`` (what the agent is told), ``aliases`` (other phrasings), ``budget``
+  ({tool_calls, sim_time_s}), and two hidden parts, ``checks`` (the check tree) and
+  ``oracle`` (the reference plan, or null); optionally a third, ``faults``
+  (benchmark.authoring.task_faults).
+- ``link_faults`` (optional): the session's link faults (emulator.link_faults).
+
+Loading never lets one bad task stop the others: a task whose fields or check tree are invalid
+is kept with its `error` set, and is recorded as a task error when run.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from agent_contract.protocol import TaskBudget
+from benchmark.authoring.task_faults import TaskFaults, task_faults
+from benchmark.scoring.validators import CheckDefinitionError, Node, parse_tree
+from emulator.scenario import Scenario, ScenarioError, scenario_from_dict
+
+__all__ = [
+    "SCHEMA",
+    "Session",
+    "SessionFileError",
+    "TaskSpec",
+    "dump_session",
+    "load_session",
+    "read_session_json",
+    "session_from_dict",
+    "task_from_dict",
+]
+
+SCHEMA = "mavswarm.session/1"
+DIFFICULTIES = ("easy", "medium", "hard")
+
+
+class SessionFileError(ValueError):
+    """Raised when a session file cannot be used at all; names the file and the field."""
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """One task of a session. `checks`, `oracle` and `faults` are hidden from agents."""
+
+    id: str
+    template: str
+    category: str
+    difficulty: str
+    text: str
+    aliases: tuple[str, ...]
+    budget: TaskBudget | None
+    checks: Node | None
+    oracle: tuple[tuple[Mapping[str, Any], ...], ...] | None
+    error: str | None = None
+    faults: TaskFaults | None = None  # hidden, like checks and oracle
+
+
+@dataclass(frozen=True)
+class Session:
+    source: str
+    id: str
+    name: str
+    family: str
+    level: str
+    index: int
+    task_type: str
+    scenario: Scenario
+    tasks: tuple[TaskSpec, ...]
+    data: Mapping[str, Any]
+
+
+def _field(where: str, data: Mapping[str, Any], key: str, kind: type | tuple[type, ...],
+           default: Any = ...) -> Any:
+    if key not in data:
+        if default is ...:
+            raise ValueError(f"{where}: missing field {key!r}")
+        return default
+    value = data[key]
+    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+        shown = json.dumps(value)[:60]
+        raise ValueError(f"{where}.{key}: expected {_kind_name(kind)}, got {shown}")
+    return value
+
+
+def _kind_name(kind: type | tuple[type, ...]) -> str:
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    return " or ".join(k.__name__ for k in kinds)
+
+
+def _budget(where: str, raw: Any) -> TaskBudget:
+    if not isinstance(raw, Mapping):
+        raise ValueError(f"{where}: expected an object {{tool_calls, sim_time_s}}")
+    calls = _field(where, raw, "tool_calls", int)
+    sim_s = _field(where, raw, "sim_time_s", (int, float))
+    try:
+        return TaskBudget(calls, float(sim_s))
+    except ValueError as error:
+        raise ValueError(f"{where}: {error}") from None
+
+
+def _oracle(where: str, raw: Any) -> tuple[tuple[Mapping[str, Any], ...], ...] | None:
+    if raw is None:
+        return None
+    if not isinstance(raw, list) or not all(isinstance(p, list) for p in raw):
+        raise ValueError(f"{where}: expected a list of phases (lists of operations)")
+    for k, phase in enumerate(raw):
+        for j, op in enumerate(phase):
+            if not isinstance(op, Mapping) or not isinstance(op.get("op"), str):
+                raise ValueError(f"{where}[{k}][{j}]: expected an operation object with 'op'")
+    return tuple(tuple(phase) for phase in raw)
+
+
+def task_from_dict(k: int, raw: Any, scenario: Scenario) -> TaskSpec:
+    """Task k of a session; an invalid task comes back with `error` set."""
+    where = f"tasks[{k}]"
+    ident = raw.get("id") if isinstance(raw, Mapping) else None
+    ident = ident if isinstance(ident, str) and ident else f"#{k + 1}"
+    where = f"tasks[{k}] ({ident})"
+    try:
+        if not isinstance(raw, Mapping):
+            raise ValueError(f"{where}: expected an object")
+        text = _field(where, raw, "text", str)
+        if not text.strip():
+            raise ValueError(f"{where}.text: empty")
+        aliases = _field(where, raw, "aliases", list, [])
+        if not all(isinstance(a, str) for a in aliases):
+            raise ValueError(f"{where}.aliases: expected a list of strings")
+        difficulty = _field(where, raw, "difficulty", str, "medium")
+        if difficulty not in DIFFICULTIES:
+            raise ValueError(f"{where}.difficulty: expected one of {DIFFICULTIES}, "
+                             f"got {difficulty!r}")
+        budget = _budget(f"{where}.budget", _field(where, raw, "budget", Mapping))
+        if "checks" not in raw:
+            raise ValueError(f"{where}: missing field 'checks'")
+        try:
+            checks = parse_tree(raw["checks"], scenario, path=f"{where}.checks")
+        except CheckDefinitionError as error:
+            raise ValueError(str(error)) from None
+        oracle = _oracle(f"{where}.oracle", raw.get("oracle"))
+        faults = task_faults(raw, [v.id for v in scenario.vehicles], where)
+        return TaskSpec(ident, _field(where, raw, "template", str, "custom"),
+                        _field(where, raw, "category", str, "uncategorised"), difficulty,
+                        text, tuple(aliases), budget, checks, oracle, faults=faults)
+    except ValueError as error:
+        text = raw.get("text") if isinstance(raw, Mapping) else None
+        return TaskSpec(ident, str(raw.get("template", "custom")) if isinstance(raw, Mapping)
+                        else "custom", "uncategorised", "medium",
+                        text if isinstance(text, str) else "", (), None, None, None,
+                        error=str(error))
+
+
+def session_from_dict(data: Any, *, source: str = "<dict>") -> Session:
+    """Build a Session; raises SessionFileError for a file that is not a usable session."""
+    if not isinstance(data, Mapping):
+        raise SessionFileError(f"{source}: the top level must be a JSON object")
+    schema = data.get("schema")
+    if schema != SCHEMA:
+        hint = (" (it looks like a MultiUAV-Plat session: convert it with "
+                "`mavswarm bench import`)" if schema is None and "drones" in data else "")
+        raise SessionFileError(f"{source}: schema: expected {SCHEMA!r}, got "
+                               f"{json.dumps(schema)}{hint}")
+    try:
+        ident = _field("session", data, "id", str)
+        family = _field("session", data, "family", str)
+        level = _field("session", data, "level", str)
+        index = _field("session", data, "index", int, 0)
+        tasks_raw = _field("session", data, "tasks", list)
+    except ValueError as error:
+        raise SessionFileError(f"{source}: {error}") from None
+    try:
+        scenario = scenario_from_dict(data, source=source)
+    except ScenarioError as error:
+        raise SessionFileError(str(error)) from None
+    tasks = tuple(task_from_dict(k, raw, scenario) for k, raw in enumerate(tasks_raw))
+    seen: set[str] = set()
+    for task in tasks:
+        if task.id in seen:
+            raise SessionFileError(f"{source}: tasks: duplicate task id {task.id!r}")
+        seen.add(task.id)
+    return Session(source, ident, str(data.get("name", ident)), family, level, index,
+                   scenario.task_type, scenario, tasks, data)
+
+
+def read_session_json(path: str | Path) -> Any:
+    """The parsed JSON of a session file; raises SessionFileError naming the file."""
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise SessionFileError(f"{source}: cannot read: {error}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise SessionFileError(f"{source}: not valid JSON (truncated or corrupt?): "
+                               f"{error}") from None
+
+
+def load_session(path: str | Path) -> Session:
+    """Read a mavswarm session file; raises SessionFileError naming the file and the field
+    (`benchmark.authoring.importer.load_any_session` also takes MultiUAV-Plat files)."""
+    return session_from_dict(read_session_json(path), source=str(path))
+
+
+def dump_session(data: Mapping[str, Any]) -> str:
+    """The canonical text of a session file: stable key order, one trailing newline."""
+    return json.dumps(data, indent=1, ensure_ascii=False) + "\n"

@@ -1,0 +1,132 @@
+"""Where a benchmark run's sessions execute: the backends behind `mavswarm bench run --backend`.
+
+A run is a list of units, one per (session file, trial). A backend calls the same unit
+function for each, wherever it runs it, and passes every message the unit sends back to the
+driver's `handle` in the driver's process: ``("record", record)``, ``("error", text)`` or
+``("note", text)``. The driver alone writes the results file, whatever the backend.
+
+- ``local`` (the default): in this process with one worker, else in that many spawned worker
+  processes on this machine. Needs nothing beyond mavswarm itself.
+- ``ray``: as Ray tasks on a Ray cluster (`benchmark/running/ray_backend.py`), for the optional
+  ``ray`` extra; Ray is imported only when this backend is asked for.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import queue as queue_module
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+__all__ = ["BACKENDS", "Backend", "BackendUnavailable", "Handle", "LocalBackend", "Message",
+           "Unit", "UnitWork", "make_backend", "require_ray"]
+
+BACKENDS = ("local", "ray")
+
+Message = tuple[str, Any]
+Handle = Callable[[Message], None]
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One session file for one trial, and the records already written for it (task key ->
+    the end state that record carries), which the unit skips and resumes from."""
+
+    path: str
+    trial: int
+    done: Mapping[str, Any] = field(default_factory=dict)
+
+
+UnitWork = Callable[[Unit, Handle], None]
+"""Runs one unit, sending its messages as they happen. Backends that run it elsewhere pickle
+it, so it must be a module-level function (or a functools.partial of one)."""
+
+
+class BackendUnavailable(ValueError):
+    """Raised when a backend is asked for that this installation cannot provide."""
+
+
+class Backend(Protocol):
+    def run(self, work: UnitWork, units: Sequence[Unit], handle: Handle) -> None:
+        """Run every unit, handing each message to `handle` in this process as it arrives.
+        A unit that could not finish is reported as an ``("error", ...)`` message."""
+
+
+def require_ray() -> None:
+    """Raise BackendUnavailable, saying how to install it, when Ray cannot be imported."""
+    try:
+        import ray  # noqa: F401
+    except ImportError as error:
+        raise BackendUnavailable(f"the ray backend needs Ray, which cannot be imported "
+                                 f"({error}): pip install 'mavswarm[ray]'") from None
+
+
+def make_backend(name: str, *, workers: int, ray_address: str = "") -> Backend:
+    """The named backend, running at most `workers` units at once."""
+    if workers < 1:
+        raise ValueError("workers must be >= 1")
+    if name == "local":
+        if ray_address:
+            raise ValueError("--ray-address is for --backend ray")
+        return LocalBackend(workers)
+    if name == "ray":
+        require_ray()
+        from benchmark.running.ray_backend import RayBackend
+        return RayBackend(workers, address=ray_address)
+    raise ValueError(f"unknown backend {name!r}; choose one of {', '.join(BACKENDS)}")
+
+
+@dataclass(frozen=True)
+class LocalBackend:
+    """Units in this process (one worker) or in spawned worker processes on this machine."""
+
+    workers: int = 1
+
+    def run(self, work: UnitWork, units: Sequence[Unit], handle: Handle) -> None:
+        if self.workers == 1:
+            for unit in units:
+                work(unit, handle)
+        else:
+            _run_processes(work, list(units), handle, self.workers)
+
+
+def _worker(work: UnitWork, units: Any, results: Any) -> None:
+    while True:
+        unit = units.get()
+        if unit is None:
+            return
+        work(unit, results.put)
+        results.put(("unit_done", (unit.path, unit.trial)))
+
+
+def _run_processes(work: UnitWork, units: list[Unit], handle: Handle, workers: int) -> None:
+    ctx = multiprocessing.get_context("spawn")
+    unit_q, result_q = ctx.Queue(), ctx.Queue()
+    for unit in units:
+        unit_q.put(unit)
+    procs = [ctx.Process(target=_worker, args=(work, unit_q, result_q), daemon=True,
+                         name=f"bench-worker-{k}") for k in range(min(workers, len(units)))]
+    for p in procs:
+        unit_q.put(None)
+        p.start()
+    remaining = len(units)
+    try:
+        while remaining:
+            try:
+                message = result_q.get(timeout=1.0)
+            except queue_module.Empty:
+                if not any(p.is_alive() for p in procs):
+                    handle(("error", f"worker processes ended with {remaining} unit(s) "
+                                     "unfinished; re-run the same command to resume"))
+                    return
+                continue
+            if message[0] == "unit_done":
+                remaining -= 1
+            else:
+                handle(message)
+    finally:
+        for p in procs:
+            p.join(timeout=5.0)
+            if p.is_alive():
+                p.terminate()

@@ -1,0 +1,163 @@
+"""Throughput and results under model latency: the oracle thinks THINK_S before every tool call
+that acts on the world, as a model would, and many sessions run at once (PROCESSES worker
+processes, each holding up to SESSIONS sessions in one event loop).
+
+    ./dev perf think_latency --think-s 2 --processes 2 --sessions 12            # full suite
+    ./dev perf think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
+
+Prints wall time, pass rate, failed tasks and the peak memory of all workers together. With
+the lockstep clock, think time costs no simulated time, so every task the oracle passes
+without thinking it also passes while thinking; with the stepped clock it does not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import dataclasses
+import multiprocessing
+import os
+import random
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _common import machine_line
+
+from agent_contract import AgentTask, AgentTools
+from benchmark.authoring.session_file import load_session
+from benchmark.authoring.suite import SUITES, suite_paths
+from benchmark.oracle import OracleAgent
+from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
+
+_SPAWN = multiprocessing.get_context("spawn")
+
+
+class ThinkingTools:
+    """An agent's tools that wait `think_s` (plus up to `jitter_s`) of wall time before every
+    tool that acts on the world."""
+
+    def __init__(self, tools: AgentTools, think_s: float, jitter_s: float, rng: random.Random):
+        self._tools, self._think_s, self._jitter_s, self._rng = tools, think_s, jitter_s, rng
+
+    def __getattr__(self, name: str) -> Any:
+        member = getattr(self._tools, name)
+        if name == "concurrently" or not asyncio.iscoroutinefunction(member):
+            return member
+
+        async def call(*args: Any, **kwargs: Any) -> Any:
+            await asyncio.sleep(self._think_s + self._rng.uniform(0.0, self._jitter_s))
+            return await member(*args, **kwargs)
+        return call
+
+
+class ThinkingOracle:
+    name = "oracle"
+
+    def __init__(self, oracle: OracleAgent, think_s: float, jitter_s: float, seed: str):
+        self._oracle, self._think_s, self._jitter_s = oracle, think_s, jitter_s
+        self._rng = random.Random(seed)
+
+    async def run(self, task: AgentTask, tools: AgentTools) -> None:
+        thinking = ThinkingTools(tools, self._think_s, self._jitter_s, self._rng)
+        await self._oracle.run(task, thinking)  # type: ignore[arg-type]
+
+
+async def _sessions(paths: list[str], args: argparse.Namespace, out: Any) -> None:
+    gate = asyncio.Semaphore(args.sessions)
+
+    async def one(path: str) -> None:
+        async with gate:
+            session = load_session(path)
+            if args.task_limit is not None:
+                session = dataclasses.replace(session, tasks=session.tasks[:args.task_limit])
+            plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
+            agent = ThinkingOracle(OracleAgent(session.scenario, plans), args.think_s,
+                                   args.jitter_s, f"{args.seed}/{path}")
+            try:
+                await run_session(session, agent, emit=lambda r: out.put(("record", r)),
+                                  options=EpisodeOptions(clock=args.clock))
+            except Exception as error:  # report, keep the other sessions going
+                out.put(("error", f"{path}: {type(error).__name__}: {error}"))
+
+    await asyncio.gather(*(one(p) for p in paths))
+
+
+def _worker(paths: list[str], args: argparse.Namespace, out: Any) -> None:
+    import logging
+    logging.disable(logging.WARNING)
+    asyncio.run(_sessions(paths, args, out))
+    out.put(("done", os.getpid()))
+
+
+def _rss_mb(pids: list[int]) -> float:
+    total = 0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/status") as f:
+                total += next(int(line.split()[1]) for line in f if line.startswith("VmRSS"))
+        except (OSError, StopIteration):
+            pass
+    return total / 1024.0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--suite", choices=SUITES, default="full")
+    parser.add_argument("--limit", type=int, default=0, help="first N sessions only")
+    parser.add_argument("--only", default="", help="sessions whose id contains this text")
+    parser.add_argument("--think-s", type=float, default=2.0)
+    parser.add_argument("--jitter-s", type=float, default=0.0)
+    parser.add_argument("--clock", choices=CLOCKS, default="lockstep")
+    parser.add_argument("--processes", type=int, default=2)
+    parser.add_argument("--sessions", type=int, default=8, help="sessions at once per process")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    suite, args.task_limit = suite_paths(args.suite)
+    paths = [str(p) for p in suite if args.only in p.stem][: args.limit or None]
+    print(machine_line())
+    print(f"{len(paths)} sessions, think {args.think_s:g} s (+{args.jitter_s:g}) per call, "
+          f"clock {args.clock}, {args.processes} processes x {args.sessions} sessions")
+    queue = _SPAWN.Queue()
+    chunks = [paths[i::args.processes] for i in range(args.processes)]
+    workers = [_SPAWN.Process(target=_worker, args=(c, args, queue)) for c in chunks if c]
+    start = time.perf_counter()
+    for w in workers:
+        w.start()
+    records: list[dict[str, Any]] = []
+    errors: list[str] = []
+    finished, peak_mb = 0, 0.0
+    pids = [w.pid for w in workers if w.pid is not None]
+    while finished < len(workers):
+        peak_mb = max(peak_mb, _rss_mb(pids))
+        try:
+            kind, value = queue.get(timeout=1.0)
+        except Exception:
+            continue
+        if kind == "record":
+            records.append(value)
+        elif kind == "error":
+            errors.append(value)
+        else:
+            finished += 1
+    wall = time.perf_counter() - start
+    for w in workers:
+        w.join()
+    passed = sum(r["passed"] for r in records)
+    print(f"wall {wall:.0f} s; {passed}/{len(records)} tasks passed "
+          f"({100.0 * passed / max(1, len(records)):.1f} %); peak RSS of the workers "
+          f"{peak_mb:.0f} MB; {len(errors)} session errors")
+    for r in records:
+        if not r["passed"]:
+            failed = [c for c in r["checks"] if not c["passed"]]
+            print(f"  FAIL {r['key']}: " + "; ".join(
+                f"{c['endpoint']} {c.get('value')}" for c in failed[:3]))
+    for e in errors[:10]:
+        print("  error", e)
+
+
+if __name__ == "__main__":
+    main()
