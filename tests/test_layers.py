@@ -4,6 +4,7 @@ emulator, so no validator, hidden task data or ground truth can reach an agent."
 
 from __future__ import annotations
 
+import ast
 import json
 import subprocess
 import sys
@@ -89,3 +90,19 @@ def test_loading_the_agent_side_loads_no_benchmark_or_emulator_module() -> None:
     assert "agent_contract.tools" in loaded and "llm_tools.mcp_server" in loaded
     below = [m for m in loaded if m.split(".")[0] in ("benchmark", "emulator", "mavswarm")]
     assert not below, below
+
+
+def test_every_package_says_what_it_is_and_names_its_public_surface() -> None:
+    lacking = []
+    for package in LAYERS:
+        for init in sorted((ROOT / package).rglob("__init__.py")):
+            if "node_modules" in init.parts:
+                continue
+            tree = ast.parse(init.read_text(encoding="utf-8"))
+            doc = ast.get_docstring(tree) or ""
+            names = {t.id for n in tree.body if isinstance(n, ast.Assign | ast.AnnAssign)
+                     for t in (n.targets if isinstance(n, ast.Assign) else [n.target])
+                     if isinstance(t, ast.Name)}
+            if len(doc.split()) < 6 or "__all__" not in names:
+                lacking.append(str(init.relative_to(ROOT)))
+    assert not lacking, lacking
