@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from benchmark.agent_plugins import ENTRY_POINT_GROUP
+from agents.plugins import ENTRY_POINT_GROUP
 from benchmark.backends import BACKENDS
 from benchmark.episode import CLOCKS
 from benchmark.hosted import EXTERNAL
@@ -213,7 +213,7 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from benchmark.agent_plugins import check_spec
+    from agents.plugins import check_spec
     from benchmark.metrics import summarize
     from benchmark.orchestrator import RunPlan, check_session_files, run_benchmark
     from benchmark.progress import ProgressBar
@@ -352,7 +352,7 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _agents(args: argparse.Namespace) -> int:
-    from benchmark.agent_plugins import listing
+    from agents.plugins import listing
     rows = listing()
     width = max(len(r.name) for r in rows) + 2
     for row in rows:

@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent
+from agents.oracle import OracleAgent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
-from benchmark.oracle import OracleAgent
 from benchmark.scenarios import SESSION_INDICES, generate_world
 from benchmark.session_file import (
     Session,

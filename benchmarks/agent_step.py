@@ -15,10 +15,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from agents.llm import ModelConfig, ReactAgent
+from agents.llm.openai_model import ChatClient
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
-from llm_tools.agents import ModelConfig, ReactAgent
-from llm_tools.agents.chat import ChatClient
 from tests.bench_fixtures import small_session
 from tests.scripted_llm import call, scripted_llm
 

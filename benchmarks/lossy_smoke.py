@@ -27,8 +27,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from agents.oracle import OracleAgent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
-from benchmark.oracle import OracleAgent
 from benchmark.session_file import load_session
 from benchmark.suite import SMOKE_TASKS, suite_paths
 from emulator.link_faults import LinkFaults, LinkProfile

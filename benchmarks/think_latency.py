@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_line
 
 from agent_contract import AgentTask, AgentTools
+from agents.oracle import OracleAgent
 from benchmark.episode import CLOCKS, EpisodeOptions, run_session
-from benchmark.oracle import OracleAgent
 from benchmark.session_file import load_session
 from benchmark.suite import SUITES, suite_paths
 

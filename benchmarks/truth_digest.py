@@ -24,8 +24,8 @@ from pathlib import Path
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import machine_line, table
 
+from agents.oracle import OracleAgent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
-from benchmark.oracle import OracleAgent
 from benchmark.session_file import load_session
 from benchmark.suite import SESSIONS_DIR, suite_paths
 

@@ -1,4 +1,4 @@
-"""Plug-in agents (`benchmark.agent_plugins`): specs resolved from their text, factories given
+"""Plug-in agents (`agents.plugins`): specs resolved from their text, factories given
 the run's options, bad plug-ins refused before a run or ended as their tasks' agent_error
 records while the run goes on, a hung agent stopped by the wall-clock guard (and only a hung
 one), and the example LLM loop against a scripted OpenAI-compatible server."""
@@ -13,8 +13,7 @@ from typing import Any
 import pytest
 
 from agent_contract import AgentOptions, tool_names
-from agent_contract.per_drone import PerDroneTeam
-from benchmark.agent_plugins import (
+from agents.plugins import (
     AgentSpecError,
     BrokenAgent,
     PluginAgent,
@@ -22,6 +21,7 @@ from benchmark.agent_plugins import (
     make_agent,
     parse_spec,
 )
+from agents.teams.per_drone import PerDroneTeam
 from benchmark.backends import Unit
 from benchmark.orchestrator import RunPlan, run_benchmark, run_unit
 from benchmark.results import read_records

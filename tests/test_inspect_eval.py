@@ -27,11 +27,11 @@ from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
+from agents.llm.react import SYSTEM_PROMPT, task_message
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
 from benchmark.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
 from llm_tools import default_registry
-from llm_tools.agents.react import SYSTEM_PROMPT, task_message
 from mavswarm.cli import main as mavswarm_main
 from mavswarm.inspect import area_search, full, sessions, smoke, swarm_task
 from mavswarm.inspect.solver import RECORD_KEY

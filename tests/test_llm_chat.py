@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from llm_tools.agents import ChatClient, ModelConfig, ModelError
-from llm_tools.agents.react import assistant_message
+from agents.llm import ChatClient, ModelConfig, ModelError
+from agents.llm.react import assistant_message
 from llm_tools.openai_adapter import parse_tool_calls
 from tests.ports import unused_tcp_port
 

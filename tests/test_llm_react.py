@@ -7,10 +7,10 @@ import json
 
 import pytest
 
+from agents.llm import ModelConfig, ReactAgent
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
 from llm_tools import default_registry, openai_tools
-from llm_tools.agents import ModelConfig, ReactAgent
 from tests.bench_fixtures import small_session
 from tests.cli_fixtures import MAVSWARM
 from tests.scripted_llm import call, scripted_llm

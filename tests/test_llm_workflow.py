@@ -9,11 +9,11 @@ from typing import Any
 
 import pytest
 
+from agents.llm import ModelConfig, WorkflowAgent
+from agents.llm.blackboard import Blackboard
+from agents.llm.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
-from llm_tools.agents import ModelConfig, WorkflowAgent
-from llm_tools.agents.blackboard import Blackboard
-from llm_tools.agents.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from llm_tools.registry import ToolRegistry
 from tests.bench_fixtures import small_session
 from tests.scripted_llm import call, scripted_llm

@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from agent_contract.per_drone import PerDroneTeam
+from agents.llm import ModelConfig, ReactAgent
+from agents.oracle import OracleAgent
+from agents.teams.per_drone import PerDroneTeam
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
-from benchmark.oracle import OracleAgent
 from benchmark.session_file import load_session
-from llm_tools.agents import ModelConfig, ReactAgent
 from mavlink_gateway import Status
 from tests.cli_fixtures import MAVSWARM, ROOT
 from tests.scripted_llm import call, scripted_llm

@@ -24,10 +24,10 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools
+from agents.llm import ChatClient, ModelConfig, ReactAgent, WorkflowAgent
 from benchmark.episode import run_session
 from benchmark.results import read_records
 from benchmark.session_file import session_from_dict
-from llm_tools.agents import ChatClient, ModelConfig, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
 from tests.ports import unused_tcp_port

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 from mcp import Client
 
+from agents.oracle import OracleAgent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.generate import build_task
-from benchmark.oracle import OracleAgent
 from benchmark.orchestrator import RunPlan, run_benchmark
 from benchmark.results import read_records
 from benchmark.scenarios import LEVELS, generate_world

@@ -9,9 +9,9 @@ from typing import Any
 
 import pytest
 
+from agents.llm import ModelConfig, WorkflowAgent
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
-from llm_tools.agents import ModelConfig, WorkflowAgent
 from tests.bench_fixtures import small_session
 from tests.scripted_llm import call, scripted_llm
 

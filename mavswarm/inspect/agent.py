@@ -27,7 +27,7 @@ from inspect_ai.tool import ToolDef
 from inspect_ai.util import LimitExceededError
 
 from agent_contract import AgentTask, AgentTools
-from llm_tools.agents.react import MAX_NUDGES, NUDGE, SYSTEM_PROMPT, task_message
+from agents.llm.react import MAX_NUDGES, NUDGE, SYSTEM_PROMPT, task_message
 from llm_tools.registry import ToolRegistry, default_registry
 from mavswarm.inspect.tools import call_tool, result_text, tool_defs
 

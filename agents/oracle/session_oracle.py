@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 
-from benchmark.oracle.agent import OracleAgent
+from agents.oracle.agent import OracleAgent
 from benchmark.session_file import Session
 
 __all__ = ["ORACLE_MODES", "ORACLE_MODE_ENV", "oracle_for_session"]

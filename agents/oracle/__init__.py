@@ -2,6 +2,6 @@
 whole world, but acts only through the same tools as any agent. Generation uses it to prove
 every task solvable."""
 
-from benchmark.oracle.agent import OracleAgent, OracleCannotPlan, OracleError
+from agents.oracle.agent import OracleAgent, OracleCannotPlan, OracleError
 
 __all__ = ["OracleAgent", "OracleCannotPlan", "OracleError"]
