@@ -9,11 +9,11 @@ from typing import Any
 
 import pytest
 
-from agents.llm import ModelConfig, WorkflowAgent
+from agents.llm import ScriptedChatModel, WorkflowAgent
+from agents.llm import tool_call as call
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
 from tests.bench_fixtures import small_session
-from tests.scripted_llm import call, scripted_llm
 
 SUMMARY = "climbed and held; " + "the long account of it goes on " * 20  # > 200 characters
 
@@ -27,10 +27,8 @@ async def test_the_workflow_transcript_holds_its_plan_and_verdict_turns() -> Non
     script = [{"role": "assistant", "content": plan},
               {"role": "assistant", "content": '{"complete": true, "reason": "holding"}'}]
     records: list[dict[str, Any]] = []
-    with scripted_llm(script) as llm:
-        agent = WorkflowAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session_from_dict(data, source="s.json"), agent,
-                          emit=records.append)
+    agent = WorkflowAgent(ScriptedChatModel(script))
+    await run_session(session_from_dict(data, source="s.json"), agent, emit=records.append)
     (record,) = records
     transcript = record["replay"]["transcript"]
     assert [e["role"] for e in transcript] == ["system", "user", "assistant",
@@ -53,10 +51,8 @@ async def test_the_workflow_react_round_keeps_its_last_tool_results() -> None:
                     "r1")],
               [call("finish", {"summary": SUMMARY}, "r2")]]
     records: list[dict[str, Any]] = []
-    with scripted_llm(script) as llm:
-        agent = WorkflowAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session_from_dict(data, source="s.json"), agent,
-                          emit=records.append)
+    agent = WorkflowAgent(ScriptedChatModel(script))
+    await run_session(session_from_dict(data, source="s.json"), agent, emit=records.append)
     (record,) = records
     transcript = record["replay"]["transcript"]
     assert record["finish"] == "finished"
