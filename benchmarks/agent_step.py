@@ -19,6 +19,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from agents.llm import ModelReply, ReactAgent, ScriptedChatModel
 from agents.llm import tool_call as call
+from agents.llm.scripted import Reply
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
 from tests.bench_fixtures import small_session
@@ -49,7 +50,7 @@ async def main(tasks: int) -> None:
     keys = ["takeoff_hold", "climb_and_face", "altitude_change"]
     data = small_session((keys * (tasks // len(keys) + 1))[:tasks])
     session = session_from_dict(data, source="bench")
-    script: list[object] = []
+    script: list[Reply] = []
     for task in data["tasks"]:  # the oracle's plan, replayed as a model's tool calls
         for op in task["oracle"][0]:
             if op["op"] == "takeoff":

@@ -83,9 +83,9 @@ class Crossing:
         return f"{self.path}:{self.line}: {self.layer} imports {self.imported}"
 
 
-def _dynamic_import(node: ast.AST) -> str | None:
+def _dynamic_import(node: ast.Call) -> str | None:
     """The module a call `__import__("m")` / `import_module("m")` names, else None."""
-    if isinstance(node, ast.Call) and node.args:
+    if node.args:
         name = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
         first = node.args[0]
         if name in ("__import__", "import_module") and isinstance(first, ast.Constant) \
@@ -105,7 +105,7 @@ def imports_of(source: str) -> Iterator[tuple[int, str]]:
                 continue
             if node.module:
                 yield node.lineno, node.module
-        elif (name := _dynamic_import(node)) is not None:
+        elif isinstance(node, ast.Call) and (name := _dynamic_import(node)) is not None:
             yield node.lineno, name
 
 
@@ -124,7 +124,7 @@ def _imported(source: str, module: str, is_package: bool) -> Iterator[tuple[int,
                 stem = ".".join(base[: len(base) - (node.level - 1)] + ([stem] if stem else []))
             for alias in node.names:
                 yield node.lineno, stem if alias.name == "*" else f"{stem}.{alias.name}"
-        elif (name := _dynamic_import(node)) is not None:
+        elif isinstance(node, ast.Call) and (name := _dynamic_import(node)) is not None:
             yield node.lineno, name
 
 

@@ -43,7 +43,8 @@ def test_the_layers_form_no_cycle() -> None:
 
 def test_nothing_that_knows_hidden_parts_is_below_the_agent_side() -> None:
     for agent_side in AGENT_SIDE:
-        below, todo = set(), [agent_side]
+        below: set[str] = set()
+        todo = [agent_side]
         while todo:
             for layer in LAYERS[todo.pop()] - below:
                 below.add(layer)

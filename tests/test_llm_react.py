@@ -9,6 +9,7 @@ import json
 import pytest
 
 from agents.llm import ReactAgent, ScriptedChatModel, tool_call
+from agents.llm.scripted import Reply
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
 from llm_tools import default_registry, openai_tools
@@ -36,7 +37,7 @@ async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
     op = data["tasks"][0]["oracle"][0][0]
     drone, altitude = op["drone"], op["altitude_m"]
     session = session_from_dict(data, source="s.json")
-    script = [
+    script: list[Reply] = [
         {"role": "assistant", "content": "Let me think without acting."},
         [tool_call("take_off", "{drone_id: oops", "c1")],  # malformed JSON
         [tool_call("take_off", {"drone_id": drone, "altitude_m": "high"}, "c2"),  # wrong type

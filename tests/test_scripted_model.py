@@ -84,7 +84,12 @@ async def test_a_function_script_answers_each_request_sync_or_async() -> None:
 
 async def test_think_time_is_awaited_before_each_answer() -> None:
     waits: list[float] = []
-    model = ScriptedChatModel(["a", "b"], think_s=lambda: waits.append(0.01) or 0.01)
+
+    def think_s() -> float:
+        waits.append(0.01)
+        return 0.01
+
+    model = ScriptedChatModel(["a", "b"], think_s=think_s)
     loop = asyncio.get_running_loop()
     started = loop.time()
     await model.complete(USER, [])

@@ -11,6 +11,7 @@ import pytest
 
 from agents.llm import ScriptedChatModel, WorkflowAgent
 from agents.llm import tool_call as call
+from agents.llm.scripted import Reply
 from benchmark.episode import run_session
 from benchmark.session_file import session_from_dict
 from tests.bench_fixtures import small_session
@@ -24,7 +25,7 @@ async def test_the_workflow_transcript_holds_its_plan_and_verdict_turns() -> Non
     op = data["tasks"][0]["oracle"][0][0]
     plan = json.dumps({"steps": [{"tool": "take_off", "arguments": {
         "drone_id": op["drone"], "altitude_m": op["altitude_m"]}}], "done_when": SUMMARY})
-    script = [{"role": "assistant", "content": plan},
+    script: list[Reply] = [{"role": "assistant", "content": plan},
               {"role": "assistant", "content": '{"complete": true, "reason": "holding"}'}]
     records: list[dict[str, Any]] = []
     agent = WorkflowAgent(ScriptedChatModel(script))
@@ -45,7 +46,7 @@ async def test_the_workflow_transcript_holds_its_plan_and_verdict_turns() -> Non
 async def test_the_workflow_react_round_keeps_its_last_tool_results() -> None:
     data = small_session(["takeoff_hold"])
     op = data["tasks"][0]["oracle"][0][0]
-    script = [{"role": "assistant", "content": "no plan"},
+    script: list[Reply] = [{"role": "assistant", "content": "no plan"},
               {"role": "assistant", "content": "still no plan"},
               [call("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]},
                     "r1")],
