@@ -5,9 +5,8 @@ end to end); agents in process are driven by `agents.llm.ScriptedChatModel` inst
 Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
 calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded as they
 came over the wire. `answer` (a callable) instead makes each reply from its request, so
-concurrent agents get the same replies in any order. `delay_s` (a callable) makes each answer
-wait, like a model thinking; `hold` (a callable given the request) may block it until the test
-lets it go.
+concurrent agents get the same replies in any order; `hold` (a callable given the request) may
+block it until the test lets it go.
 """
 
 from __future__ import annotations
@@ -15,7 +14,6 @@ from __future__ import annotations
 import contextlib
 import json
 import threading
-import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -27,11 +25,9 @@ __all__ = ["ScriptedLLM", "call", "scripted_llm"]
 
 
 class ScriptedLLM:
-    def __init__(self, replies: list[Any], *, delay_s: Callable[[], float] | None = None,
-                 answer: Callable[[dict[str, Any]], Any] | None = None,
+    def __init__(self, replies: list[Any], *, answer: Callable[[dict[str, Any]], Any] | None = None,
                  hold: Callable[[dict[str, Any]], None] | None = None) -> None:
         self.replies = list(replies)
-        self.delay_s = delay_s
         self.answer = answer
         self.hold = hold
         self.requests: list[dict[str, Any]] = []
@@ -39,10 +35,6 @@ class ScriptedLLM:
         self._lock = threading.Lock()
 
     def next_reply(self, request: dict[str, Any]) -> tuple[int, str]:
-        with self._lock:
-            delay = self.delay_s() if self.delay_s is not None else 0.0
-        if delay > 0.0:
-            time.sleep(delay)
         if self.hold is not None:
             self.hold(request)
         with self._lock:
@@ -68,11 +60,10 @@ class ScriptedLLM:
 
 
 @contextmanager
-def scripted_llm(replies: list[Any], *, delay_s: Callable[[], float] | None = None,
-                 answer: Callable[[dict[str, Any]], Any] | None = None,
+def scripted_llm(replies: list[Any], *, answer: Callable[[dict[str, Any]], Any] | None = None,
                  hold: Callable[[dict[str, Any]], None] | None = None
                  ) -> Iterator[ScriptedLLM]:
-    llm = ScriptedLLM(replies, delay_s=delay_s, answer=answer, hold=hold)
+    llm = ScriptedLLM(replies, answer=answer, hold=hold)
 
     class Handler(BaseHTTPRequestHandler):
         def do_POST(self) -> None:
