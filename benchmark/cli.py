@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from benchmark.agent_plugins import ENTRY_POINT_GROUP
+from agents.plugins import ENTRY_POINT_GROUP
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.reporting.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.running.backends import BACKENDS
@@ -214,7 +214,7 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from benchmark.agent_plugins import check_spec
+    from agents.plugins import check_spec
     from benchmark.reporting.report import metrics_table, write_report
     from benchmark.reporting.report_html import check_inspector_url
     from benchmark.running.orchestrator import RunPlan, check_session_files, run_benchmark
@@ -354,7 +354,7 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _agents(args: argparse.Namespace) -> int:
-    from benchmark.agent_plugins import listing
+    from agents.plugins import listing
     rows = listing()
     width = max(len(r.name) for r in rows) + 2
     for row in rows:

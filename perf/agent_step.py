@@ -1,8 +1,8 @@
 """Where an LLM agent's step goes: time inside the model call versus outside it (tools,
-gateway, flight in stepped time, agent logic), with a scripted model that answers at once, so
-the outside share is the platform's own cost per step.
+gateway, flight in stepped time, agent logic), with a scripted model in process that answers
+at once, so the outside share is the platform's own cost per step.
 
-    ./dev perf agent_step [--tasks 5]
+    ./dev bench agent_step [--tasks 5]
 """
 
 from __future__ import annotations
@@ -11,23 +11,46 @@ import argparse
 import asyncio
 import sys
 import time
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from agents.llm import ModelReply, ReactAgent, ScriptedChatModel
+from agents.llm import tool_call as call
+from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
-from llm_tools.agents import ModelConfig, ReactAgent
-from llm_tools.agents.chat import ChatClient
 from tests.bench_fixtures import small_session
-from tests.scripted_llm import call, scripted_llm
+
+
+class TimedModel:
+    """A `ChatModel` that counts the calls to another and the time spent in them."""
+
+    def __init__(self, model: ScriptedChatModel) -> None:
+        self.model = model
+        self.in_model_s = 0.0
+        self.calls = 0
+
+    async def complete(self, messages: Sequence[Mapping[str, Any]],
+                       tools: Sequence[Mapping[str, Any]]) -> ModelReply:
+        started = time.perf_counter()
+        try:
+            return await self.model.complete(messages, tools)
+        finally:
+            self.in_model_s += time.perf_counter() - started
+            self.calls += 1
+
+    async def close(self) -> None:
+        await self.model.close()
 
 
 async def main(tasks: int) -> None:
     keys = ["takeoff_hold", "climb_and_face", "altitude_change"]
     data = small_session((keys * (tasks // len(keys) + 1))[:tasks])
     session = session_from_dict(data, source="bench")
-    script: list[object] = []
+    script: list[Reply] = []
     for task in data["tasks"]:  # the oracle's plan, replayed as a model's tool calls
         for op in task["oracle"][0]:
             if op["op"] == "takeoff":
@@ -40,24 +63,10 @@ async def main(tasks: int) -> None:
                 script.append([call("change_altitude", {"drone_id": op["drone"],
                                                         "altitude_m": op["altitude_m"]})])
         script.append([call("finish", {})])
-    in_model = 0.0
-    steps = 0
-    original = ChatClient.complete
-
-    async def timed(self, messages, tools):  # type: ignore[no-untyped-def]
-        nonlocal in_model, steps
-        t = time.perf_counter()
-        try:
-            return await original(self, messages, tools)
-        finally:
-            in_model += time.perf_counter() - t
-            steps += 1
-
-    ChatClient.complete = timed  # type: ignore[method-assign]
+    model = TimedModel(ScriptedChatModel(script))
     records: list[dict] = []
-    with scripted_llm(script) as llm:
-        agent = ReactAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session, agent, emit=records.append)
+    await run_session(session, ReactAgent(model), emit=records.append)
+    in_model, steps = model.in_model_s, model.calls
     total = sum(r["wall_time_s"] for r in records)
     outside = total - in_model
     print(f"{len(records)} tasks, {sum(r['passed'] for r in records)} passed, {steps} model "

@@ -1,7 +1,7 @@
 """The oracle over the smoke suite through faulty links: pass rate, wall-time cost, and whether
 the same seed gives the same truth.
 
-    ./dev perf lossy_smoke [--loss 0.2] [--latency-ms 50] [--jitter-ms 20] [--seed 1]
+    ./dev bench lossy_smoke [--loss 0.2] [--latency-ms 50] [--jitter-ms 20] [--seed 1]
                             [--runs 2] [--sessions ID ...]
 
 Runs the smoke sessions' first 6 tasks with the oracle on a lockstep clock, once on a clean
@@ -27,9 +27,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SMOKE_TASKS, suite_paths
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from emulator.link_faults import LinkFaults, LinkProfile
 

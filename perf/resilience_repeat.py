@@ -1,7 +1,7 @@
 """Shipped resilience sessions flown twice by the oracle: whether the same seed gives the same
 truth and verdicts with the tasks' faults striking.
 
-    ./dev perf resilience_repeat [--sessions ID ...] [--tasks N] [--runs 2]
+    ./dev bench resilience_repeat [--sessions ID ...] [--tasks N] [--runs 2]
 
 Runs each session's first N tasks (default all 20) with the oracle on a lockstep clock, --runs
 times, each run in a fresh swarm. For each task it keeps the record (wall-clock fields and the
@@ -26,9 +26,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 
 DROPPED = ("wall_time_s", "overhead_s", "replay")

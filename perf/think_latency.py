@@ -2,8 +2,8 @@
 that acts on the world, as a model would, and many sessions run at once (PROCESSES worker
 processes, each holding up to SESSIONS sessions in one event loop).
 
-    ./dev perf think_latency --think-s 2 --processes 2 --sessions 12            # full suite
-    ./dev perf think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
+    ./dev bench think_latency --think-s 2 --processes 2 --sessions 12            # full suite
+    ./dev bench think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
 
 Prints wall time, pass rate, failed tasks and the peak memory of all workers together. With
 the lockstep clock, think time costs no simulated time, so every task the oracle passes
@@ -28,9 +28,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_line
 
 from agent_contract import AgentTask, AgentTools
+from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
 
 _SPAWN = multiprocessing.get_context("spawn")

@@ -1,6 +1,6 @@
 """Digests of the oracle's ground truth and records, to show a change left results as they were.
 
-    ./dev perf truth_digest [--suite smoke] [--sessions ID ...] [--tasks N]
+    ./dev bench truth_digest [--suite smoke] [--sessions ID ...] [--tasks N]
 
 Flies the oracle (lockstep clock, as `bench run`) over the sessions of a suite (default: the
 smoke suite and its per-session task limit, plus target_tracking-easy-1 for moving targets)
@@ -24,9 +24,9 @@ from pathlib import Path
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import machine_line, table
 
+from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR, suite_paths
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 
 WALL_FIELDS = ("wall_time_s", "overhead_s")

@@ -1,5 +1,6 @@
 """Plug-in agents for the plug-in tests, written to a file the way a user would write them:
-good ones (an instance, a class built with or without the run's options, a factory), and bad
+good ones (an instance, a class built with or without the run's options, a factory, the ReAct
+agent on a scripted model), and bad
 ones (raising, hanging, not agents)."""
 
 from __future__ import annotations
@@ -58,6 +59,22 @@ class SlowThinker:
             await asyncio.sleep(0.3)
             tools.list_drones()
         tools.finish()
+
+
+def scripted_react(options):
+    """The built-in ReAct loop on a scripted model in process: the drone it is told is its own
+    takes off, then it finishes (an agent told of no drone only talks)."""
+    from agents.llm import ReactAgent, ScriptedChatModel, tool_call
+    me = options.drone_id
+
+    def answer(request):
+        if f"You are the agent of drone {me} only" not in request.messages[1]["content"]:
+            return "I was not told which drone is mine."
+        if len(request.messages) == 2:
+            return [tool_call("take_off", {"drone_id": me, "altitude_m": 8.0}, f"{me}-1")]
+        return [tool_call("finish", {"summary": f"{me} up"}, f"{me}-2")]
+
+    return ReactAgent(ScriptedChatModel(answer))
 
 
 def broken_factory(options):

@@ -1,65 +1,40 @@
-"""A scripted OpenAI-compatible chat-completions server on real HTTP, for agent tests.
+"""A scripted OpenAI-compatible chat-completions server on real HTTP, for the tests whose model
+client is in another process or goes through `--base-url` (the CLI, Ray workers, the openai SDK
+end to end); agents in process are driven by `agents.llm.ScriptedChatModel` instead.
 
 Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
-calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded. With
-`by_drone`, each drone's agent (named in its first user message, "You are the agent of drone
-X") gets the replies of its own script. `answer` (a callable) instead makes each reply from its
-request, so concurrent agents get the same replies in any order. `delay_s` (a callable) makes
-each answer wait, like a model thinking; `hold` (a callable given the request) may block it
-until the test lets it go.
+calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded as they
+came over the wire. `answer` (a callable) instead makes each reply from its request, so
+concurrent agents get the same replies in any order; `hold` (a callable given the request) may
+block it until the test lets it go.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
-import re
 import threading
-import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
+from agents.llm.scripted import tool_call as call
+
 __all__ = ["ScriptedLLM", "call", "scripted_llm"]
 
 
-def call(name: str, arguments: Any, call_id: str | None = None) -> dict[str, Any]:
-    """A tool call; arguments given as a dict are JSON-encoded, a str is sent as is."""
-    args = arguments if isinstance(arguments, str) else json.dumps(arguments)
-    return {"id": call_id or f"call_{name}", "type": "function",
-            "function": {"name": name, "arguments": args}}
-
-
-_AGENT_OF = re.compile(r"You are the agent of drone (\S+?) only")
-
-
 class ScriptedLLM:
-    def __init__(self, replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
-                 delay_s: Callable[[], float] | None = None,
-                 answer: Callable[[dict[str, Any]], Any] | None = None,
+    def __init__(self, replies: list[Any], *, answer: Callable[[dict[str, Any]], Any] | None = None,
                  hold: Callable[[dict[str, Any]], None] | None = None) -> None:
         self.replies = list(replies)
-        self.by_drone = {d: list(r) for d, r in (by_drone or {}).items()}
-        self.delay_s = delay_s
         self.answer = answer
         self.hold = hold
         self.requests: list[dict[str, Any]] = []
         self.base_url = ""
         self._lock = threading.Lock()
 
-    def _script(self, request: dict[str, Any]) -> list[Any]:
-        for message in request.get("messages", []):
-            found = _AGENT_OF.search(str(message.get("content") or ""))
-            if found and found.group(1) in self.by_drone:
-                return self.by_drone[found.group(1)]
-        return self.replies
-
     def next_reply(self, request: dict[str, Any]) -> tuple[int, str]:
-        with self._lock:
-            delay = self.delay_s() if self.delay_s is not None else 0.0
-        if delay > 0.0:
-            time.sleep(delay)
         if self.hold is not None:
             self.hold(request)
         with self._lock:
@@ -67,14 +42,13 @@ class ScriptedLLM:
 
     def _reply(self, request: dict[str, Any]) -> tuple[int, str]:
         self.requests.append(request)
-        replies = self._script(request)
         if self.answer is not None:
             message: Any = self.answer(request)
-        elif not replies:
+        elif not self.replies:
             message = {"role": "assistant", "content": "",
                        "tool_calls": [call("finish", {"summary": "script ended"})]}
         else:
-            message = replies.pop(0)
+            message = self.replies.pop(0)
         if isinstance(message, tuple):  # (status, raw body)
             return message
         if isinstance(message, list):  # a bare list of tool calls
@@ -86,12 +60,10 @@ class ScriptedLLM:
 
 
 @contextmanager
-def scripted_llm(replies: list[Any], *, by_drone: dict[str, list[Any]] | None = None,
-                 delay_s: Callable[[], float] | None = None,
-                 answer: Callable[[dict[str, Any]], Any] | None = None,
+def scripted_llm(replies: list[Any], *, answer: Callable[[dict[str, Any]], Any] | None = None,
                  hold: Callable[[dict[str, Any]], None] | None = None
                  ) -> Iterator[ScriptedLLM]:
-    llm = ScriptedLLM(replies, by_drone=by_drone, delay_s=delay_s, answer=answer, hold=hold)
+    llm = ScriptedLLM(replies, answer=answer, hold=hold)
 
     class Handler(BaseHTTPRequestHandler):
         def do_POST(self) -> None:

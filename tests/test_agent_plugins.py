@@ -1,7 +1,8 @@
-"""Plug-in agents (`benchmark.agent_plugins`): specs resolved from their text, factories given
+"""Plug-in agents (`agents.plugins`): specs resolved from their text, factories given
 the run's options, bad plug-ins refused before a run or ended as their tasks' agent_error
 records while the run goes on, a hung agent stopped by the wall-clock guard (and only a hung
-one), and the example LLM loop against a scripted OpenAI-compatible server."""
+one), the example LLM loop (the openai SDK) against a scripted OpenAI-compatible server, and
+a team of built-in ReAct agents on scripted models, one per drone."""
 
 from __future__ import annotations
 
@@ -13,8 +14,7 @@ from typing import Any
 import pytest
 
 from agent_contract import AgentOptions, tool_names
-from agent_contract.per_drone import PerDroneTeam
-from benchmark.agent_plugins import (
+from agents.plugins import (
     AgentSpecError,
     BrokenAgent,
     PluginAgent,
@@ -22,6 +22,7 @@ from benchmark.agent_plugins import (
     make_agent,
     parse_spec,
 )
+from agents.teams.per_drone import PerDroneTeam
 from benchmark.authoring.session_file import Session, session_from_dict
 from benchmark.running.backends import Unit
 from benchmark.running.orchestrator import RunPlan, run_benchmark, run_unit
@@ -201,16 +202,10 @@ def test_the_example_llm_loop_flies_on_a_scripted_model(tmp_path: Path) -> None:
 
 @pytest.mark.mavsdk
 @pytest.mark.slow
-def test_a_plugin_plays_per_drone(tmp_path: Path) -> None:
+def test_a_plugin_plays_per_drone(plugins: Path, tmp_path: Path) -> None:
     session_file = write_json(tmp_path / "s.json", small_session(["takeoff_hold"]))
-    by_drone = {d: [[call("take_off", {"drone_id": d, "altitude_m": 8.0}, f"{d}-1")],
-                    [call("finish", {"summary": f"{d} up"}, f"{d}-2")]]
-                for d in ("d1", "d2", "d3")}
-    spec = EXAMPLE_LLM + ":per-drone"
-    with scripted_llm([], by_drone=by_drone) as llm:
-        [record] = _run(session_file, tmp_path / "team", spec, base_url=llm.base_url)
+    spec = f"{plugins}:scripted_react:per-drone"
+    [record] = _run(session_file, tmp_path / "team", spec)
+    # each drone's agent was told which drone it commands, took it off and finished
     assert (record["agent"], record["finish"], record["tool_calls"]) == (spec, "finished", 3)
     assert record["tokens"]["prompt"] == 600  # six model calls, two per drone
-    firsts = [r for r in llm.requests if len(r["messages"]) == 2]
-    assert sorted(r["messages"][1]["content"].split("You are the agent of drone ")[1][:2]
-                  for r in firsts) == ["d1", "d2", "d3"]

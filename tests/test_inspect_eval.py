@@ -27,11 +27,11 @@ from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
+from agents.llm.react import SYSTEM_PROMPT, task_message
 from benchmark.authoring.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
 from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
 from llm_tools import default_registry
-from llm_tools.agents.react import SYSTEM_PROMPT, task_message
 from mavswarm.cli import main as mavswarm_main
 from mavswarm.inspect import area_search, full, sessions, smoke, swarm_task
 from mavswarm.inspect.solver import RECORD_KEY
@@ -168,6 +168,31 @@ def test_a_sample_limit_ends_the_task_which_is_still_flown_out_and_scored(
     assert (record["finish"], record["error"], record["tool_calls"]) == ("finished", None, 1)
     score = sample.scores["swarm_checks"] if sample.scores else None
     assert score is not None and score.value == "C", score and score.explanation
+
+
+@pytest.mark.mavsdk
+def test_arguments_inspect_could_not_read_get_an_error_result_the_model_reads(
+        tmp_path: Path) -> None:
+    data = small_session(["takeoff_hold"])
+    path = write_json(tmp_path / "hold.json", data)
+    unreadable = ToolCall(id="c1", function="take_off", arguments={},
+                          parse_error="Expecting value: line 1 column 2")
+    outputs = [_turn(unreadable), _turn(ToolCall(id="c2", function="finish",
+                                                 arguments={"summary": "gave up"}))]
+    (log,) = inspect_eval(sessions(sessions=str(path)),
+                          model=get_model("mockllm/model", custom_outputs=outputs),
+                          display="none", log_dir=str(tmp_path / "logs"))
+    assert log.samples is not None
+    (sample,) = log.samples
+    record = sample.store[RECORD_KEY]
+    assert (record["finish"], record["tool_calls"]) == ("finished", 0)
+    assert record["tokens"]["prompt"] == 200  # two turns, counted as `bench run` counts them
+    tool_messages = [m for m in sample.messages if m.role == "tool"]
+    assert [(m.tool_call_id, m.function) for m in tool_messages] == [("c1", "take_off"),
+                                                                     ("c2", "finish")]
+    refused = json.loads(tool_messages[0].text)
+    assert refused["status"] == "error" and "not valid JSON" in refused["message"]
+    assert "Expecting value" in refused["message"]
 
 
 @pytest.mark.mavsdk

@@ -1,6 +1,8 @@
-"""The packages import one way only (tests/import_layers.py), with no exemption; the scanner
-finds a planted violation; and loading the agent side loads nothing of the benchmark or the
-emulator, so no validator, hidden task data or ground truth can reach an agent."""
+"""The layers import one way only (tests/import_layers.py), with no exemption; the scanner
+finds planted violations, relative and `from a import b` ones included; and loading the agent
+side (the agent contract, the LLM tools and the LLM, baseline and team agents) loads nothing of
+the benchmark or the emulator, so no validator, hidden task data or ground truth can reach an
+agent."""
 
 from __future__ import annotations
 
@@ -13,13 +15,20 @@ from pathlib import Path
 import pytest
 
 from tests.cli_fixtures import ROOT
-from tests.import_layers import LAYERS, TIERS, crossings, tier_crossings
+from tests.import_layers import LAYERS, TIERS, crossings, layer_of, tier_crossings
 
-AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools")
+AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools", "agents.llm", "agents.baselines",
+              "agents.teams")
 
 
-def test_every_package_imports_only_the_layers_below_it() -> None:
-    assert set(LAYERS) <= {p.name for p in ROOT.iterdir() if (p / "__init__.py").exists()}
+def _exists(root: Path, layer: str) -> bool:
+    path = root.joinpath(*layer.split("."))
+    return (path / "__init__.py").is_file() or path.with_suffix(".py").is_file()
+
+
+def test_every_layer_imports_only_the_layers_below_it() -> None:
+    missing = [layer for layer in LAYERS if not _exists(ROOT, layer)]
+    assert not missing, f"layers that are no module of the repository: {missing}"
     found = crossings(ROOT)
     assert not found, "\n".join(map(str, found))
 
@@ -58,43 +67,97 @@ def test_the_layers_form_no_cycle() -> None:
     assert order[-1] == "mavswarm"
 
 
-def test_a_planted_violation_is_found(tmp_path: Path) -> None:
-    for package in LAYERS:
-        (tmp_path / package).mkdir()
-        (tmp_path / package / "__init__.py").write_text("")
-    (tmp_path / "mavlink_gateway" / "up.py").write_text(
-        "import json\nfrom emulator.geo import GeoOrigin\n")
-    (tmp_path / "llm_tools" / "sneaky.py").write_text(
-        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-        "    import benchmark.running.episode\n"
-        "def f():\n    from benchmark.scoring.validators import evaluate\n"
-        "    return __import__('emulator.truth')\n")
-    (tmp_path / "emulator" / "fine.py").write_text("from . import geo\nimport numpy\n")
-    (tmp_path / "benchmark" / "fine.py").write_text("import llm_tools.registry\n")
-    found = sorted((c.path, c.line, c.imported) for c in crossings(tmp_path))
-    assert found == [("llm_tools/sneaky.py", 3, "benchmark.running.episode"),
-                     ("llm_tools/sneaky.py", 5, "benchmark.scoring.validators"),
-                     ("llm_tools/sneaky.py", 6, "emulator.truth"),
-                     ("mavlink_gateway/up.py", 2, "emulator.geo")]
+def test_nothing_that_knows_hidden_parts_is_below_the_agent_side() -> None:
+    for agent_side in AGENT_SIDE:
+        below: set[str] = set()
+        todo = [agent_side]
+        while todo:
+            for layer in LAYERS[todo.pop()] - below:
+                below.add(layer)
+                todo.append(layer)
+        hidden = below & {"emulator", "benchmark", "benchmark.scoring.validators",
+                          "benchmark.authoring.session_file", "agents.oracle", "agents.plugins"}
+        assert not hidden, (agent_side, hidden)
+
+
+def test_a_module_belongs_to_the_longest_layer_it_starts_with() -> None:
+    assert layer_of("agents.llm.react") == "agents.llm"
+    assert layer_of("agents.oracle") == "agents.oracle"
+    assert layer_of("agents") == "agents"
+    assert layer_of("benchmark.scoring.validators.tree") == "benchmark.scoring.validators"
+    assert layer_of("benchmark.running.orchestrator") == "benchmark"
+    assert layer_of("numpy.linalg") is None
+
+
+def _plant(root: Path, files: dict[str, str]) -> None:
+    for layer in LAYERS:
+        package = root / layer.split(".")[0]
+        package.mkdir(exist_ok=True)
+        (package / "__init__.py").write_text("")
+    for name, source in files.items():
+        path = root / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(source)
+
+
+def test_planted_violations_are_found(tmp_path: Path) -> None:
+    _plant(tmp_path, {
+        "mavlink_gateway/up.py": "import json\nfrom emulator.geo import GeoOrigin\n",
+        "llm_tools/sneaky.py": (
+            "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+            "    import benchmark.running.episode\n"
+            "def f():\n    from benchmark.scoring.validators import evaluate\n"
+            "    return __import__('emulator.truth')\n"),
+        "emulator/fine.py": "from . import geo\nimport numpy\n",
+        "benchmark/fine.py": "import llm_tools.registry\nfrom agents import oracle\n",
+        "agents/llm/__init__.py": "",
+        "agents/llm/peek.py": ("from .. import oracle\nfrom ..oracle.agent import OracleAgent\n"
+                               "from agents.teams import DroneView\n"),
+        "agents/oracle/__init__.py": "",
+        "agents/oracle/fine.py": ("from benchmark.scoring import validators\n"
+                                  "from benchmark.authoring.session_file import Session\n"
+                                  "from . import planner\nfrom ..oracle import agent\n"),
+        "agents/oracle/up.py": ("from benchmark.running import orchestrator\n"
+                                "from benchmark.scoring import validators\n"),
+        "agents/teams.py": "from agents.llm import react\n",
+        "benchmark/scoring/validators/__init__.py": "",
+        "benchmark/scoring/validators/up.py": "from benchmark.authoring.generate import proven\n",
+    })
+    found = sorted((c.path, c.line, c.layer, c.imported) for c in crossings(tmp_path))
+    assert found == [
+        ("agents/llm/peek.py", 1, "agents.llm", "agents.oracle"),
+        ("agents/llm/peek.py", 2, "agents.llm", "agents.oracle.agent.OracleAgent"),
+        ("agents/llm/peek.py", 3, "agents.llm", "agents.teams.DroneView"),
+        ("agents/oracle/up.py", 1, "agents.oracle", "benchmark.running.orchestrator"),
+        ("agents/teams.py", 1, "agents.teams", "agents.llm.react"),
+        ("benchmark/scoring/validators/up.py", 1, "benchmark.scoring.validators",
+         "benchmark.authoring.generate.proven"),
+        ("llm_tools/sneaky.py", 3, "llm_tools", "benchmark.running.episode"),
+        ("llm_tools/sneaky.py", 5, "llm_tools", "benchmark.scoring.validators.evaluate"),
+        ("llm_tools/sneaky.py", 6, "llm_tools", "emulator.truth"),
+        ("mavlink_gateway/up.py", 2, "mavlink_gateway", "emulator.geo.GeoOrigin")]
 
 
 @pytest.mark.slow
 def test_loading_the_agent_side_loads_no_benchmark_or_emulator_module() -> None:
     code = ("import json, sys\n"
             f"for m in {list(AGENT_SIDE)!r}: __import__(m)\n"
-            "import llm_tools.agents, llm_tools.mcp_server, llm_tools.registry\n"
+            "import agents.llm.react, agents.llm.workflow, agents.llm.scripted\n"
+            "import llm_tools.mcp_server, llm_tools.registry\n"
             "print(json.dumps(sorted(sys.modules)))\n")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                          text=True, check=True, timeout=60)
     loaded = json.loads(out.stdout)
-    assert "agent_contract.tools" in loaded and "llm_tools.mcp_server" in loaded
-    below = [m for m in loaded if m.split(".")[0] in ("benchmark", "emulator", "mavswarm")]
+    assert {"agent_contract.tools", "llm_tools.mcp_server", "agents.llm.openai_model",
+            "agents.teams.per_drone", "agents.baselines.noop"} <= set(loaded)
+    below = [m for m in loaded if m.split(".")[0] in ("benchmark", "emulator", "mavswarm")
+             or m.startswith(("agents.oracle", "agents.plugins"))]
     assert not below, below
 
 
 def test_every_package_says_what_it_is_and_names_its_public_surface() -> None:
     lacking = []
-    for package in LAYERS:
+    for package in sorted({layer.split(".")[0] for layer in LAYERS}):
         for init in sorted((ROOT / package).rglob("__init__.py")):
             if "node_modules" in init.parts:
                 continue

@@ -1,6 +1,6 @@
-"""The chat-completions client (the OpenAI SDK underneath) against a real HTTP server that
-answers from a script: what it sends, what it retries, and what it gives back; and the
-assistant message the agents send back into the conversation."""
+"""The `ChatModel` over the OpenAI SDK (`OpenAIChatModel`) against a real HTTP server that
+answers from a script: what it sends, what it retries, and what it gives back (token use
+priced); and the assistant message the agents send back into the conversation."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from llm_tools.agents import ChatClient, ModelConfig, ModelError
-from llm_tools.agents.react import assistant_message
+from agents.llm import ChatModel, ModelConfig, ModelError, OpenAIChatModel, Usage
+from agents.llm.react import assistant_message
 from llm_tools.openai_adapter import parse_tool_calls
 from tests.ports import unused_tcp_port
 
@@ -77,11 +77,13 @@ def server(replies: list[tuple[int, str]]) -> Iterator[Recorded]:
 
 async def _complete(base_url: str, tools: list[Any] | None = None,
                     **config: Any) -> tuple[dict[str, Any], dict[str, int]]:
-    client = ChatClient(ModelConfig(base_url=base_url, model="m", **config))
+    client = OpenAIChatModel(ModelConfig(base_url=base_url, model="m", **config))
+    assert isinstance(client, ChatModel)
     try:
-        return await client.complete(USER, tools or [])
+        reply = await client.complete(USER, tools or [])
     finally:
         await client.close()
+    return reply.message, reply.usage.tokens()
 
 
 async def test_an_answer_comes_back_with_its_token_use_and_the_request_is_complete(
@@ -99,6 +101,18 @@ async def test_an_answer_comes_back_with_its_token_use_and_the_request_is_comple
     assert first["tools"] == [tool] and first["max_tokens"] == 12
     assert first["temperature"] == 0.5
     assert "tools" not in second and "max_tokens" not in second
+
+
+async def test_token_use_is_priced_per_million_tokens() -> None:
+    with server([]) as llm:
+        client = OpenAIChatModel(ModelConfig(base_url=llm.base_url, model="m",
+                                             price_in_usd_per_mtok=2.0,
+                                             price_out_usd_per_mtok=8.0))
+        try:
+            reply = await client.complete(USER, [])
+        finally:
+            await client.close()
+    assert reply.usage == Usage(prompt=7, completion=3, cost_usd=(7 * 2.0 + 3 * 8.0) / 1e6)
 
 
 async def test_a_key_is_sent_as_a_bearer_token_and_no_key_sends_no_authorization(
@@ -173,7 +187,7 @@ def test_bad_settings_are_refused_by_name(config: dict[str, Any], error: str,
     monkeypatch.delenv("OPENAI_MODEL", raising=False)
     settings = {"base_url": "http://127.0.0.1:9/v1", "model": "m", **config}
     with pytest.raises(ValueError, match=f"^{error}$".replace("(", r"\(").replace(")", r"\)")):
-        ChatClient(ModelConfig(**settings))
+        OpenAIChatModel(ModelConfig(**settings))
 
 
 # --------------------------------------------------------------- back into the conversation

@@ -1,5 +1,6 @@
-"""The ReAct agent on a scripted OpenAI-compatible server, flying a real task on a real swarm,
-through malformed model output to a pass."""
+"""The ReAct agent flying a real task on a real swarm: on a scripted model in process, through
+malformed model output to a pass; and from `bench run --agent react` on an OpenAI-compatible
+server over a real socket (the openai SDK's client end to end)."""
 
 from __future__ import annotations
 
@@ -7,13 +8,14 @@ import json
 
 import pytest
 
+from agents.llm import ReactAgent, ScriptedChatModel, tool_call
+from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from llm_tools import default_registry, openai_tools
-from llm_tools.agents import ModelConfig, ReactAgent
 from tests.bench_fixtures import small_session
 from tests.cli_fixtures import MAVSWARM
-from tests.scripted_llm import call, scripted_llm
+from tests.scripted_llm import scripted_llm
 
 
 def test_tool_definitions_are_strict() -> None:
@@ -35,28 +37,26 @@ async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
     op = data["tasks"][0]["oracle"][0][0]
     drone, altitude = op["drone"], op["altitude_m"]
     session = session_from_dict(data, source="s.json")
-    script = [
+    script: list[Reply] = [
         {"role": "assistant", "content": "Let me think without acting."},
-        [call("take_off", "{drone_id: oops", "c1")],  # malformed JSON
-        [call("take_off", {"drone_id": drone, "altitude_m": "high"}, "c2"),  # wrong type
-         call("teleport", {"drone_id": drone}, "c3"),  # unknown tool
-         call("take_off", {"drone_id": drone}, "c4")],  # missing argument
-        (500, "upstream hiccup"),  # the client retries
-        [call("take_off", {"drone_id": drone, "altitude_m": altitude, "speed": 3}, "c5")],
-        [call("take_off", {"drone_id": drone, "altitude_m": altitude}, "c6")],
-        [call("finish", {"summary": "hovering"}, "c7")],
+        [tool_call("take_off", "{drone_id: oops", "c1")],  # malformed JSON
+        [tool_call("take_off", {"drone_id": drone, "altitude_m": "high"}, "c2"),  # wrong type
+         tool_call("teleport", {"drone_id": drone}, "c3"),  # unknown tool
+         tool_call("take_off", {"drone_id": drone}, "c4")],  # missing argument
+        [tool_call("take_off", {"drone_id": drone, "altitude_m": altitude, "speed": 3}, "c5")],
+        [tool_call("take_off", {"drone_id": drone, "altitude_m": altitude}, "c6")],
+        [tool_call("finish", {"summary": "hovering"}, "c7")],
     ]
     records: list[dict] = []
-    with scripted_llm(script) as llm:
-        agent = ReactAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session, agent, emit=records.append)
+    model = ScriptedChatModel(script)
+    await run_session(session, ReactAgent(model), emit=records.append)
     (record,) = records
     assert record["passed"], record["checks"]
-    assert record["finish"] == "finished"
-    # 6 answers (not the 500); no prices given, so no cost.
+    assert record["finish"] == "finished" and model.remaining == 0
+    # 6 answers; the scripted model prices nothing.
     assert record["tokens"] == {"prompt": 600, "completion": 120, "cost_usd": 0.0}
     # Every bad call was answered with an error the model could read, and changed nothing.
-    tool_msgs = [m for m in llm.requests[-1]["messages"] if m["role"] == "tool"]
+    tool_msgs = [m for m in model.requests[-1].messages if m["role"] == "tool"]
     by_id = {m["tool_call_id"]: json.loads(m["content"]) for m in tool_msgs}
     assert "not valid JSON" in by_id["c1"]["message"]
     assert "altitude_m must be a number" in by_id["c2"]["message"]
@@ -65,8 +65,8 @@ async def test_react_agent_recovers_from_bad_calls_and_passes() -> None:
     assert "unknown argument(s) 'speed'" in by_id["c5"]["message"]
     assert all(by_id[c]["status"] == "error" for c in ("c1", "c2", "c3", "c4", "c5"))
     assert by_id["c6"]["status"] == "ok"
-    assert llm.requests[0]["tools"][0]["type"] == "function"
-    assert "Task: " in llm.requests[0]["messages"][1]["content"]
+    assert model.requests[0].tools[0]["type"] == "function"
+    assert "Task: " in model.requests[0].messages[1]["content"]
 
 
 @pytest.mark.mavsdk
@@ -78,8 +78,8 @@ def test_bench_run_with_the_react_agent(tmp_path) -> None:
     data = small_session(["takeoff_hold"])
     op = data["tasks"][0]["oracle"][0][0]
     session = write_json(tmp_path / "s.json", data)
-    script = [[call("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]})],
-              [call("finish", {})]]
+    script = [[tool_call("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]})],
+              [tool_call("finish", {})]]
     root = Path(__file__).resolve().parents[1]
     with scripted_llm(script) as llm:
         run = subprocess.run(
@@ -91,3 +91,7 @@ def test_bench_run_with_the_react_agent(tmp_path) -> None:
     record = json.loads((tmp_path / "out" / "results.jsonl").read_text())
     assert record["agent"] == "react" and record["passed"]
     assert record["tokens"] == {"prompt": 200, "completion": 40, "cost_usd": 0.00072}
+    # what went over the wire: the model named, the tools offered, the results read back
+    first, second = llm.requests
+    assert first["model"] == "scripted" and first["tools"][0]["type"] == "function"
+    assert json.loads(second["messages"][-1]["content"])["status"] == "ok"

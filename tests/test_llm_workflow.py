@@ -1,4 +1,4 @@
-"""The workflow agent on a scripted OpenAI-compatible server, flying real tasks on a real swarm:
+"""The workflow agent on a scripted model in process, flying real tasks on a real swarm:
 plan -> execute -> verify, re-asking for malformed plans, replanning after an incomplete
 verdict, and a blackboard that holds only what the tools reported."""
 
@@ -9,14 +9,14 @@ from typing import Any
 
 import pytest
 
+from agents.llm import ModelConfig, ScriptedChatModel, WorkflowAgent
+from agents.llm import tool_call as call
+from agents.llm.blackboard import Blackboard
+from agents.llm.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
-from llm_tools.agents import ModelConfig, WorkflowAgent
-from llm_tools.agents.blackboard import Blackboard
-from llm_tools.agents.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from llm_tools.registry import ToolRegistry
 from tests.bench_fixtures import small_session
-from tests.scripted_llm import call, scripted_llm
 
 
 def _text(content: str) -> dict[str, Any]:
@@ -39,14 +39,13 @@ def _takeoff_session() -> tuple[Any, str, float]:
 
 
 async def _run(session: Any, script: list[Any], agent_kwargs: dict[str, Any] | None = None
-               ) -> tuple[dict[str, Any], Any, WorkflowAgent]:
+               ) -> tuple[dict[str, Any], ScriptedChatModel, WorkflowAgent]:
     records: list[dict[str, Any]] = []
-    with scripted_llm(script) as llm:
-        agent = WorkflowAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"),
-                              **(agent_kwargs or {}))
-        await run_session(session, agent, emit=records.append)
+    model = ScriptedChatModel(script)
+    agent = WorkflowAgent(model, **(agent_kwargs or {}))
+    await run_session(session, agent, emit=records.append)
     (record,) = records
-    return record, llm, agent
+    return record, model, agent
 
 
 # ------------------------------------------------------------------ parsing (no swarm)
@@ -104,14 +103,14 @@ async def test_takeoff_passes_through_plan_execute_verify() -> None:
     fenced = {"role": "assistant",
               "content": f"Here is my plan:\n```json\n{plan['content']}\n```\nGood luck."}
     script = [fenced, _verdict(True, f"{drone} hovers at {altitude} m")]
-    record, llm, agent = await _run(session, script)
+    record, model, agent = await _run(session, script)
     assert record["passed"], record["checks"]
     assert record["finish"] == "finished"
     assert record["tokens"] == {"prompt": 200, "completion": 40, "cost_usd": 0.0}
     # Planning calls offer the model no tools.
-    assert len(llm.requests) == 2 and "tools" not in llm.requests[0]
-    assert "Task: Take off" in llm.requests[0]["messages"][1]["content"]
-    verify_text = llm.requests[1]["messages"][1]["content"]
+    assert len(model.requests) == 2 and not model.requests[0].tools
+    assert "Task: Take off" in model.requests[0].messages[1]["content"]
+    verify_text = model.requests[1].messages[1]["content"]
     assert f'take_off({{"altitude_m":{altitude},"drone_id":"{drone}"}}) -> ok' in verify_text
     state = agent.blackboard.drones[drone]
     assert state["altitude_m"] == pytest.approx(altitude, abs=1.5)
@@ -125,10 +124,10 @@ async def test_malformed_plan_is_reasked_then_succeeds() -> None:
     script = [_text("I would take off the drone and then hover."),
               _plan(("take_off", {"drone_id": drone, "altitude_m": altitude})),
               _verdict(True, "hovering")]
-    record, llm, _ = await _run(session, script)
+    record, model, _ = await _run(session, script)
     assert record["passed"], record["checks"]
     assert record["tokens"] == {"prompt": 300, "completion": 60, "cost_usd": 0.0}
-    reask = llm.requests[1]["messages"]
+    reask = model.requests[1].messages
     assert reask[-2] == {"role": "assistant",
                          "content": "I would take off the drone and then hover."}
     assert reask[-1] == {"role": "user", "content": REASK}
@@ -140,11 +139,11 @@ async def test_unreadable_plans_fall_back_to_tool_calling() -> None:
     script = [_text("not json"), _text("{still not"),
               [call("take_off", {"drone_id": drone, "altitude_m": altitude}, "c1")],
               [call("finish", {"summary": "done"}, "c2")]]
-    record, llm, _ = await _run(session, script)
+    record, model, _ = await _run(session, script)
     assert record["passed"], record["checks"]
-    assert record["finish"] == "finished" and len(llm.requests) == 4
-    assert llm.requests[2]["tools"] and llm.requests[2]["tools"][0]["type"] == "function"
-    tool_msg = json.loads(llm.requests[3]["messages"][-1]["content"])
+    assert record["finish"] == "finished" and len(model.requests) == 4
+    assert model.requests[2].tools and model.requests[2].tools[0]["type"] == "function"
+    tool_msg = json.loads(model.requests[3].messages[-1]["content"])
     assert tool_msg["status"] == "ok"
 
 
@@ -156,10 +155,10 @@ async def test_incomplete_verdict_triggers_a_replan_with_the_failures() -> None:
               _verdict(False, "the drone is still on the ground"),
               _plan(("take_off", {"drone_id": drone, "altitude_m": altitude})),
               _verdict(True, "hovering")]
-    record, llm, agent = await _run(session, script)
+    record, model, agent = await _run(session, script)
     assert record["passed"], record["checks"]
-    assert len(llm.requests) == 4
-    replan = llm.requests[2]["messages"][1]["content"]
+    assert len(model.requests) == 4
+    replan = model.requests[2].messages[1]["content"]
     assert "Verifier: the drone is still on the ground" in replan
     assert "Failed steps:" in replan and "move_to(" in replan
     actions = [s.tool for s in agent.blackboard.steps if s.tool not in ("list_drones", "nearby")]
@@ -190,7 +189,7 @@ async def test_blackboard_holds_only_what_the_drones_sensed() -> None:
     registry = _RecordingRegistry()
     script = [_plan(("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]})),
               _verdict(True, "hovering")]
-    _, llm, agent = await _run(session, script, {"registry": registry})
+    _, model, agent = await _run(session, script, {"registry": registry})
     sensed: set[str] = set()
     for name, result in registry.results:
         if name == "nearby":
@@ -200,7 +199,7 @@ async def test_blackboard_holds_only_what_the_drones_sensed() -> None:
     assert near["id"] in board.targets  # the test is not vacuous: something was sensed
     assert set(board.targets) | set(board.obstacles) <= sensed
     assert not (set(board.targets) | set(board.obstacles)) & far_ids - sensed
-    sent = json.dumps(llm.requests)
+    sent = json.dumps([r.messages for r in model.requests])
     for hidden in far_ids - sensed:
         assert f'\\"{hidden}\\"' not in sent, hidden
     assert f'\\"{near["id"]}\\"' in sent  # sensed ids do reach the model

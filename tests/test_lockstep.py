@@ -19,14 +19,14 @@ import numpy as np
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from agent_contract.per_drone import PerDroneTeam
+from agents.llm import ReactAgent, ScriptedChatModel
+from agents.llm import tool_call as call
+from agents.oracle import OracleAgent
+from agents.teams.per_drone import PerDroneTeam
 from benchmark.authoring.session_file import load_session
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
-from llm_tools.agents import ModelConfig, ReactAgent
 from mavlink_gateway import Status
 from tests.cli_fixtures import MAVSWARM, ROOT
-from tests.scripted_llm import call, scripted_llm
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
@@ -216,21 +216,26 @@ async def test_react_agents_with_random_model_latency_are_deterministic(per_dron
     runs = []
     for seed in (21, 22):
         rng = random.Random(seed)
-        script = [] if per_drone else list(TEAM_SCRIPT)
-        scripts = {d: list(r) for d, r in PER_DRONE_SCRIPTS.items()} if per_drone else None
-        with scripted_llm(script, by_drone=scripts,
-                          delay_s=lambda rng=rng: rng.uniform(0.0, MAX_THINK_S)) as llm:
-            config = ModelConfig(base_url=llm.base_url, model="scripted", api_key="k")
+        models: list[ScriptedChatModel] = []
 
-            def make(session, config=config):
-                if per_drone:
-                    return PerDroneTeam("react:per-drone", lambda d: ReactAgent(config))
-                return ReactAgent(config)
+        def react(script: list[Any], rng: random.Random = rng,
+                  models: list[ScriptedChatModel] = models) -> ReactAgent:
+            models.append(ScriptedChatModel(
+                list(script), think_s=lambda: rng.uniform(0.0, MAX_THINK_S)))
+            return ReactAgent(models[-1])
 
-            results = await _fly(make, ["t05"])
-            outcomes = {m["tool_call_id"]: json.loads(m["content"])
-                        for request in llm.requests for m in request["messages"]
-                        if m["role"] == "tool"}
+        def make(session: Any, react: Any = react) -> Any:
+            if per_drone:
+                return PerDroneTeam("react:per-drone",
+                                    lambda d: react(PER_DRONE_SCRIPTS[d]))
+            return react(TEAM_SCRIPT)
+
+        results = await _fly(make, ["t05"])
+        outcomes = {m["tool_call_id"]: json.loads(m["content"])
+                    for model in models for request in model.requests
+                    for m in request.messages if m["role"] == "tool"}
+        assert len(models) == (3 if per_drone else 1)
+        assert all(model.remaining == 0 for model in models)
         runs.append(results)
         record = results[0][0]
         assert record["finish"] == "finished" and record["tokens"]["prompt"] > 0

@@ -13,11 +13,11 @@ import shapely
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
+from agents.oracle import OracleAgent
+from agents.oracle.derive import Unplannable, derive_plan, plannable_endpoints
+from agents.oracle.pursuit import Pursuit
+from agents.oracle.session_oracle import oracle_for_session
 from benchmark.authoring.session_file import session_from_dict
-from benchmark.oracle import OracleAgent
-from benchmark.oracle.derive import Unplannable, derive_plan, plannable_endpoints
-from benchmark.oracle.pursuit import Pursuit
-from benchmark.oracle.session_oracle import oracle_for_session
 from benchmark.running.episode import run_one_task
 from benchmark.scoring.validators import ENDPOINTS, parse_tree
 

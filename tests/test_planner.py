@@ -11,8 +11,8 @@ import pytest
 import shapely
 import shapely.affinity
 
-from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
-from benchmark.oracle.planner import NoPath, PathPlanner
+from agents.oracle.coverage import lawnmower, order_visits, split_lanes
+from agents.oracle.planner import NoPath, PathPlanner
 from emulator.world import Obstacle, World, ellipse_polygon
 
 Point3 = tuple[float, float, float]

@@ -24,10 +24,10 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools
+from agents.llm import ModelConfig, OpenAIChatModel, ReactAgent, WorkflowAgent
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from benchmark.running.results import read_records
-from llm_tools.agents import ChatClient, ModelConfig, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
 from tests.ports import unused_tcp_port
@@ -143,15 +143,16 @@ def _assert_clean(record: dict[str, Any]) -> None:
 
 # --------------------------------------------------------------------------- the client
 async def test_the_sdk_client_gets_answers_and_token_counts(llama_url: str) -> None:
-    client = ChatClient(ModelConfig(base_url=llama_url, model=MODEL, max_completion_tokens=5))
+    client = OpenAIChatModel(ModelConfig(base_url=llama_url, model=MODEL,
+                                         max_completion_tokens=5))
     try:
-        message, usage = await client.complete(
-            [{"role": "user", "content": "Name one colour."}], [])
+        reply = await client.complete([{"role": "user", "content": "Name one colour."}], [])
     finally:
         await client.close()
+    message, usage = reply.message, reply.usage
     assert message["role"] == "assistant" and isinstance(message["content"], str)
     assert message["content"].strip()
-    assert usage["prompt"] > 5 and 0 < usage["completion"] <= 5
+    assert usage.prompt > 5 and 0 < usage.completion <= 5
 
 
 # ------------------------------------------------------------------- the benchmark path

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 from mcp import Client
 
+from agents.oracle import OracleAgent
 from benchmark.authoring.generate import build_task
 from benchmark.authoring.scenarios import LEVELS, generate_world
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.authoring.templates import SessionView
 from benchmark.authoring.templates.resilience import FAULT_AFTER_S, TEMPLATES
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records

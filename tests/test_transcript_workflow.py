@@ -9,11 +9,12 @@ from typing import Any
 
 import pytest
 
+from agents.llm import ScriptedChatModel, WorkflowAgent
+from agents.llm import tool_call as call
+from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
-from llm_tools.agents import ModelConfig, WorkflowAgent
 from tests.bench_fixtures import small_session
-from tests.scripted_llm import call, scripted_llm
 
 SUMMARY = "climbed and held; " + "the long account of it goes on " * 20  # > 200 characters
 
@@ -24,13 +25,11 @@ async def test_the_workflow_transcript_holds_its_plan_and_verdict_turns() -> Non
     op = data["tasks"][0]["oracle"][0][0]
     plan = json.dumps({"steps": [{"tool": "take_off", "arguments": {
         "drone_id": op["drone"], "altitude_m": op["altitude_m"]}}], "done_when": SUMMARY})
-    script = [{"role": "assistant", "content": plan},
+    script: list[Reply] = [{"role": "assistant", "content": plan},
               {"role": "assistant", "content": '{"complete": true, "reason": "holding"}'}]
     records: list[dict[str, Any]] = []
-    with scripted_llm(script) as llm:
-        agent = WorkflowAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session_from_dict(data, source="s.json"), agent,
-                          emit=records.append)
+    agent = WorkflowAgent(ScriptedChatModel(script))
+    await run_session(session_from_dict(data, source="s.json"), agent, emit=records.append)
     (record,) = records
     transcript = record["replay"]["transcript"]
     assert [e["role"] for e in transcript] == ["system", "user", "assistant",
@@ -47,16 +46,14 @@ async def test_the_workflow_transcript_holds_its_plan_and_verdict_turns() -> Non
 async def test_the_workflow_react_round_keeps_its_last_tool_results() -> None:
     data = small_session(["takeoff_hold"])
     op = data["tasks"][0]["oracle"][0][0]
-    script = [{"role": "assistant", "content": "no plan"},
+    script: list[Reply] = [{"role": "assistant", "content": "no plan"},
               {"role": "assistant", "content": "still no plan"},
               [call("take_off", {"drone_id": op["drone"], "altitude_m": op["altitude_m"]},
                     "r1")],
               [call("finish", {"summary": SUMMARY}, "r2")]]
     records: list[dict[str, Any]] = []
-    with scripted_llm(script) as llm:
-        agent = WorkflowAgent(ModelConfig(base_url=llm.base_url, model="scripted", api_key="k"))
-        await run_session(session_from_dict(data, source="s.json"), agent,
-                          emit=records.append)
+    agent = WorkflowAgent(ScriptedChatModel(script))
+    await run_session(session_from_dict(data, source="s.json"), agent, emit=records.append)
     (record,) = records
     transcript = record["replay"]["transcript"]
     assert record["finish"] == "finished"

@@ -162,8 +162,8 @@ _OWNERS = {  # module -> classes whose private members stay inside them
     "emulator/flight/offboard.py": ("OffboardControl",),
     "emulator/flight/failures.py": ("VehicleFailures",),
 }
-_PACKAGES = ("emulator", "mavlink_gateway", "benchmark", "mqtt_bus", "console", "mavswarm",
-             "tests", "perf")
+_PACKAGES = ("emulator", "mavlink_gateway", "agents", "benchmark", "mqtt_bus", "console",
+             "mavswarm", "tests", "perf")
 
 
 def _private_members() -> set[str]:

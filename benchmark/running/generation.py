@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent
+from agents.oracle import OracleAgent
 from benchmark.authoring import generate as draw_tasks
 from benchmark.authoring.generate import (
     MAX_ATTEMPTS,
@@ -26,7 +27,6 @@ from benchmark.authoring.scenarios import SESSION_INDICES, all_session_keys
 from benchmark.authoring.session_file import Session, TaskSpec, read_session_json, task_from_dict
 from benchmark.authoring.suite import Draw, suite_keys
 from benchmark.authoring.templates import TemplateUnfit
-from benchmark.oracle import OracleAgent
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm

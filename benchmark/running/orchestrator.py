@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent, AgentOptions
-from benchmark import agent_plugins
+from agents import plugins
 from benchmark.authoring.importer import load_any_session
 from benchmark.authoring.session_file import Session, SessionFileError, read_session_json
 from benchmark.running.backends import Handle, Unit, make_backend
@@ -38,12 +38,12 @@ from mavlink_gateway import set_mavsdk_log
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
            "run_benchmark", "run_unit"]
 
-# The built-in agents; NAME:per-drone: one instance of NAME per drone (agent_contract.per_drone).
-# --agent also takes plug-ins (benchmark.agent_plugins: package.module:Name, path/to/file.py:Name,
+# The built-in agents; NAME:per-drone: one instance of NAME per drone (agents.teams.per_drone).
+# --agent also takes plug-ins (agents.plugins: package.module:Name, path/to/file.py:Name,
 # installed entry points), which these lists do not hold.
-PER_DRONE = agent_plugins.PER_DRONE
-AGENTS = (*agent_plugins.BUILTIN_AGENTS, *(n + PER_DRONE for n in agent_plugins.LLM_AGENTS))
-LLM_AGENTS = tuple(n for n in AGENTS if n.removesuffix(PER_DRONE) in agent_plugins.LLM_AGENTS)
+PER_DRONE = plugins.PER_DRONE
+AGENTS = (*plugins.BUILTIN_AGENTS, *(n + PER_DRONE for n in plugins.LLM_AGENTS))
+LLM_AGENTS = tuple(n for n in AGENTS if n.removesuffix(PER_DRONE) in plugins.LLM_AGENTS)
 
 
 @dataclass(frozen=True)
@@ -88,14 +88,14 @@ class RunOutcome:
 
 def make_agent(name: str, session: Session, plan: RunPlan | None = None, trial: int = 0
                ) -> Agent:
-    """The named agent (a built-in or a plug-in, `benchmark.agent_plugins`) for one session
+    """The named agent (a built-in or a plug-in, `agents.plugins`) for one session
     and trial."""
     plan = plan or RunPlan(sessions=())
     options = AgentOptions(agent=name, session_id=session.id, trial=trial, model=plan.model,
                            base_url=plan.base_url,
                            price_in_usd_per_mtok=plan.price_in_usd_per_mtok,
                            price_out_usd_per_mtok=plan.price_out_usd_per_mtok)
-    return agent_plugins.make_agent(name, session, options, plan.agent_base_dir)
+    return plugins.make_agent(name, session, options, plan.agent_base_dir)
 
 
 def _limited(session: Session, limit: int | None) -> Session:
@@ -276,11 +276,11 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
     if not plan.agent_base_dir:
         plan = replace(plan, agent_base_dir=os.getcwd())
     if plan.agent != EXTERNAL:  # one line, before anything runs
-        agent_plugins.check_spec(plan.agent, plan.agent_base_dir)
+        plugins.check_spec(plan.agent, plan.agent_base_dir)
     if not plan.agent_timeout_s > 0:
         raise ValueError(f"the agent timeout must be > 0 s, got {plan.agent_timeout_s:g}")
     if plan.agent in LLM_AGENTS:
-        from llm_tools.agents import ModelConfig
+        from agents.llm import ModelConfig
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:
         raise ValueError("workers and trials must be >= 1")

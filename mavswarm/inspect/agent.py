@@ -1,12 +1,12 @@
 """The default agent of the inspect tasks: the benchmark's ReAct loop (`bench run --agent
-react`) with inspect's model in place of the OpenAI-compatible client.
+react`, `agents.llm.react.react_loop`) thinking with inspect's model (`InspectChatModel`).
 
 The model gets the same system prompt, opening message, tools, results and nudges as
 `ReactAgent`; the calls of one model turn run side by side, one thread of control each (so
 with the lockstep clock a turn's flights share simulated time, as they do in `bench run`),
 and the loop ends when the model calls `finish`, answers without a tool call three times,
-spends its turns or hits one of inspect's sample limits. The conversation is the sample's
-`state.messages`, so inspect's log shows it as it happened.
+spends its turns or hits one of inspect's sample limits. The conversation is mirrored into the
+sample's `state.messages`, so inspect's log shows it as it happened.
 
 `InspectSolverAgent` instead lets any inspect solver play the task (``generate()``,
 ``basic_agent()``, a solver of one's own) with the tools in ``state.tools``; inspect's tool
@@ -15,21 +15,17 @@ loop runs the calls of one turn one after another.
 
 from __future__ import annotations
 
-from inspect_ai.model import (
-    ChatMessageSystem,
-    ChatMessageTool,
-    ChatMessageUser,
-    Model,
-    get_model,
-)
+from typing import Any
+
+from inspect_ai.model import ChatMessageSystem, ChatMessageUser, Model, get_model
 from inspect_ai.solver import Generate, Solver, TaskState
-from inspect_ai.tool import ToolDef
 from inspect_ai.util import LimitExceededError
 
 from agent_contract import AgentTask, AgentTools
-from llm_tools.agents.react import MAX_NUDGES, NUDGE, SYSTEM_PROMPT, task_message
+from agents.llm.react import SYSTEM_PROMPT, react_loop, task_message
 from llm_tools.registry import ToolRegistry, default_registry
-from mavswarm.inspect.tools import call_tool, result_text, tool_defs
+from mavswarm.inspect.model import InspectChatModel
+from mavswarm.inspect.tools import tool_defs
 
 __all__ = ["InspectReactAgent", "InspectSolverAgent"]
 
@@ -49,48 +45,21 @@ class InspectReactAgent:
         self.registry = registry or default_registry()
 
     async def run(self, task: AgentTask, tools: AgentTools) -> None:
-        state, model = self.state, self.model or get_model()
         defs = tool_defs(self.registry, tools)
-        state.tools = list(defs)
+        self.state.tools = list(defs)
+        model = InspectChatModel(self.model or get_model(), self.state, defs)
+        messages: list[dict[str, Any]] = [
+            {"role": "system", "content": SYSTEM_PROMPT},
+            {"role": "user", "content": task_message(task.text, tools.drone_ids)}]
         try:
-            state.messages = [ChatMessageSystem(content=SYSTEM_PROMPT),
-                              ChatMessageUser(content=task_message(task.text, tools.drone_ids))]
-            stop = await self._loop(model, defs, tools)
+            self.state.messages = []
+            stop = await react_loop(model, self.registry, tools, messages,
+                                    max_steps=self.max_turns)
+            model.sync(messages)  # the last tool results
         except LimitExceededError as limit:  # one of inspect's sample limits
             stop = f"stopped: {limit}"
         if not tools.finished:
             tools.finish(stop or "")
-
-    async def _loop(self, model: Model, defs: list[ToolDef], tools: AgentTools) -> str | None:
-        """Model turns until `finish` (None) or a reason to stop (returned)."""
-        state, nudges = self.state, 0
-        for _ in range(self.max_turns):
-            output = await model.generate(state.messages, tools=defs)
-            state.output = output
-            if output.usage is not None:
-                tools.add_tokens(output.usage.input_tokens, output.usage.output_tokens)
-            message = output.message
-            state.messages.append(message)
-            calls = message.tool_calls or []
-            if calls:
-                results = await tools.concurrently(
-                    *(call_tool(self.registry, tools, call) for call in calls))
-                for result in results:
-                    if isinstance(result, BaseException):
-                        raise result
-                for call, result in zip(calls, results, strict=True):
-                    state.messages.append(ChatMessageTool(
-                        content=result_text(result), tool_call_id=call.id,
-                        function=call.function))
-                if tools.finished:
-                    return None
-            elif nudges >= MAX_NUDGES:
-                return (f"stopped: the model answered without a tool call {nudges + 1} times "
-                        "(text instead of tool calls)")
-            else:
-                nudges += 1
-                state.messages.append(ChatMessageUser(content=NUDGE))
-        return f"stopped: the budget of {self.max_turns} model turns is spent"
 
 
 class InspectSolverAgent:

@@ -5,36 +5,22 @@ registry, so a model sees and gets exactly what it would through `bench run`, RE
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
-from inspect_ai.tool import ToolCall, ToolDef, ToolParams
+from inspect_ai.tool import ToolDef, ToolParams
 
 from agent_contract import AgentTools
+from agents.llm.react import result_text
 from llm_tools.registry import ToolRegistry
 
-__all__ = ["call_tool", "result_text", "tool_defs"]
-
-
-def result_text(result: dict[str, Any]) -> str:
-    """A tool's result as the model reads it (as `bench run`'s ReAct agent sends it)."""
-    return json.dumps(result, separators=(",", ":"))
-
-
-async def call_tool(registry: ToolRegistry, tools: AgentTools, call: ToolCall
-                    ) -> dict[str, Any]:
-    """Run a model's tool call through the registry: its result, or an error result the
-    model can act on. Raises only BudgetExhausted (the task is over)."""
-    if call.parse_error is not None:  # inspect could not read the arguments the model sent
-        return {"status": "error",
-                "message": f"{call.function}: {call.parse_error}; send a JSON object"}
-    return await registry.call(tools, call.function, call.arguments)
+__all__ = ["tool_defs"]
 
 
 def tool_defs(registry: ToolRegistry, tools: AgentTools) -> list[ToolDef]:
     """Every tool of the registry as a ToolDef acting on one task's `tools`. They run one at
     a time when inspect's own tool loop calls them (parallel=False); the swarm agent runs the
-    calls of one model turn side by side itself."""
+    calls of one model turn side by side itself. A result reads as `bench run`'s ReAct agent
+    sends it."""
     defs = []
     for spec in registry.specs():
         defs.append(ToolDef(_executor(registry, tools, spec.name), name=spec.name,

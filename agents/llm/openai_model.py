@@ -1,26 +1,25 @@
-"""A client for OpenAI-compatible chat completions (tools included), on the official OpenAI SDK:
-any server that speaks the chat-completions API (OpenAI, a hosted gateway, llama.cpp, vLLM,
-Ollama...) at a base URL."""
+"""The `ChatModel` of OpenAI-compatible chat completions (tools included), on the official
+`openai` SDK: any server that speaks the chat-completions API (OpenAI, a hosted gateway,
+llama.cpp, vLLM, Ollama...) at a base URL."""
 
 from __future__ import annotations
 
 import asyncio
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import AsyncIterator, Mapping, Sequence
+from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from typing import Any
 
 import openai
 
-__all__ = ["ChatClient", "ModelConfig", "ModelError"]
+from agents.llm.model import ChatModel, ModelError, ModelReply, Usage
+
+__all__ = ["ModelConfig", "OpenAIChatModel", "opened"]
 
 # Statuses the SDK retries itself before giving up (request timeout, conflict, rate limit,
 # server errors); any other error status is final at once.
 _RETRIED_STATUSES = frozenset({408, 409, 429})
-
-
-class ModelError(RuntimeError):
-    """Raised when the model backend cannot give a usable answer after retries."""
 
 
 @dataclass(frozen=True)
@@ -57,14 +56,14 @@ class ModelConfig:
         return ModelConfig(base.rstrip("/"), model, key, self.temperature, self.timeout_s,
                            self.retries, price_in, price_out, self.max_completion_tokens)
 
-    def cost_usd(self, usage: Mapping[str, int]) -> float:
+    def cost_usd(self, prompt_tokens: int, completion_tokens: int) -> float:
         """The price of one answer's token use."""
-        return (usage["prompt"] * self.price_in_usd_per_mtok
-                + usage["completion"] * self.price_out_usd_per_mtok) / 1e6
+        return (prompt_tokens * self.price_in_usd_per_mtok
+                + completion_tokens * self.price_out_usd_per_mtok) / 1e6
 
 
-class ChatClient:
-    """Asks {base_url}/chat/completions; returns (assistant message, usage).
+class OpenAIChatModel:
+    """Asks {base_url}/chat/completions (a `ChatModel`).
 
     The SDK retries transport failures, time-outs, rate limits and server errors
     (`config.retries` times, with back-off); an answer that is not a usable completion is asked
@@ -85,8 +84,7 @@ class ChatClient:
         await self._client.close()
 
     async def complete(self, messages: Sequence[Mapping[str, Any]],
-                       tools: Sequence[Mapping[str, Any]]
-                       ) -> tuple[dict[str, Any], dict[str, int]]:
+                       tools: Sequence[Mapping[str, Any]]) -> ModelReply:
         request: dict[str, Any] = {"model": self.config.model, "messages": list(messages),
                                    "temperature": self.config.temperature,
                                    "extra_headers": self._headers}
@@ -116,7 +114,8 @@ class ChatClient:
             if isinstance(answer, str):
                 problem = answer
                 continue
-            return answer
+            message, (prompt, done) = answer
+            return ModelReply(message, Usage(prompt, done, self.config.cost_usd(prompt, done)))
         raise ModelError(_failed(attempts, problem))
 
 
@@ -125,7 +124,7 @@ def _failed(attempts: int, problem: str) -> str:
     return f"the model backend failed {times}: {problem}"
 
 
-def _answer(completion: Any) -> tuple[dict[str, Any], dict[str, int]] | str:
+def _answer(completion: Any) -> tuple[dict[str, Any], tuple[int, int]] | str:
     """The assistant message and token use of a completion, or what makes it unusable."""
     if not isinstance(completion, openai.BaseModel):
         return f"unusable response (not a completion): {str(completion)[:200]}"
@@ -139,8 +138,7 @@ def _answer(completion: Any) -> tuple[dict[str, Any], dict[str, int]] | str:
     usage = data.get("usage")
     if not isinstance(usage, dict):
         usage = {}
-    return message, {"prompt": _count(usage.get("prompt_tokens")),
-                     "completion": _count(usage.get("completion_tokens"))}
+    return message, (_count(usage.get("prompt_tokens")), _count(usage.get("completion_tokens")))
 
 
 def _count(value: Any) -> int:
@@ -149,3 +147,17 @@ def _count(value: Any) -> int:
         return max(int(value or 0), 0)
     except (TypeError, ValueError):
         return 0
+
+
+@asynccontextmanager
+async def opened(model: ChatModel | ModelConfig) -> AsyncIterator[ChatModel]:
+    """The model an agent asks during one run: a `ModelConfig` opens an `OpenAIChatModel`,
+    closed when the run ends; a `ChatModel` is used as it is (its owner closes it)."""
+    if not isinstance(model, ModelConfig):
+        yield model
+        return
+    client = OpenAIChatModel(model)
+    try:
+        yield client
+    finally:
+        await client.close()

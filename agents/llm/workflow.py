@@ -15,10 +15,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from llm_tools.agents.blackboard import Blackboard, StepRecord
-from llm_tools.agents.chat import ChatClient, ModelConfig
-from llm_tools.agents.react import assistant_message
-from llm_tools.agents.transcript import record_messages, unrecorded_from
+from agents.llm.blackboard import Blackboard, StepRecord
+from agents.llm.model import ChatModel
+from agents.llm.openai_model import ModelConfig, opened
+from agents.llm.react import assistant_message, result_text
+from agents.llm.transcript import record_messages, unrecorded_from
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
 
@@ -149,15 +150,16 @@ def parse_verdict(text: Any) -> Verdict | None:
 
 # ------------------------------------------------------------------------------ agent
 class WorkflowAgent:
-    """Observe, plan, execute and verify over OpenAI-compatible chat completions."""
+    """Observe, plan, execute and verify over a chat model (a `ChatModel`, or a `ModelConfig`
+    of an OpenAI-compatible server, as for `ReactAgent`)."""
 
     name = "workflow"
 
-    def __init__(self, config: ModelConfig, *, registry: ToolRegistry | None = None,
+    def __init__(self, model: ChatModel | ModelConfig, *, registry: ToolRegistry | None = None,
                  max_steps: int = 40, max_tokens: int = 400_000, max_rounds: int = 3) -> None:
         if max_rounds < 1:
             raise ValueError(f"max_rounds must be at least 1, got {max_rounds!r}")
-        self.config = config
+        self.model = model
         self.registry = registry or default_registry()
         self.max_steps = max_steps
         self.max_tokens = max_tokens
@@ -168,30 +170,27 @@ class WorkflowAgent:
     async def run(self, task: AgentTask, tools: AgentTools) -> None:
         self.blackboard = Blackboard()
         self._steps_used = 0
-        client = ChatClient(self.config)
-        try:
-            await self._workflow(client, task, tools)
-        finally:
-            await client.close()
+        async with opened(self.model) as model:
+            await self._workflow(model, task, tools)
 
     # ---------------------------------------------------------------- rounds
-    async def _workflow(self, client: ChatClient, task: AgentTask, tools: AgentTools) -> None:
+    async def _workflow(self, model: ChatModel, task: AgentTask, tools: AgentTools) -> None:
         board = self.blackboard
         await self._observe(tools)
         feedback = ""
         stop = f"stopped: {self.max_rounds} round(s) did not complete the task"
         for round_index in range(self.max_rounds):
             first_step = len(board.steps)
-            plan = await self._plan(client, task, tools, feedback)
+            plan = await self._plan(model, task, tools, feedback)
             if plan is None:
-                await self._react_round(client, task, tools)
+                await self._react_round(model, task, tools)
             else:
                 await self._execute(plan, tools)
             if tools.finished or self._out_of_budget(tools):
                 break
             failures = board.failures(first_step)
             await self._observe(tools)
-            verdict = await self._verify(client, task, tools, first_step)
+            verdict = await self._verify(model, task, tools, first_step)
             if verdict.complete:
                 await self._call(tools, "finish", {"summary": verdict.reason[:500]})
                 return
@@ -220,14 +219,16 @@ class WorkflowAgent:
         result = await self.registry.call(tools, name, arguments)
         return self.blackboard.ingest(name, arguments, result)
 
-    async def _ask(self, client: ChatClient, tools: AgentTools,
+    async def _ask(self, model: ChatModel, tools: AgentTools,
                    messages: list[dict[str, Any]],
                    schema: list[dict[str, Any]] | None = None) -> dict[str, Any]:
         record_messages(tools, messages, unrecorded_from(messages))
-        message, usage = await client.complete(messages, schema or [])
-        tools.add_tokens(usage["prompt"], usage["completion"], client.config.cost_usd(usage))
-        record_messages(tools, [assistant_message(message, parse_tool_calls(message))], 0, usage)
-        return message
+        reply = await model.complete(messages, schema or [])
+        usage = reply.usage
+        tools.add_tokens(usage.prompt, usage.completion, usage.cost_usd)
+        record_messages(tools, [assistant_message(reply.message, parse_tool_calls(reply.message))],
+                        0, usage.tokens())
+        return reply.message
 
     # --------------------------------------------------------------- observe
     async def _observe(self, tools: AgentTools) -> None:
@@ -237,7 +238,7 @@ class WorkflowAgent:
             await self._call(tools, "nearby", {"drone_id": drone})
 
     # ------------------------------------------------------------------ plan
-    async def _plan(self, client: ChatClient, task: AgentTask, tools: AgentTools,
+    async def _plan(self, model: ChatModel, task: AgentTask, tools: AgentTools,
                     feedback: str) -> Plan | None:
         user = (f"Task: {task.text}\nYour drones: {', '.join(tools.drone_ids)}.\n"
                 f"Blackboard: {self.blackboard.summary()}")
@@ -247,7 +248,7 @@ class WorkflowAgent:
             {"role": "system", "content": PLAN_PROMPT.format(tools=self._tool_lines())},
             {"role": "user", "content": user}]
         for attempt in range(2):
-            message = await self._ask(client, tools, messages)
+            message = await self._ask(model, tools, messages)
             content = message.get("content")
             plan = parse_plan(content)
             if plan is not None or attempt == 1 or self._out_of_budget(tools):
@@ -292,7 +293,7 @@ class WorkflowAgent:
                     failed.add(step.drone_id)
 
     # ---------------------------------------------------------------- verify
-    async def _verify(self, client: ChatClient, task: AgentTask, tools: AgentTools,
+    async def _verify(self, model: ChatModel, task: AgentTask, tools: AgentTools,
                       first_step: int) -> Verdict:
         log = "\n".join(s.describe() for s in self.blackboard.steps[first_step:]
                         if s.tool not in ("list_drones", "nearby")) or "(no actions)"
@@ -301,7 +302,7 @@ class WorkflowAgent:
             {"role": "user", "content": f"Task: {task.text}\nActions this round:\n{log}\n"
                                         f"Blackboard: {self.blackboard.summary()}"}]
         for attempt in range(2):
-            message = await self._ask(client, tools, messages)
+            message = await self._ask(model, tools, messages)
             content = message.get("content")
             verdict = parse_verdict(content)
             if verdict is not None:
@@ -312,7 +313,7 @@ class WorkflowAgent:
         return Verdict(False, "the verification answer was not readable")
 
     # ----------------------------------------------------------- react round
-    async def _react_round(self, client: ChatClient, task: AgentTask,
+    async def _react_round(self, model: ChatModel, task: AgentTask,
                            tools: AgentTools) -> None:
         """Tool calling for one round, when no plan could be read."""
         schema = openai_tools(self.registry)
@@ -322,7 +323,7 @@ class WorkflowAgent:
                                         f"{', '.join(tools.drone_ids)}.\n"
                                         f"Blackboard: {self.blackboard.summary()}"}]
         for _ in range(REACT_TURNS_PER_ROUND):
-            message = await self._ask(client, tools, messages, schema)
+            message = await self._ask(model, tools, messages, schema)
             calls = parse_tool_calls(message)
             messages.append(assistant_message(message, calls))
             if not calls:
@@ -332,7 +333,7 @@ class WorkflowAgent:
                 result = await self.registry.call(tools, call.name, call.arguments)
                 self.blackboard.ingest(call.name, call.arguments, result)
                 messages.append({"role": "tool", "tool_call_id": call.id,
-                                 "content": json.dumps(result, separators=(",", ":"))})
+                                 "content": result_text(result)})
             if tools.finished or self._out_of_budget(tools):
                 break
         # The last turn's tool results, which no further question carries into the transcript.

@@ -10,10 +10,10 @@ from functools import partial
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
-from benchmark.oracle.derive import Unplannable, derive_plan
-from benchmark.oracle.planner import NoPath, PathPlanner
-from benchmark.oracle.pursuit import Pursuit
+from agents.oracle.coverage import lawnmower, order_visits, split_lanes
+from agents.oracle.derive import Unplannable, derive_plan
+from agents.oracle.planner import NoPath, PathPlanner
+from agents.oracle.pursuit import Pursuit
 from benchmark.scoring.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status

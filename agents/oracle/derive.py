@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from benchmark.oracle.intentions import DroneIntent, Intentions, Unplannable, target_point
+from agents.oracle.intentions import DroneIntent, Intentions, Unplannable, target_point
 from benchmark.scoring.validators.tree import Leaf, Node
 from emulator.scenario import Scenario
 
