@@ -23,7 +23,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from agents.plugins import ENTRY_POINT_GROUP
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.reporting.report_html import DEFAULT_INSPECTOR_URL
 from benchmark.running.backends import BACKENDS
@@ -32,6 +31,7 @@ from benchmark.running.hosted import EXTERNAL
 from benchmark.running.hosted.options import add_hosted_arguments
 from emulator.link_faults import add_link_arguments, link_faults_from_args
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
+from swarm_agents.plugins import ENTRY_POINT_GROUP
 
 __all__ = ["add_parsers", "add_verbose_argument", "run_bench"]
 
@@ -214,13 +214,13 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from agents.plugins import check_spec
     from benchmark.reporting.report import metrics_table, write_report
     from benchmark.reporting.report_html import check_inspector_url
     from benchmark.running.orchestrator import RunPlan, check_session_files, run_benchmark
     from benchmark.running.progress import ProgressBar
     from benchmark.running.results import read_records
     from benchmark.scoring.metrics import summarize
+    from swarm_agents.plugins import check_spec
     if args.agent != EXTERNAL:
         check_spec(args.agent)  # a bad --agent is one line, before anything starts
     if not args.agent_timeout_s > 0:
@@ -354,7 +354,7 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _agents(args: argparse.Namespace) -> int:
-    from agents.plugins import listing
+    from swarm_agents.plugins import listing
     rows = listing()
     width = max(len(r.name) for r in rows) + 2
     for row in rows:

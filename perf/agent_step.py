@@ -17,11 +17,11 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from agents.llm import ModelReply, ReactAgent, ScriptedChatModel
-from agents.llm import tool_call as call
-from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
+from swarm_agents.llm import ModelReply, ReactAgent, ScriptedChatModel
+from swarm_agents.llm import tool_call as call
+from swarm_agents.llm.scripted import Reply
 from tests.bench_fixtures import small_session
 
 

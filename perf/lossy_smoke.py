@@ -27,11 +27,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SMOKE_TASKS, suite_paths
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from emulator.link_faults import LinkFaults, LinkProfile
+from swarm_agents.oracle import OracleAgent
 
 WALL_FIELDS = ("wall_time_s", "overhead_s")
 

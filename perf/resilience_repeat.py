@@ -26,10 +26,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+from swarm_agents.oracle import OracleAgent
 
 DROPPED = ("wall_time_s", "overhead_s", "replay")
 DEFAULT_SESSIONS = ("resilience-easy-1", "resilience-moderate-3")

@@ -28,10 +28,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import machine_line
 
 from agent_contract import AgentTask, AgentTools
-from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
+from swarm_agents.oracle import OracleAgent
 
 _SPAWN = multiprocessing.get_context("spawn")
 

@@ -24,10 +24,10 @@ from pathlib import Path
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _common import machine_line, table
 
-from agents.oracle import OracleAgent
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR, suite_paths
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+from swarm_agents.oracle import OracleAgent
 
 WALL_FIELDS = ("wall_time_s", "overhead_s")
 TRACKING = "target_tracking-easy-1"

@@ -1,19 +1,20 @@
 """The layers of mavswarm and a scanner that finds every import crossing them.
 
-A layer is a package, or a subpackage or module named apart (`agents.llm`,
+A layer is a package, or a subpackage or module named apart (`swarm_agents.llm`,
 `benchmark.scoring.validators`): a module belongs to the longest layer its dotted name starts
 with, and may import only its own layer and those listed for it. The MAVLink vocabulary
 (`mavlink_vocabulary`) imports nothing of ours and every layer may import it; the emulator and
 the MAVLink gateway import nothing else of ours; the agent contract imports the gateway, the LLM
-tools the gateway and the contract. The agent side of `agents` (the LLM agents and their model
-seam, the baselines, the per-drone teams) stands on those alone, so loading an agent loads no
-validator, hidden task data or ground truth. The benchmark's session files and checks
+tools the gateway and the contract. The agent side of `swarm_agents` (the LLM agents and their
+model seam, the baselines, the per-drone teams) stands on those alone, so loading an agent loads
+no validator, hidden task data or ground truth. The benchmark's session files and checks
 (`benchmark.authoring.session_file`, `benchmark.authoring.task_faults`,
 `benchmark.scoring.validators`) stand on the emulator and the agent side; the oracle
-(`agents.oracle`) on them, the agent loader (`agents.plugins`) on every agent; the MQTT bus on
-the emulator and the agent side (it reads what vehicles report, never ground truth); the rest of
-the benchmark on all of them, the web console on all of those, and the composition root
-(`mavswarm`) on whatever it assembles. `agents` itself (its `__init__`) imports nothing.
+(`swarm_agents.oracle`) on them, the agent loader (`swarm_agents.plugins`) on every agent; the
+MQTT bus on the emulator and the agent side (it reads what vehicles report, never ground truth);
+the rest of the benchmark on all of them, the web console on all of those, and the composition
+root (`mavswarm`) on whatever it assembles. `swarm_agents` itself (its `__init__`) imports
+nothing.
 
 Every import counts wherever it stands: at the top, inside a function, under `TYPE_CHECKING`,
 relative, or as a string passed to `__import__` / `importlib.import_module`; `from a import b`
@@ -35,8 +36,8 @@ _AGENT_SIDE = _BOTTOM | {"mavlink_gateway", "agent_contract", "llm_tools"}
 _SESSIONS_AND_CHECKS = frozenset({"benchmark.authoring.session_file",
                                   "benchmark.authoring.task_faults",
                                   "benchmark.scoring.validators"})
-_AGENTS = frozenset({"agents", "agents.llm", "agents.baselines", "agents.teams",
-                     "agents.oracle", "agents.plugins"})
+_AGENTS = frozenset({"swarm_agents", "swarm_agents.llm", "swarm_agents.baselines",
+                     "swarm_agents.teams", "swarm_agents.oracle", "swarm_agents.plugins"})
 _BELOW_BENCHMARK = _AGENT_SIDE | {"emulator", "mqtt_bus"} | _SESSIONS_AND_CHECKS | _AGENTS
 LAYERS: dict[str, frozenset[str]] = {
     "mavlink_vocabulary": frozenset(),
@@ -44,18 +45,19 @@ LAYERS: dict[str, frozenset[str]] = {
     "mavlink_gateway": _BOTTOM,
     "agent_contract": _BOTTOM | {"mavlink_gateway"},
     "llm_tools": _AGENT_SIDE - {"llm_tools"},
-    "agents": frozenset(),
-    "agents.baselines": _BOTTOM | {"agent_contract"},
-    "agents.teams": _BOTTOM | {"mavlink_gateway", "agent_contract"},
-    "agents.llm": _AGENT_SIDE,
+    "swarm_agents": frozenset(),
+    "swarm_agents.baselines": _BOTTOM | {"agent_contract"},
+    "swarm_agents.teams": _BOTTOM | {"mavlink_gateway", "agent_contract"},
+    "swarm_agents.llm": _AGENT_SIDE,
     "mqtt_bus": _AGENT_SIDE | {"emulator"},
     "benchmark.authoring.task_faults": _AGENT_SIDE | {"emulator"},
     "benchmark.scoring.validators": _AGENT_SIDE | {"emulator"},
     "benchmark.authoring.session_file": _AGENT_SIDE | {"emulator",
                                                        "benchmark.authoring.task_faults",
                                                        "benchmark.scoring.validators"},
-    "agents.oracle": _AGENT_SIDE | {"emulator"} | _SESSIONS_AND_CHECKS,
-    "agents.plugins": _AGENT_SIDE | _SESSIONS_AND_CHECKS | (_AGENTS - {"agents.plugins"}),
+    "swarm_agents.oracle": _AGENT_SIDE | {"emulator"} | _SESSIONS_AND_CHECKS,
+    "swarm_agents.plugins": (_AGENT_SIDE | _SESSIONS_AND_CHECKS
+                             | (_AGENTS - {"swarm_agents.plugins"})),
     "benchmark": _BELOW_BENCHMARK,
     "console": _BELOW_BENCHMARK | {"benchmark"},
     "mavswarm": _BELOW_BENCHMARK | {"benchmark", "console"},

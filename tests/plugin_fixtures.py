@@ -64,7 +64,7 @@ class SlowThinker:
 def scripted_react(options):
     """The built-in ReAct loop on a scripted model in process: the drone it is told is its own
     takes off, then it finishes (an agent told of no drone only talks)."""
-    from agents.llm import ReactAgent, ScriptedChatModel, tool_call
+    from swarm_agents.llm import ReactAgent, ScriptedChatModel, tool_call
     me = options.drone_id
 
     def answer(request):

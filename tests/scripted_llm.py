@@ -1,6 +1,6 @@
 """A scripted OpenAI-compatible chat-completions server on real HTTP, for the tests whose model
 client is in another process or goes through `--base-url` (the CLI, Ray workers, the openai SDK
-end to end); agents in process are driven by `agents.llm.ScriptedChatModel` instead.
+end to end); agents in process are driven by `swarm_agents.llm.ScriptedChatModel` instead.
 
 Each POST to /v1/chat/completions gets the next scripted reply: an assistant message (tool
 calls, possibly malformed, or text), or a raw HTTP status/body. Requests are recorded as they
@@ -19,7 +19,7 @@ from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
-from agents.llm.scripted import tool_call as call
+from swarm_agents.llm.scripted import tool_call as call
 
 __all__ = ["ScriptedLLM", "call", "scripted_llm"]
 

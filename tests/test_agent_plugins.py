@@ -1,4 +1,4 @@
-"""Plug-in agents (`agents.plugins`): specs resolved from their text, factories given
+"""Plug-in agents (`swarm_agents.plugins`): specs resolved from their text, factories given
 the run's options, bad plug-ins refused before a run or ended as their tasks' agent_error
 records while the run goes on, a hung agent stopped by the wall-clock guard (and only a hung
 one), the example LLM loop (the openai SDK) against a scripted OpenAI-compatible server, and
@@ -14,7 +14,11 @@ from typing import Any
 import pytest
 
 from agent_contract import AgentOptions, tool_names
-from agents.plugins import (
+from benchmark.authoring.session_file import Session, session_from_dict
+from benchmark.running.backends import Unit
+from benchmark.running.orchestrator import RunPlan, run_benchmark, run_unit
+from benchmark.running.results import read_records
+from swarm_agents.plugins import (
     AgentSpecError,
     BrokenAgent,
     PluginAgent,
@@ -22,11 +26,7 @@ from agents.plugins import (
     make_agent,
     parse_spec,
 )
-from agents.teams.per_drone import PerDroneTeam
-from benchmark.authoring.session_file import Session, session_from_dict
-from benchmark.running.backends import Unit
-from benchmark.running.orchestrator import RunPlan, run_benchmark, run_unit
-from benchmark.running.results import read_records
+from swarm_agents.teams.per_drone import PerDroneTeam
 from tests.bench_fixtures import small_session, write_json
 from tests.plugin_fixtures import write_plugins
 from tests.scripted_llm import call, scripted_llm

@@ -155,9 +155,9 @@ async def test_a_task_schedules_hidden_failures_and_link_faults_from_its_start()
     import copy
     import json
 
-    from agents.oracle import OracleAgent
     from benchmark.authoring.session_file import session_from_dict
     from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+    from swarm_agents.oracle import OracleAgent
     from tests.cli_fixtures import ROOT
 
     path = ROOT / "benchmark" / "sessions" / "target_assignment-easy-1.json"

@@ -27,7 +27,6 @@ from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
-from agents.llm.react import SYSTEM_PROMPT, task_message
 from benchmark.authoring.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
 from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
@@ -35,6 +34,7 @@ from llm_tools import default_registry
 from mavswarm.cli import main as mavswarm_main
 from mavswarm.inspect import area_search, full, sessions, smoke, swarm_task
 from mavswarm.inspect.solver import RECORD_KEY
+from swarm_agents.llm.react import SYSTEM_PROMPT, task_message
 from tests.bench_fixtures import overcrowded, small_session, write_json
 from tests.cli_fixtures import ROOT
 from tests.inspect_fixtures import INSPECT, inspect_env

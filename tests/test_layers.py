@@ -17,8 +17,8 @@ import pytest
 from tests.cli_fixtures import ROOT
 from tests.import_layers import LAYERS, TIERS, crossings, layer_of, tier_crossings
 
-AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools", "agents.llm", "agents.baselines",
-              "agents.teams")
+AGENT_SIDE = ("mavlink_gateway", "agent_contract", "llm_tools", "swarm_agents.llm",
+              "swarm_agents.baselines", "swarm_agents.teams")
 
 
 def _exists(root: Path, layer: str) -> bool:
@@ -76,14 +76,15 @@ def test_nothing_that_knows_hidden_parts_is_below_the_agent_side() -> None:
                 below.add(layer)
                 todo.append(layer)
         hidden = below & {"emulator", "benchmark", "benchmark.scoring.validators",
-                          "benchmark.authoring.session_file", "agents.oracle", "agents.plugins"}
+                          "benchmark.authoring.session_file", "swarm_agents.oracle",
+                          "swarm_agents.plugins"}
         assert not hidden, (agent_side, hidden)
 
 
 def test_a_module_belongs_to_the_longest_layer_it_starts_with() -> None:
-    assert layer_of("agents.llm.react") == "agents.llm"
-    assert layer_of("agents.oracle") == "agents.oracle"
-    assert layer_of("agents") == "agents"
+    assert layer_of("swarm_agents.llm.react") == "swarm_agents.llm"
+    assert layer_of("swarm_agents.oracle") == "swarm_agents.oracle"
+    assert layer_of("swarm_agents") == "swarm_agents"
     assert layer_of("benchmark.scoring.validators.tree") == "benchmark.scoring.validators"
     assert layer_of("benchmark.running.orchestrator") == "benchmark"
     assert layer_of("numpy.linalg") is None
@@ -109,49 +110,51 @@ def test_planted_violations_are_found(tmp_path: Path) -> None:
             "def f():\n    from benchmark.scoring.validators import evaluate\n"
             "    return __import__('emulator.truth')\n"),
         "emulator/fine.py": "from . import geo\nimport numpy\n",
-        "benchmark/fine.py": "import llm_tools.registry\nfrom agents import oracle\n",
-        "agents/llm/__init__.py": "",
-        "agents/llm/peek.py": ("from .. import oracle\nfrom ..oracle.agent import OracleAgent\n"
-                               "from agents.teams import DroneView\n"),
-        "agents/oracle/__init__.py": "",
-        "agents/oracle/fine.py": ("from benchmark.scoring import validators\n"
+        "benchmark/fine.py": "import llm_tools.registry\nfrom swarm_agents import oracle\n",
+        "swarm_agents/llm/__init__.py": "",
+        "swarm_agents/llm/peek.py": ("from .. import oracle\n"
+                                     "from ..oracle.agent import OracleAgent\n"
+                                     "from swarm_agents.teams import DroneView\n"),
+        "swarm_agents/oracle/__init__.py": "",
+        "swarm_agents/oracle/fine.py": ("from benchmark.scoring import validators\n"
                                   "from benchmark.authoring.session_file import Session\n"
                                   "from . import planner\nfrom ..oracle import agent\n"),
-        "agents/oracle/up.py": ("from benchmark.running import orchestrator\n"
+        "swarm_agents/oracle/up.py": ("from benchmark.running import orchestrator\n"
                                 "from benchmark.scoring import validators\n"),
-        "agents/teams.py": "from agents.llm import react\n",
+        "swarm_agents/teams.py": "from swarm_agents.llm import react\n",
         "benchmark/scoring/validators/__init__.py": "",
         "benchmark/scoring/validators/up.py": "from benchmark.authoring.generate import proven\n",
     })
     found = sorted((c.path, c.line, c.layer, c.imported) for c in crossings(tmp_path))
-    assert found == [
-        ("agents/llm/peek.py", 1, "agents.llm", "agents.oracle"),
-        ("agents/llm/peek.py", 2, "agents.llm", "agents.oracle.agent.OracleAgent"),
-        ("agents/llm/peek.py", 3, "agents.llm", "agents.teams.DroneView"),
-        ("agents/oracle/up.py", 1, "agents.oracle", "benchmark.running.orchestrator"),
-        ("agents/teams.py", 1, "agents.teams", "agents.llm.react"),
+    assert found == sorted([
+        ("swarm_agents/llm/peek.py", 1, "swarm_agents.llm", "swarm_agents.oracle"),
+        ("swarm_agents/llm/peek.py", 2, "swarm_agents.llm",
+         "swarm_agents.oracle.agent.OracleAgent"),
+        ("swarm_agents/llm/peek.py", 3, "swarm_agents.llm", "swarm_agents.teams.DroneView"),
+        ("swarm_agents/oracle/up.py", 1, "swarm_agents.oracle", "benchmark.running.orchestrator"),
+        ("swarm_agents/teams.py", 1, "swarm_agents.teams", "swarm_agents.llm.react"),
         ("benchmark/scoring/validators/up.py", 1, "benchmark.scoring.validators",
          "benchmark.authoring.generate.proven"),
         ("llm_tools/sneaky.py", 3, "llm_tools", "benchmark.running.episode"),
         ("llm_tools/sneaky.py", 5, "llm_tools", "benchmark.scoring.validators.evaluate"),
         ("llm_tools/sneaky.py", 6, "llm_tools", "emulator.truth"),
-        ("mavlink_gateway/up.py", 2, "mavlink_gateway", "emulator.geo.GeoOrigin")]
+        ("mavlink_gateway/up.py", 2, "mavlink_gateway", "emulator.geo.GeoOrigin")])
 
 
 @pytest.mark.slow
 def test_loading_the_agent_side_loads_no_benchmark_or_emulator_module() -> None:
     code = ("import json, sys\n"
             f"for m in {list(AGENT_SIDE)!r}: __import__(m)\n"
-            "import agents.llm.react, agents.llm.workflow, agents.llm.scripted\n"
+            "import swarm_agents.llm.react, swarm_agents.llm.workflow, swarm_agents.llm.scripted\n"
             "import llm_tools.mcp_server, llm_tools.registry\n"
             "print(json.dumps(sorted(sys.modules)))\n")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                          text=True, check=True, timeout=60)
     loaded = json.loads(out.stdout)
-    assert {"agent_contract.tools", "llm_tools.mcp_server", "agents.llm.openai_model",
-            "agents.teams.per_drone", "agents.baselines.noop"} <= set(loaded)
+    assert {"agent_contract.tools", "llm_tools.mcp_server", "swarm_agents.llm.openai_model",
+            "swarm_agents.teams.per_drone", "swarm_agents.baselines.noop"} <= set(loaded)
     below = [m for m in loaded if m.split(".")[0] in ("benchmark", "emulator", "mavswarm")
-             or m.startswith(("agents.oracle", "agents.plugins"))]
+             or m.startswith(("swarm_agents.oracle", "swarm_agents.plugins"))]
     assert not below, below
 
 

@@ -14,9 +14,9 @@ from typing import Any
 
 import pytest
 
-from agents.llm import ChatModel, ModelConfig, ModelError, OpenAIChatModel, Usage
-from agents.llm.react import assistant_message
 from llm_tools.openai_adapter import parse_tool_calls
+from swarm_agents.llm import ChatModel, ModelConfig, ModelError, OpenAIChatModel, Usage
+from swarm_agents.llm.react import assistant_message
 from tests.ports import unused_tcp_port
 
 USER = [{"role": "user", "content": "hello"}]

@@ -8,11 +8,11 @@ import json
 
 import pytest
 
-from agents.llm import ReactAgent, ScriptedChatModel, tool_call
-from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from llm_tools import default_registry, openai_tools
+from swarm_agents.llm import ReactAgent, ScriptedChatModel, tool_call
+from swarm_agents.llm.scripted import Reply
 from tests.bench_fixtures import small_session
 from tests.cli_fixtures import MAVSWARM
 from tests.scripted_llm import scripted_llm

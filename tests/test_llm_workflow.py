@@ -9,13 +9,13 @@ from typing import Any
 
 import pytest
 
-from agents.llm import ModelConfig, ScriptedChatModel, WorkflowAgent
-from agents.llm import tool_call as call
-from agents.llm.blackboard import Blackboard
-from agents.llm.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from llm_tools.registry import ToolRegistry
+from swarm_agents.llm import ModelConfig, ScriptedChatModel, WorkflowAgent
+from swarm_agents.llm import tool_call as call
+from swarm_agents.llm.blackboard import Blackboard
+from swarm_agents.llm.workflow import REASK, parse_json_object, parse_plan, parse_verdict
 from tests.bench_fixtures import small_session
 
 

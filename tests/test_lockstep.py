@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from agents.llm import ReactAgent, ScriptedChatModel
-from agents.llm import tool_call as call
-from agents.oracle import OracleAgent
-from agents.teams.per_drone import PerDroneTeam
 from benchmark.authoring.session_file import load_session
 from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from mavlink_gateway import Status
+from swarm_agents.llm import ReactAgent, ScriptedChatModel
+from swarm_agents.llm import tool_call as call
+from swarm_agents.oracle import OracleAgent
+from swarm_agents.teams.per_drone import PerDroneTeam
 from tests.cli_fixtures import MAVSWARM, ROOT
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]

@@ -13,13 +13,13 @@ import shapely
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from agents.oracle import OracleAgent
-from agents.oracle.derive import Unplannable, derive_plan, plannable_endpoints
-from agents.oracle.pursuit import Pursuit
-from agents.oracle.session_oracle import oracle_for_session
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_one_task
 from benchmark.scoring.validators import ENDPOINTS, parse_tree
+from swarm_agents.oracle import OracleAgent
+from swarm_agents.oracle.derive import Unplannable, derive_plan, plannable_endpoints
+from swarm_agents.oracle.pursuit import Pursuit
+from swarm_agents.oracle.session_oracle import oracle_for_session
 
 FLIGHTS = settings(derandomize=True, database=None, deadline=None, max_examples=3,
                    phases=(Phase.explicit, Phase.generate),

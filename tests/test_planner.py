@@ -11,9 +11,9 @@ import pytest
 import shapely
 import shapely.affinity
 
-from agents.oracle.coverage import lawnmower, order_visits, split_lanes
-from agents.oracle.planner import NoPath, PathPlanner
 from emulator.world import Obstacle, World, ellipse_polygon
+from swarm_agents.oracle.coverage import lawnmower, order_visits, split_lanes
+from swarm_agents.oracle.planner import NoPath, PathPlanner
 
 Point3 = tuple[float, float, float]
 

@@ -24,10 +24,10 @@ import httpx
 import pytest
 
 from agent_contract import AgentTask, AgentTools
-from agents.llm import ModelConfig, OpenAIChatModel, ReactAgent, WorkflowAgent
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from benchmark.running.results import read_records
+from swarm_agents.llm import ModelConfig, OpenAIChatModel, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
 from tests.ports import unused_tcp_port

@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 from mcp import Client
 
-from agents.oracle import OracleAgent
 from benchmark.authoring.generate import build_task
 from benchmark.authoring.scenarios import LEVELS, generate_world
 from benchmark.authoring.session_file import session_from_dict
@@ -28,6 +27,7 @@ from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
 from llm_tools import default_registry
 from llm_tools.mcp_server import build_server
+from swarm_agents.oracle import OracleAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.rest_fixtures import as_role, served
 

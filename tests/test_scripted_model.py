@@ -11,7 +11,8 @@ from typing import Any
 import pytest
 
 from agent_contract import AgentTask, TaskBudget
-from agents.llm import (
+from mavlink_gateway import Outcome, Status
+from swarm_agents.llm import (
     ChatModel,
     ModelError,
     ReactAgent,
@@ -20,8 +21,7 @@ from agents.llm import (
     WorkflowAgent,
     tool_call,
 )
-from agents.llm.scripted import SCRIPTED_USAGE, ScriptedRequest
-from mavlink_gateway import Outcome, Status
+from swarm_agents.llm.scripted import SCRIPTED_USAGE, ScriptedRequest
 
 USER = [{"role": "user", "content": "hello"}]
 TOOL = {"type": "function", "function": {"name": "land", "parameters": {"type": "object"}}}

@@ -9,11 +9,11 @@ from typing import Any
 
 import pytest
 
-from agents.llm import ScriptedChatModel, WorkflowAgent
-from agents.llm import tool_call as call
-from agents.llm.scripted import Reply
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
+from swarm_agents.llm import ScriptedChatModel, WorkflowAgent
+from swarm_agents.llm import tool_call as call
+from swarm_agents.llm.scripted import Reply
 from tests.bench_fixtures import small_session
 
 SUMMARY = "climbed and held; " + "the long account of it goes on " * 20  # > 200 characters

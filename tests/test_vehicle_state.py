@@ -162,7 +162,7 @@ _OWNERS = {  # module -> classes whose private members stay inside them
     "emulator/flight/offboard.py": ("OffboardControl",),
     "emulator/flight/failures.py": ("VehicleFailures",),
 }
-_PACKAGES = ("emulator", "mavlink_gateway", "agents", "benchmark", "mqtt_bus", "console",
+_PACKAGES = ("emulator", "mavlink_gateway", "swarm_agents", "benchmark", "mqtt_bus", "console",
              "mavswarm", "tests", "perf")
 
 

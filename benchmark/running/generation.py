@@ -12,7 +12,6 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent
-from agents.oracle import OracleAgent
 from benchmark.authoring import generate as draw_tasks
 from benchmark.authoring.generate import (
     MAX_ATTEMPTS,
@@ -31,6 +30,7 @@ from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
 from mavlink_gateway import Gateway
+from swarm_agents.oracle import OracleAgent
 
 __all__ = ["generate_for_world", "generate_session", "generate_suite", "generate_world_file",
            "verified_tasks"]

@@ -22,7 +22,6 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract import Agent, AgentOptions
-from agents import plugins
 from benchmark.authoring.importer import load_any_session
 from benchmark.authoring.session_file import Session, SessionFileError, read_session_json
 from benchmark.running.backends import Handle, Unit, make_backend
@@ -34,12 +33,14 @@ from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.results import ResultsLog, read_task_records
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
+from swarm_agents import plugins
 
 __all__ = ["AGENTS", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
            "run_benchmark", "run_unit"]
 
-# The built-in agents; NAME:per-drone: one instance of NAME per drone (agents.teams.per_drone).
-# --agent also takes plug-ins (agents.plugins: package.module:Name, path/to/file.py:Name,
+# The built-in agents; NAME:per-drone: one instance of NAME per drone
+# (swarm_agents.teams.per_drone).
+# --agent also takes plug-ins (swarm_agents.plugins: package.module:Name, path/to/file.py:Name,
 # installed entry points), which these lists do not hold.
 PER_DRONE = plugins.PER_DRONE
 AGENTS = (*plugins.BUILTIN_AGENTS, *(n + PER_DRONE for n in plugins.LLM_AGENTS))
@@ -88,7 +89,7 @@ class RunOutcome:
 
 def make_agent(name: str, session: Session, plan: RunPlan | None = None, trial: int = 0
                ) -> Agent:
-    """The named agent (a built-in or a plug-in, `agents.plugins`) for one session
+    """The named agent (a built-in or a plug-in, `swarm_agents.plugins`) for one session
     and trial."""
     plan = plan or RunPlan(sessions=())
     options = AgentOptions(agent=name, session_id=session.id, trial=trial, model=plan.model,
@@ -280,7 +281,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
     if not plan.agent_timeout_s > 0:
         raise ValueError(f"the agent timeout must be > 0 s, got {plan.agent_timeout_s:g}")
     if plan.agent in LLM_AGENTS:
-        from agents.llm import ModelConfig
+        from swarm_agents.llm import ModelConfig
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
     if plan.workers < 1 or plan.trials < 1:
         raise ValueError("workers and trials must be >= 1")

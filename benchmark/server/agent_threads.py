@@ -10,7 +10,7 @@ long the agent thinks.
 
 Which thread a request is: the session's agent (its agent keys, and requests without a key
 under `--open`), or, for a session served with per-drone keys, one drone's agent, which sees
-that drone's tools only (`agents.teams.per_drone.DroneView`) and whose `finish` ends its part
+that drone's tools only (`swarm_agents.teams.per_drone.DroneView`) and whose `finish` ends its part
 (the task ends with the last part). A thread runs one request at a time: a second one while
 the first runs is refused (`rejected`, nothing done, nothing counted), since where it would
 start in simulated time would depend on the wall clock. Calls that must run side by side go in
@@ -30,10 +30,10 @@ from collections.abc import Awaitable, Callable, Sequence
 from typing import Any, TypeVar, cast
 
 from agent_contract import AgentTask, AgentTools, tool_names
-from agents.teams.per_drone import DroneView
 from benchmark.running.tool_log import LoggedTools
 from mavlink_gateway import Gateway, Outcome, Status
 from mavlink_gateway.pacing import Thinker, run_as
+from swarm_agents.teams.per_drone import DroneView
 
 __all__ = ["AgentThread", "ServedTools", "call_tool", "read_tool", "surface_of"]
 

@@ -1,5 +1,5 @@
 """The default agent of the inspect tasks: the benchmark's ReAct loop (`bench run --agent
-react`, `agents.llm.react.react_loop`) thinking with inspect's model (`InspectChatModel`).
+react`, `swarm_agents.llm.react.react_loop`) thinking with inspect's model (`InspectChatModel`).
 
 The model gets the same system prompt, opening message, tools, results and nudges as
 `ReactAgent`; the calls of one model turn run side by side, one thread of control each (so
@@ -22,10 +22,10 @@ from inspect_ai.solver import Generate, Solver, TaskState
 from inspect_ai.util import LimitExceededError
 
 from agent_contract import AgentTask, AgentTools
-from agents.llm.react import SYSTEM_PROMPT, react_loop, task_message
 from llm_tools.registry import ToolRegistry, default_registry
 from mavswarm.inspect.model import InspectChatModel
 from mavswarm.inspect.tools import tool_defs
+from swarm_agents.llm.react import SYSTEM_PROMPT, react_loop, task_message
 
 __all__ = ["InspectReactAgent", "InspectSolverAgent"]
 

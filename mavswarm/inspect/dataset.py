@@ -14,11 +14,11 @@ from pathlib import Path
 
 from inspect_ai.dataset import MemoryDataset, Sample
 
-from agents.llm.react import task_message
 from benchmark.authoring.importer import load_any_session
 from benchmark.authoring.scenarios import FAMILIES, LEVELS, all_session_keys, session_id
 from benchmark.authoring.session_file import Session, SessionFileError
 from benchmark.authoring.suite import SESSIONS_DIR
+from swarm_agents.llm.react import task_message
 
 __all__ = ["family_paths", "load_session", "session_dataset", "session_paths"]
 

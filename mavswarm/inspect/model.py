@@ -1,5 +1,5 @@
-"""inspect's model as the `ChatModel` of the built-in LLM agents (`agents.llm`), so the inspect
-tasks run the benchmark's own ReAct loop rather than a copy of it.
+"""inspect's model as the `ChatModel` of the built-in LLM agents (`swarm_agents.llm`), so the
+inspect tasks run the benchmark's own ReAct loop rather than a copy of it.
 
 The conversation is mirrored into the sample's ``state.messages`` as inspect's chat messages
 (each model answer as inspect gave it, the agent's other messages as they are added), so
@@ -24,7 +24,7 @@ from inspect_ai.model import (
 from inspect_ai.solver import TaskState
 from inspect_ai.tool import ToolCall, ToolDef
 
-from agents.llm import ModelReply, Usage
+from swarm_agents.llm import ModelReply, Usage
 
 __all__ = ["InspectChatModel"]
 

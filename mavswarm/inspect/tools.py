@@ -10,8 +10,8 @@ from typing import Any
 from inspect_ai.tool import ToolDef, ToolParams
 
 from agent_contract import AgentTools
-from agents.llm.react import result_text
 from llm_tools.registry import ToolRegistry
+from swarm_agents.llm.react import result_text
 
 __all__ = ["tool_defs"]
 

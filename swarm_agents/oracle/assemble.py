@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from agents.oracle.intentions import (
+from swarm_agents.oracle.intentions import (
     AIRBORNE_OPS,
     EXCURSION_EXTRA_M,
     GROUNDING_OPS,

@@ -24,7 +24,7 @@ from collections.abc import Awaitable, Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeAlias
 
-from agents.llm.model import ModelReply, Usage
+from swarm_agents.llm.model import ModelReply, Usage
 
 __all__ = ["SCRIPTED_USAGE", "Reply", "ScriptedChatModel", "ScriptedRequest", "tool_call"]
 

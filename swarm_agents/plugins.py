@@ -12,7 +12,7 @@ SPEC is one of
   is added to sys.path so it can import its neighbours);
 
 ``Name`` may be dotted (``Outer.attr``). Any but ``oracle`` and ``noop`` may end in
-``:per-drone``: one instance per drone (`agents.teams.per_drone`). ``external`` is reserved (a
+``:per-drone``: one instance per drone (`swarm_agents.teams.per_drone`). ``external`` is reserved (a
 hosted run, not an agent in this process).
 
 What ``Name`` may be (an agent instance, a class or a function called with the run's
@@ -323,12 +323,12 @@ def _build_plugin(spec: AgentSpec, options: AgentOptions, base_dir: str) -> Agen
 
 def _build_builtin(name: str, session: Session, options: AgentOptions) -> Agent:
     if name == "noop":
-        from agents.baselines import NoopAgent
+        from swarm_agents.baselines import NoopAgent
         return NoopAgent()
     if name == "oracle":
-        from agents.oracle.session_oracle import oracle_for_session
+        from swarm_agents.oracle.session_oracle import oracle_for_session
         return oracle_for_session(session)
-    from agents.llm import ModelConfig, ReactAgent, WorkflowAgent
+    from swarm_agents.llm import ModelConfig, ReactAgent, WorkflowAgent
     config = ModelConfig(base_url=options.base_url, model=options.model,
                          price_in_usd_per_mtok=options.price_in_usd_per_mtok,
                          price_out_usd_per_mtok=options.price_out_usd_per_mtok)
@@ -344,7 +344,7 @@ def make_agent(text: str, session: Session, options: AgentOptions, base_dir: str
     if spec.per_drone:
         from dataclasses import replace
 
-        from agents.teams.per_drone import PerDroneTeam
+        from swarm_agents.teams.per_drone import PerDroneTeam
         single = text.removesuffix(PER_DRONE)
         return PerDroneTeam(text, lambda drone_id: make_agent(
             single, session, replace(options, agent=text, drone_id=drone_id), base_dir))

@@ -15,13 +15,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from agents.llm.blackboard import Blackboard, StepRecord
-from agents.llm.model import ChatModel
-from agents.llm.openai_model import ModelConfig, opened
-from agents.llm.react import assistant_message, result_text
-from agents.llm.transcript import record_messages, unrecorded_from
 from llm_tools.openai_adapter import openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
+from swarm_agents.llm.blackboard import Blackboard, StepRecord
+from swarm_agents.llm.model import ChatModel
+from swarm_agents.llm.openai_model import ModelConfig, opened
+from swarm_agents.llm.react import assistant_message, result_text
+from swarm_agents.llm.transcript import record_messages, unrecorded_from
 
 __all__ = ["PLAN_PROMPT", "VERIFY_PROMPT", "Plan", "PlanStep", "Verdict", "WorkflowAgent",
            "parse_json_object", "parse_plan", "parse_verdict"]

@@ -17,9 +17,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from agents.oracle.intentions import DroneIntent, Intentions, Unplannable, target_point
 from benchmark.scoring.validators.tree import Leaf, Node
 from emulator.scenario import Scenario
+from swarm_agents.oracle.intentions import DroneIntent, Intentions, Unplannable, target_point
 
 __all__ = ["Unplannable", "derive_plan", "plannable_endpoints"]
 

@@ -3,8 +3,8 @@
 An agent hands a `ChatModel` the conversation so far (OpenAI chat-completions messages as
 dicts) and the tools' function schemas, and gets back a `ModelReply`: the assistant message as
 the model gave it (tool calls possibly malformed: reading them is the agent's business) and the
-turn's token use and cost. `agents.llm.openai_model` implements it over the official `openai`
-SDK for any OpenAI-compatible server; `agents.llm.scripted` in process, for tests and
+turn's token use and cost. `swarm_agents.llm.openai_model` implements it over the official `openai`
+SDK for any OpenAI-compatible server; `swarm_agents.llm.scripted` in process, for tests and
 examples; inspect's model plays it in `mavswarm.inspect`.
 """
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import os
 
-from agents.oracle.agent import OracleAgent
 from benchmark.authoring.session_file import Session
+from swarm_agents.oracle.agent import OracleAgent
 
 __all__ = ["ORACLE_MODES", "ORACLE_MODE_ENV", "oracle_for_session"]
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import openai
 
-from agents.llm.model import ChatModel, ModelError, ModelReply, Usage
+from swarm_agents.llm.model import ChatModel, ModelError, ModelReply, Usage
 
 __all__ = ["ModelConfig", "OpenAIChatModel", "opened"]
 

@@ -8,11 +8,11 @@ from collections.abc import Mapping
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from agents.llm.model import ChatModel
-from agents.llm.openai_model import ModelConfig, opened
-from agents.llm.transcript import Recorder
 from llm_tools.openai_adapter import ToolCall, openai_tools, parse_tool_calls
 from llm_tools.registry import ToolRegistry, default_registry
+from swarm_agents.llm.model import ChatModel
+from swarm_agents.llm.openai_model import ModelConfig, opened
+from swarm_agents.llm.transcript import Recorder
 
 __all__ = ["MAX_NUDGES", "NUDGE", "SYSTEM_PROMPT", "ReactAgent", "assistant_message",
            "react_loop", "result_text", "task_message"]

@@ -200,5 +200,5 @@ class Intentions:
                 self.reach_any.append((path, t.id, 1))
 
     def plan(self) -> list[list[Op]]:
-        from agents.oracle.assemble import assemble
+        from swarm_agents.oracle.assemble import assemble
         return assemble(self)

@@ -2,6 +2,6 @@
 and perception (`DroneView`) and talking to the others by radio (`--agent NAME:per-drone`).
 Agent side: it imports the agent contract and the gateway's outcomes alone."""
 
-from agents.teams.per_drone import DroneView, PerDroneTeam, per_drone_task
+from swarm_agents.teams.per_drone import DroneView, PerDroneTeam, per_drone_task
 
 __all__ = ["DroneView", "PerDroneTeam", "per_drone_task"]

@@ -10,13 +10,13 @@ from functools import partial
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
-from agents.oracle.coverage import lawnmower, order_visits, split_lanes
-from agents.oracle.derive import Unplannable, derive_plan
-from agents.oracle.planner import NoPath, PathPlanner
-from agents.oracle.pursuit import Pursuit
 from benchmark.scoring.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
+from swarm_agents.oracle.coverage import lawnmower, order_visits, split_lanes
+from swarm_agents.oracle.derive import Unplannable, derive_plan
+from swarm_agents.oracle.planner import NoPath, PathPlanner
+from swarm_agents.oracle.pursuit import Pursuit
 
 __all__ = ["OracleAgent", "OracleCannotPlan", "OracleError"]
 

@@ -7,11 +7,11 @@ so this package stays on the agent side: it imports the agent contract and the L
 nothing of the benchmark or the emulator.
 """
 
-from agents.llm.model import ChatModel, ModelError, ModelReply, Usage
-from agents.llm.openai_model import ModelConfig, OpenAIChatModel
-from agents.llm.react import ReactAgent
-from agents.llm.scripted import ScriptedChatModel, tool_call
-from agents.llm.workflow import WorkflowAgent
+from swarm_agents.llm.model import ChatModel, ModelError, ModelReply, Usage
+from swarm_agents.llm.openai_model import ModelConfig, OpenAIChatModel
+from swarm_agents.llm.react import ReactAgent
+from swarm_agents.llm.scripted import ScriptedChatModel, tool_call
+from swarm_agents.llm.workflow import WorkflowAgent
 
 __all__ = ["ChatModel", "ModelConfig", "ModelError", "ModelReply", "OpenAIChatModel",
            "ReactAgent", "ScriptedChatModel", "Usage", "WorkflowAgent", "tool_call"]

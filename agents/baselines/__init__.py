@@ -1,6 +1,0 @@
-"""Baseline agents without a model: `noop`, the floor every other agent should beat (the
-ceiling, the oracle, is `agents.oracle`). Agent side: they import the agent contract alone."""
-
-from agents.baselines.noop import NoopAgent
-
-__all__ = ["NoopAgent"]
