@@ -3,7 +3,8 @@
 Named IntEnums for the MAVLink numbers the code uses, each member spelled as in the pymavlink
 common dialect without its enum's prefix (`MavCmd.NAV_TAKEOFF` is `MAV_CMD_NAV_TAKEOFF`;
 tests/test_mavlink_vocabulary.py checks every value against the dialect), and the STATUSTEXT
-reasons a ground station reads to tell why a vehicle stopped or refused.
+reasons a ground station reads to tell why a vehicle stopped or refused, and the flight state
+a ground station derives from telemetry (`FlightState`, `derive_flight_state`).
 
 This is the bottom layer: it imports nothing of mavswarm (and not even pymavlink).
 """
@@ -34,6 +35,12 @@ from mavlink_vocabulary.enums import (
     PositionTargetTypemask,
     SpeedType,
 )
+from mavlink_vocabulary.flight_state import (
+    HOVER_SPEED_M_S,
+    TELEMETRY_FLIGHT_STATES,
+    FlightState,
+    derive_flight_state,
+)
 from mavlink_vocabulary.ids import MavCmd, MessageId
 from mavlink_vocabulary.reasons import (
     FAILSAFE_TEXTS,
@@ -45,11 +52,14 @@ from mavlink_vocabulary.reasons import (
 __all__ = [
     "FAILSAFE_TEXTS",
     "FAILURE_TEXTS",
+    "HOVER_SPEED_M_S",
     "OBSTACLE_TEXT",
     "REPAIRED_TEXT",
+    "TELEMETRY_FLIGHT_STATES",
     "CameraCapFlags",
     "FailureType",
     "FailureUnit",
+    "FlightState",
     "GpsFixType",
     "MavAutopilot",
     "MavBatteryChargeState",
@@ -73,4 +83,5 @@ __all__ = [
     "MessageId",
     "PositionTargetTypemask",
     "SpeedType",
+    "derive_flight_state",
 ]

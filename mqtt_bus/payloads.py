@@ -8,6 +8,8 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
+from mavlink_vocabulary import FlightState
+
 __all__ = [
     "DroneSample",
     "encode",
@@ -44,7 +46,7 @@ class DroneSample:
     battery_pct: float
     mode: str
     armed: bool
-    flight_state: str  # on_ground, taking_off, hovering, flying, landing
+    flight_state: FlightState  # one of TELEMETRY_FLIGHT_STATES
     home_m: tuple[float, float, float] | None
     home_geodetic: tuple[float, float, float] | None
     primitive: str | None = None  # the gateway primitive running for it, if any

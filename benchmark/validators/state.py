@@ -19,6 +19,7 @@ from benchmark.validators.endpoint import (
 from benchmark.validators.geometry import Footprint, heading_delta_deg
 from benchmark.validators.params import REQUIRED, ParamSpec, drone_list, entity, number, text
 from benchmark.validators.reach import footprint
+from mavlink_vocabulary import HOVER_SPEED_M_S
 
 __all__ = [
     "DRONE_STATUSES",
@@ -29,9 +30,8 @@ __all__ = [
     "is_on_ground",
 ]
 
-HOVER_SPEED_M_S = 0.5
-"""Below this speed (max over the last 0.05 s) an airborne drone hovers; a drone on the ground
-must also be slower than this (current speed)."""
+# Below HOVER_SPEED_M_S (max over the last 0.05 s) an airborne drone hovers; a drone on the
+# ground must also be slower than it (current speed).
 DRONE_STATUSES = ("idle", "ready", "taking_off", "flying", "moving", "hovering", "landing",
                   "emergency", "offline")
 _STATUS_MATCHES = {
