@@ -22,6 +22,7 @@ from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.flight.vehicle_state import Phase
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["DLL_ACTIONS", "FAILURE_KINDS", "VehicleFailures"]
 
@@ -81,17 +82,17 @@ class VehicleFailures:
         ap = self._ap
         if kind not in FAILURE_KINDS:
             raise ValueError(f"unknown failure {kind!r} (known: {', '.join(FAILURE_KINDS)})")
-        ap.event("failure", unit=kind, source=source, position_m=list(ap.position_m))
+        ap.event(TruthEventKind.FAILURE, unit=kind, source=source, position_m=list(ap.position_m))
         if kind == "gps":
             self.gps_off = True
             if ap.in_air:
-                ap.event("failsafe", reason="gps_lost")
+                ap.event(TruthEventKind.FAILSAFE, reason="gps_lost")
                 ap.say(Severity.CRITICAL, "GPS lost: no position estimate, landing")
                 ap.start_land(None)
         elif kind == "motor":
             self.motor_off = True
             if ap.in_air:
-                ap.event("failsafe", reason="motor_failure")
+                ap.event(TruthEventKind.FAILSAFE, reason="motor_failure")
                 ap.say(Severity.EMERGENCY, "Motor failure: vehicle going down")
                 ap.pause_mission()
                 ap.switch_mode(FlightMode.LAND)
@@ -120,10 +121,10 @@ class VehicleFailures:
         """A failure cleared by injection of 'ok' (GPS and MAVLink signal only)."""
         if kind == "gps" and self.gps_off:
             self.gps_off = False
-            self._ap.event("failure_cleared", unit=kind, source=source)
+            self._ap.event(TruthEventKind.FAILURE_CLEARED, unit=kind, source=source)
         elif kind == "mavlink" and self.mavlink_off:
             self._set_mavlink(False)
-            self._ap.event("failure_cleared", unit=kind, source=source)
+            self._ap.event(TruthEventKind.FAILURE_CLEARED, unit=kind, source=source)
 
     # --------------------------------------------------------- link failsafe
     def data_link_lost(self, timeout_s: float) -> None:
@@ -133,10 +134,10 @@ class VehicleFailures:
             return
         self.link_lost = True
         action = DLL_ACTIONS.get(int(ap.params["NAV_DLL_ACT"]))
-        ap.event("link_lost", timeout_s=timeout_s, action=action or "none")
+        ap.event(TruthEventKind.LINK_LOST, timeout_s=timeout_s, action=action or "none")
         if action is None or not ap.in_air or self.motor_off:
             return
-        ap.event("failsafe", reason="data_link_lost", action=action)
+        ap.event(TruthEventKind.FAILSAFE, reason="data_link_lost", action=action)
         ap.say(Severity.CRITICAL, f"Data link lost: failsafe {action}")
         if action == "hold":
             ap.hold()
@@ -148,4 +149,4 @@ class VehicleFailures:
     def data_link_regained(self) -> None:
         if self.link_lost:
             self.link_lost = False
-            self._ap.event("link_regained")
+            self._ap.event(TruthEventKind.LINK_REGAINED)

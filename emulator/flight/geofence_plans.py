@@ -9,6 +9,7 @@ from emulator.flight.geofence import Fence, parse_fence, parse_rally
 from emulator.flight.mission import MissionItem
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["GF_ACTION_NONE", "GeofencePlans"]
 
@@ -91,7 +92,7 @@ class GeofencePlans:
         action = int(ap.params["GF_ACTION"])
         if action == GF_ACTION_NONE:
             return
-        ap.event("failsafe", reason="geofence", action=action, position_m=[x, y, z])
+        ap.event(TruthEventKind.FAILSAFE, reason="geofence", action=action, position_m=[x, y, z])
         if action == GF_ACTION_WARN:
             ap.say(Severity.WARNING, "Geofence breached")
         elif action == GF_ACTION_HOLD:

@@ -32,6 +32,7 @@ from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["JOYSTICK_RC_IN_MODES", "MANUAL_MODES", "ManualControl", "Sticks"]
 
@@ -168,7 +169,7 @@ class ManualControl:
         self._lost = True
         self._sticks = CENTRED
         action = DLL_ACTIONS.get(int(ap.params["NAV_RCL_ACT"]))
-        ap.event("failsafe", reason="manual_control_lost", action=action or "none")
+        ap.event(TruthEventKind.FAILSAFE, reason="manual_control_lost", action=action or "none")
         ap.say(Severity.CRITICAL, f"Manual control lost: failsafe {action or 'sticks centred'}")
         if action == "hold":
             ap.hold()

@@ -25,6 +25,7 @@ from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["OffboardControl", "Setpoint"]
 
@@ -158,7 +159,7 @@ class OffboardControl:
             (x - hx) * vx + (y - hy) * vy > 0.0
         )
         if above or outside:
-            ap.event("failsafe", reason="geofence")
+            ap.event(TruthEventKind.FAILSAFE, reason="geofence")
             ap.say(Severity.WARNING, "Geofence reached: holding")
             self._stop()
             ap.hold()
@@ -174,7 +175,7 @@ class OffboardControl:
         if ap.state.mode is FlightMode.OFFBOARD and (
             wall_now_s - self._received_wall_s > ap.params["COM_OF_LOSS_T"]
         ):
-            ap.event("failsafe", reason="offboard_lost")
+            ap.event(TruthEventKind.FAILSAFE, reason="offboard_lost")
             ap.say(Severity.WARNING, "Offboard setpoints lost: holding")
             self._stop()
             ap.hold()

@@ -13,6 +13,7 @@ from emulator.flight.camera import CameraCarrier, ImageCapture
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["VehicleControl"]
 
@@ -34,7 +35,7 @@ class VehicleControl(CameraCarrier, Protocol):
     def battery_pct(self) -> float: ...
 
     # ------------------------------------------------------------ bookkeeping
-    def event(self, kind: str, **data: object) -> None:
+    def event(self, kind: TruthEventKind, **data: object) -> None:
         """Record a ground-truth event of this vehicle."""
 
     def say(self, severity: int, text: str) -> None:
