@@ -22,7 +22,7 @@ from mavlink_gateway.lockstep_wait import (
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
-from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
+from mavlink_vocabulary import GOAL_ENDING_MESSAGES, ObstacleHold, parse_statustext
 
 if TYPE_CHECKING:
     from mavlink_gateway.fleet import FleetConnection
@@ -286,10 +286,10 @@ class GatewayCore:
             if failure is not None:
                 return failure
             for text in new_texts:
-                if text.startswith(FAILSAFE_TEXTS):
+                if isinstance(parse_statustext(text), GOAL_ENDING_MESSAGES):
                     return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())
             if watch_obstacles and obstacle_mark is None and \
-                    any(t.startswith(OBSTACLE_TEXT) for t in new_texts):
+                    any(isinstance(parse_statustext(t), ObstacleHold) for t in new_texts):
                 obstacle_mark = dict(link.seen)
             # The text comes the moment the vehicle stops; speed, mode and position come at
             # their own rates and may still describe the start of the move (in stepped mode a
@@ -298,7 +298,8 @@ class GatewayCore:
                     link.refreshed_since(obstacle_mark, ("position", "velocity"), 2) and \
                     link.speed_m_s < ARRIVED_SPEED_M_S and link.mode == "HOLD":
                 x, y, z = link.position_m or (math.nan,) * 3
-                obstacle = next(t for t in new_texts if t.startswith(OBSTACLE_TEXT))
+                obstacle = next(t for t in new_texts
+                                if isinstance(parse_statustext(t), ObstacleHold))
                 return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
                                f"{obstacle.lower()}", link.state())
             elapsed = self.services.clock_s() - start_sim

@@ -27,11 +27,12 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
 from mavlink_vocabulary import (
-    FAILURE_TEXTS,
-    REPAIRED_TEXT,
+    OUT_OF_TASK_MESSAGES,
+    FailuresCleared,
     FlightState,
     MavLandedState,
     derive_flight_state,
+    parse_statustext,
 )
 
 __all__ = ["UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
@@ -95,7 +96,7 @@ class DroneLink:
         self.param = ParamAsync(system)
         self.direct = MavlinkDirectAsync(system)
         self.capture_sequence = 0  # the camera protocol's capture sequence number, per drone
-        self.failure: str | None = None  # a failure the drone reported (FAILURE_TEXTS)
+        self.failure: str | None = None  # a failure the drone reported (OUT_OF_TASK_MESSAGES)
         self.last_update_wall_s = time.monotonic()
         self.position_m: tuple[float, float, float] | None = None
         self.velocity_m_s = (0.0, 0.0, 0.0)
@@ -208,9 +209,10 @@ class DroneLink:
 
     def _on_status_text(self, s: Any) -> None:
         self.status_texts.append(s.text)
-        if s.text.startswith(FAILURE_TEXTS) and self.failure is None:
+        message = parse_statustext(s.text)
+        if isinstance(message, OUT_OF_TASK_MESSAGES) and self.failure is None:
             self.failure = s.text
-        elif s.text.startswith(REPAIRED_TEXT):
+        elif isinstance(message, FailuresCleared):
             self.failure = None
 
     def silent_for_s(self) -> float:

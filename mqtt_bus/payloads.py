@@ -4,11 +4,17 @@ reports) becomes an `osd` payload and a `state` payload; events are built here t
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from typing import Any
 
-from mavlink_vocabulary import FlightState
+from mavlink_vocabulary import (
+    BatteryFailsafe,
+    FlightState,
+    GeofenceReached,
+    ObstacleHold,
+    OffboardLost,
+    parse_statustext,
+)
 
 __all__ = [
     "DroneSample",
@@ -22,10 +28,6 @@ __all__ = [
     "statustext_event",
 ]
 
-_OBSTACLE = re.compile(r"^Obstacle (?P<obstacle>.+) ahead: holding$")
-_FAILSAFE = re.compile(r"^(?P<level>Critical|Emergency) battery (?P<pct>[\d.]+)%: "
-                       r"(?P<action>returning home|landing)$")
-_LINK_FAILSAFE = ("Offboard setpoints lost: holding", "Geofence reached: holding")
 
 
 def _r(value: float, digits: int = 2) -> float | None:
@@ -88,19 +90,20 @@ def statustext_event(drone: str, time_s: float, severity: int | None, text: str
                      ) -> dict[str, Any]:
     """A STATUSTEXT, classified: obstacle holds and failsafes get their own kind (the text
     is kept)."""
-    held = _OBSTACLE.match(text)
-    if held:
-        return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
-                             obstacle=held["obstacle"])
-    failsafe = _FAILSAFE.match(text)
-    if failsafe:
-        reason = f"battery_{failsafe['level'].lower()}"
-        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                             reason=reason, action=failsafe["action"].replace(" ", "_"))
-    if text in _LINK_FAILSAFE:
-        reason = "offboard_lost" if text.startswith("Offboard") else "geofence"
-        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                             reason=reason, action="hold")
+    match parse_statustext(text):
+        case ObstacleHold(obstacle):
+            return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
+                                 obstacle=obstacle)
+        case BatteryFailsafe() as failsafe:
+            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                                 reason=f"battery_{failsafe.level.lower()}",
+                                 action=failsafe.action.replace(" ", "_"))
+        case OffboardLost():
+            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                                 reason="offboard_lost", action="hold")
+        case GeofenceReached():
+            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                                 reason="geofence", action="hold")
     return event_payload(drone, time_s, "statustext", severity=severity, text=text)
 
 

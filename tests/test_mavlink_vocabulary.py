@@ -59,8 +59,10 @@ def test_message_ids_are_the_dialects() -> None:
         assert mavlink.mavlink_map[member.value].msgname == member.name
 
 
-# The vocabulary's own words, not MAVLink's (tested in test_flight_state.py)
-OWN_ENUMS: set[type[enum.Enum]] = {vocab.FlightState}
+# The vocabulary's own words, not MAVLink's (tested in test_flight_state.py and
+# test_statustext.py)
+OWN_ENUMS: set[type[enum.Enum]] = {vocab.FlightState, vocab.BatteryLevel, vocab.FailsafeAction,
+                                   vocab.GeofenceAction}
 
 
 def test_every_exported_enum_is_checked() -> None:

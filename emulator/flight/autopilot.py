@@ -33,6 +33,7 @@ from emulator.flight.vehicle_state import MISSION_PHASES, Phase, TimerAction
 from emulator.geo import wrap_heading_deg
 from emulator.scenario import VehicleSpec
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import BatteryFailsafe, BatteryLevel, LowBattery, ObstacleHold
 
 __all__ = ["Autopilot", "AutopilotListener", "CommandRefused", "ImageCapture", "Severity"]
 
@@ -86,7 +87,7 @@ class Autopilot(Vehicle):
     def _stopped_by(self, obstacle_id: str | None, name: str) -> None:
         x, y, z = self.position_m
         self.event(TruthEventKind.OBSTACLE_STOP, obstacle=obstacle_id, position_m=[x, y, z])
-        self.say(Severity.WARNING, f"Obstacle {name} ahead: holding")
+        self.announce(ObstacleHold(name))
         if self.state.mode is not FlightMode.OFFBOARD:
             self.mission.pause()
             self.switch_mode(FlightMode.HOLD)
@@ -147,16 +148,16 @@ class Autopilot(Vehicle):
     def on_battery_level(self, level: int) -> None:
         pct = self.battery_pct
         if level == BATTERY_LOW:
-            self.say(Severity.WARNING, f"Low battery: {pct:.0f}% remaining")
+            self.announce(LowBattery(pct))
         elif level == BATTERY_CRITICAL and self.in_air and self.mode not in (
             FlightMode.RTL, FlightMode.LAND
         ):
             self.event(TruthEventKind.FAILSAFE, reason="battery_critical", battery_pct=pct)
-            self.say(Severity.CRITICAL, f"Critical battery {pct:.0f}%: returning home")
+            self.announce(BatteryFailsafe(BatteryLevel.CRITICAL, pct))
             self.start_rtl()
         elif level == BATTERY_EMERGENCY and self.in_air and self.mode is not FlightMode.LAND:
             self.event(TruthEventKind.FAILSAFE, reason="battery_emergency", battery_pct=pct)
-            self.say(Severity.CRITICAL, f"Emergency battery {pct:.0f}%: landing")
+            self.announce(BatteryFailsafe(BatteryLevel.EMERGENCY, pct))
             self.start_land(None)
         self.update_charging()
 

@@ -19,10 +19,18 @@ from __future__ import annotations
 
 from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode, LandedState
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.flight.vehicle_state import Phase
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import (
+    BatteryFailure,
+    DataLinkLost,
+    FailsafeAction,
+    GpsLost,
+    MotorFailure,
+    build_statustext,
+)
 
 __all__ = ["DLL_ACTIONS", "FAILURE_KINDS", "VehicleFailures"]
 
@@ -53,11 +61,14 @@ class VehicleFailures:
         """The STATUSTEXT a vehicle out of the task keeps telling (the swarm sends it again with
         the vehicle's telemetry at a halt, so a report lost on the way still reaches the
         client); None when no such failure is in force."""
+        report: MotorFailure | GpsLost
         if self.motor_off:
-            return Severity.EMERGENCY, "Motor failure: vehicle out of service"
-        if self.gps_off:
-            return Severity.CRITICAL, "GPS lost: no position estimate"
-        return None
+            report = MotorFailure(falling=False)
+        elif self.gps_off:
+            report = GpsLost(landing=False)
+        else:
+            return None
+        return report.severity, build_statustext(report)
 
     def check_arming(self) -> None:
         if self.motor_off:
@@ -87,13 +98,13 @@ class VehicleFailures:
             self.gps_off = True
             if ap.in_air:
                 ap.event(TruthEventKind.FAILSAFE, reason="gps_lost")
-                ap.say(Severity.CRITICAL, "GPS lost: no position estimate, landing")
+                ap.announce(GpsLost(landing=True))
                 ap.start_land(None)
         elif kind == "motor":
             self.motor_off = True
             if ap.in_air:
                 ap.event(TruthEventKind.FAILSAFE, reason="motor_failure")
-                ap.say(Severity.EMERGENCY, "Motor failure: vehicle going down")
+                ap.announce(MotorFailure(falling=True))
                 ap.pause_mission()
                 ap.switch_mode(FlightMode.LAND)
                 x, y, _ = ap.position_m
@@ -102,7 +113,7 @@ class VehicleFailures:
                 ap.state.landed_state = LandedState.LANDING
             elif ap.armed:
                 ap.disarm()
-            ap.say(Severity.EMERGENCY, "Motor failure: vehicle out of service")
+            ap.announce(MotorFailure(falling=False))
         elif kind == "battery":
             bat, k = ap.fleet.bat, ap.k
             bat.pct[k] = max(0.0, min(float(bat.pct[k]),
@@ -110,7 +121,7 @@ class VehicleFailures:
             before = int(bat.level[k])
             bat.step(0.0, ap.fleet.airborne, ap.fleet.armed, ap.fleet.dyn.airspeed_m_s(),
                      ap.fleet.dyn.velocity_m_s[:, 2])
-            ap.say(Severity.CRITICAL, f"Battery failure: {ap.battery_pct:.0f}% remaining")
+            ap.announce(BatteryFailure(ap.battery_pct))
             if int(bat.level[k]) != before:
                 ap.on_battery_level(int(bat.level[k]))
         else:
@@ -138,7 +149,7 @@ class VehicleFailures:
         if action is None or not ap.in_air or self.motor_off:
             return
         ap.event(TruthEventKind.FAILSAFE, reason="data_link_lost", action=action)
-        ap.say(Severity.CRITICAL, f"Data link lost: failsafe {action}")
+        ap.announce(DataLinkLost(FailsafeAction(action)))
         if action == "hold":
             ap.hold()
         elif action == "return" and ap.state.mode is not FlightMode.RTL:

@@ -23,9 +23,10 @@ from emulator.flight.attitude_control import attitude_acceleration_enu
 from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import GeofenceReached, OffboardLost
 
 __all__ = ["OffboardControl", "Setpoint"]
 
@@ -160,7 +161,7 @@ class OffboardControl:
         )
         if above or outside:
             ap.event(TruthEventKind.FAILSAFE, reason="geofence")
-            ap.say(Severity.WARNING, "Geofence reached: holding")
+            ap.announce(GeofenceReached())
             self._stop()
             ap.hold()
 
@@ -176,6 +177,6 @@ class OffboardControl:
             wall_now_s - self._received_wall_s > ap.params["COM_OF_LOSS_T"]
         ):
             ap.event(TruthEventKind.FAILSAFE, reason="offboard_lost")
-            ap.say(Severity.WARNING, "Offboard setpoints lost: holding")
+            ap.announce(OffboardLost())
             self._stop()
             ap.hold()

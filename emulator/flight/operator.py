@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode, LandedState
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import FailuresCleared
 
 if TYPE_CHECKING:
     from emulator.flight.autopilot import Autopilot
@@ -46,7 +47,7 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
                            if getattr(ap.failures, f"{name}_off")])
     ap.failures.clear()
     if repaired:
-        ap.listener.on_statustext(6, "Failures cleared by the operator")
+        ap.announce(FailuresCleared())
     ap.event(TruthEventKind.OPERATOR_PLACE, position_m=[x_m, y_m, 0.0])
     ap.update_charging()
     ap.listener.on_operator_reset()

@@ -20,6 +20,7 @@ from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
 from emulator.geo import wrap_heading_deg
 from emulator.scenario import VehicleSpec
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import Announcement, build_statustext
 
 __all__ = ["Vehicle"]
 
@@ -148,6 +149,10 @@ class Vehicle:
 
     def say(self, severity: int, text: str) -> None:
         self.listener.on_statustext(severity, text)
+
+    def announce(self, message: Announcement) -> None:
+        """Send one of the vocabulary's STATUSTEXT messages, with its severity."""
+        self.say(message.severity, build_statustext(message))
 
     def switch_mode(self, mode: FlightMode) -> None:
         """Enter `mode`, recorded and announced; nothing else changes."""

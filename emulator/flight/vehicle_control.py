@@ -14,6 +14,7 @@ from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
 from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import Announcement
 
 __all__ = ["VehicleControl"]
 
@@ -40,6 +41,9 @@ class VehicleControl(CameraCarrier, Protocol):
 
     def say(self, severity: int, text: str) -> None:
         """Announce a STATUSTEXT."""
+
+    def announce(self, message: Announcement) -> None:
+        """Send one of the vocabulary's STATUSTEXT messages, with its severity."""
 
     def switch_mode(self, mode: FlightMode) -> None:
         """Enter `mode` (recorded and announced); nothing else changes."""
