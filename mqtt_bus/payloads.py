@@ -9,14 +9,18 @@ from typing import Any
 
 from mavlink_vocabulary import (
     BatteryFailsafe,
+    BatteryLevel,
     FlightState,
     GeofenceReached,
     ObstacleHold,
     OffboardLost,
+    StatusMessage,
     parse_statustext,
 )
 
 __all__ = [
+    "FAILSAFE_ACTIONS",
+    "FAILSAFE_REASONS",
     "DroneSample",
     "encode",
     "event_payload",
@@ -28,6 +32,27 @@ __all__ = [
     "statustext_event",
 ]
 
+
+
+def _failsafe(message: StatusMessage) -> tuple[str, str] | None:
+    """(reason, action) of a failsafe event, for the messages the bus reports as one."""
+    match message:
+        case BatteryFailsafe(level=level):
+            return f"battery_{level.lower()}", message.action.replace(" ", "_")
+        case OffboardLost():
+            return "offboard_lost", "hold"
+        case GeofenceReached():
+            return "geofence", "hold"
+    return None
+
+
+_BUS_FAILSAFES: list[StatusMessage] = [*(BatteryFailsafe(level, 0.0) for level in BatteryLevel),
+                                       OffboardLost(), GeofenceReached()]
+_FAILSAFES = [_failsafe(m) for m in _BUS_FAILSAFES]
+FAILSAFE_REASONS: tuple[str, ...] = tuple(dict.fromkeys(f[0] for f in _FAILSAFES if f))
+"""Every `reason` of a failsafe event."""
+FAILSAFE_ACTIONS: tuple[str, ...] = tuple(dict.fromkeys(f[1] for f in _FAILSAFES if f))
+"""Every `action` of a failsafe event."""
 
 
 def _r(value: float, digits: int = 2) -> float | None:
@@ -90,20 +115,15 @@ def statustext_event(drone: str, time_s: float, severity: int | None, text: str
                      ) -> dict[str, Any]:
     """A STATUSTEXT, classified: obstacle holds and failsafes get their own kind (the text
     is kept)."""
-    match parse_statustext(text):
-        case ObstacleHold(obstacle):
-            return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
-                                 obstacle=obstacle)
-        case BatteryFailsafe() as failsafe:
-            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                                 reason=f"battery_{failsafe.level.lower()}",
-                                 action=failsafe.action.replace(" ", "_"))
-        case OffboardLost():
-            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                                 reason="offboard_lost", action="hold")
-        case GeofenceReached():
-            return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                                 reason="geofence", action="hold")
+    message = parse_statustext(text)
+    if isinstance(message, ObstacleHold):
+        return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
+                             obstacle=message.obstacle)
+    failsafe = _failsafe(message)
+    if failsafe is not None:
+        reason, action = failsafe
+        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
+                             reason=reason, action=action)
     return event_payload(drone, time_s, "statustext", severity=severity, text=text)
 
 
