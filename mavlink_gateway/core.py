@@ -22,7 +22,7 @@ from mavlink_gateway.lockstep_wait import (
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
-from mavlink_vocabulary import GOAL_ENDING_MESSAGES, ObstacleHold, parse_statustext
+from mavlink_vocabulary import GOAL_ENDING_MESSAGES, FlightState, ObstacleHold, parse_statustext
 
 if TYPE_CHECKING:
     from mavlink_gateway.fleet import FleetConnection
@@ -160,7 +160,7 @@ class GatewayCore:
     # -------------------------------------------------------- preconditions
     @staticmethod
     def _require_air(link: DroneLink) -> None:
-        if link.flight_state == "on_ground":
+        if link.flight_state == FlightState.ON_GROUND:
             raise Refusal(f"drone {link.drone_id} is on the ground: take off first")
 
     @staticmethod
@@ -339,7 +339,7 @@ class GatewayCore:
         """Switch an airborne drone to HOLD (it brakes and stays); True if it was sent. An
         armed drone is held even where telemetry still says it is on the ground: early in a
         take-off the climb has begun before telemetry tells it."""
-        if link.flight_state == "on_ground" and not link.armed:
+        if link.flight_state == FlightState.ON_GROUND and not link.armed:
             return False
         try:
             await link.action.hold()
@@ -354,7 +354,8 @@ class GatewayCore:
         positions, and an outcome built on the landed state alone could report a landed drone
         still at its flight altitude."""
         pos = link.position_m
-        return link.flight_state == "on_ground" and pos is not None and pos[2] < LANDED_Z_M
+        return link.flight_state == FlightState.ON_GROUND and pos is not None and \
+            pos[2] < LANDED_Z_M
 
     @staticmethod
     def _arrived(link: DroneLink, target: tuple[float, float, float], tolerance_m: float

@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import ast
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from mavsdk.plugins.telemetry import LandedState as TelemetryLandedState
 
+from emulator.flight.modes import LandedState as EmulatorLandedState
+from mavlink_gateway.drone_link import DroneLink
 from mavlink_vocabulary import (
     HOVER_SPEED_M_S,
     TELEMETRY_FLIGHT_STATES,
@@ -65,3 +70,20 @@ def test_one_hover_speed() -> None:
                       for p in (ROOT / package).rglob("*.py")
                       if "HOVER_SPEED_M_S" in _assigned_names(p))
     assert defining == ["mavlink_vocabulary/flight_state.py"]
+
+
+@given(st.sampled_from(list(TelemetryLandedState)), st.booleans(),
+       st.floats(min_value=0.0, max_value=20.0))
+def test_the_gateway_reads_mavsdk_landed_states_as_the_rule(landed: Any, in_air: bool,
+                                                              speed_m_s: float) -> None:
+    """The gateway keeps MAVSDK's landed-state names; its flight state is the rule's for the
+    MAV_LANDED_STATE they stand for (the bus's swarm view passes the emulator's values)."""
+    link = SimpleNamespace(landed_state=landed.name, in_air=in_air, speed_m_s=speed_m_s)
+    derived = DroneLink.flight_state.fget(link)  # type: ignore[attr-defined]
+    assert derived is derive_flight_state(landed.value, in_air, speed_m_s)
+
+
+def test_the_emulators_landed_states_are_mavlinks() -> None:
+    assert {m.name: m.value for m in EmulatorLandedState} == {
+        "ON_GROUND": MavLandedState.ON_GROUND, "IN_AIR": MavLandedState.IN_AIR,
+        "TAKEOFF": MavLandedState.TAKEOFF, "LANDING": MavLandedState.LANDING}
