@@ -29,6 +29,7 @@ from emulator.flight.dynamics import FleetDynamics
 from emulator.flight.listener import SilentListener
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.scenario import VehicleSpec
+from emulator.truth_events import TruthEventKind
 
 if TYPE_CHECKING:
     from emulator.flight.fleet import Fleet
@@ -135,7 +136,8 @@ def join(swarm: Swarm, spec: VehicleSpec) -> int:
     link.on_mavlink_signal = swarm.faults.mavlink_signal_changed
     network.add(link)
     swarm.watches.add_vehicle()
-    ap.event("joined", system_id=k + 1, position_m=[float(v) for v in dyn.position_m[k]])
+    ap.event(TruthEventKind.JOINED, system_id=k + 1,
+             position_m=[float(v) for v in dyn.position_m[k]])
     swarm.send_telemetry_of(spec.id)
     return k
 
@@ -149,7 +151,7 @@ def leave(swarm: Swarm, drone_id: str) -> None:
         raise KeyError(f"drone {drone_id!r} is not in the swarm")
     ap = fleet.autopilots[k]
     dyn = fleet.dyn
-    ap.event("left", system_id=k + 1, position_m=[float(v) for v in dyn.position_m[k]])
+    ap.event(TruthEventKind.LEFT, system_id=k + 1, position_m=[float(v) for v in dyn.position_m[k]])
     ap.listener = SilentListener()
     ap.mission.pause()
     ap.cancel_timer()

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from emulator.flight.fleet_view import FleetView
+from emulator.truth_events import TruthEventKind
 from emulator.ulog import LOG_LEVEL_WARNING, ULogWriter
 
 __all__ = ["FlightLog", "flight_log", "flight_spans"]
@@ -31,10 +32,10 @@ def flight_spans(fleet: FleetView, vehicle_id: str) -> list[tuple[float, float]]
     """(arm, disarm) simulated times of each flight, oldest first (now for one under way)."""
     spans: list[tuple[float, float]] = []
     armed_at: float | None = None
-    for e in fleet.recorder.events(vehicle_id, kinds=("arm", "disarm")):
-        if e.kind == "arm" and armed_at is None:
+    for e in fleet.recorder.events(vehicle_id, kinds=(TruthEventKind.ARM, TruthEventKind.DISARM)):
+        if e.kind is TruthEventKind.ARM and armed_at is None:
             armed_at = e.t_s
-        elif e.kind == "disarm" and armed_at is not None:
+        elif e.kind is TruthEventKind.DISARM and armed_at is not None:
             spans.append((armed_at, e.t_s))
             armed_at = None
     if armed_at is not None:
@@ -63,7 +64,7 @@ def _ulog(fleet: FleetView, k: int, vehicle_id: str, t0: float, t1: float) -> by
                         math.atan2(math.sin(math.radians(yaw)), math.cos(math.radians(yaw))))
             writer.data(battery, us, pct / 100.0)
     for e in fleet.recorder.events(vehicle_id, t0, t1):
-        level = LOG_LEVEL_WARNING if e.kind == "failsafe" else None
+        level = LOG_LEVEL_WARNING if e.kind is TruthEventKind.FAILSAFE else None
         text = e.kind + "".join(f" {key}={value}" for key, value in e.data.items())
         if level is None:
             writer.log(round(e.t_s * 1e6), text)

@@ -9,6 +9,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from emulator.truth_events import TruthEventKind
+
 if TYPE_CHECKING:
     from emulator.truth import TruthRecorder
 
@@ -74,8 +76,8 @@ class Radio:
         inbox = self._inboxes[message.recipient]
         if len(inbox) >= MAX_INBOX:
             dropped = inbox.popleft()
-            self._recorder.record_event(message.t_s, message.recipient, "message_dropped",
-                                        sender=dropped.sender)
+            self._recorder.record_event(message.t_s, message.recipient,
+                                        TruthEventKind.MESSAGE_DROPPED, sender=dropped.sender)
         inbox.append(message)
 
     def send(self, sender: str, recipient: str, text: str) -> Message:
@@ -85,7 +87,8 @@ class Radio:
             raise RadioError(f"drone {sender} cannot message itself")
         self._check_text(text)
         message = Message(sender, recipient, text, self._clock())
-        self._recorder.record_event(message.t_s, sender, "message_sent", to=recipient, text=text)
+        self._recorder.record_event(message.t_s, sender, TruthEventKind.MESSAGE_SENT,
+                                    to=recipient, text=text)
         self._deliver(message)
         return message
 
@@ -94,7 +97,7 @@ class Radio:
         self._check_text(text)
         t_s = self._clock()
         recipients = [d for d in self._inboxes if d != sender]
-        self._recorder.record_event(t_s, sender, "message_broadcast", text=text,
+        self._recorder.record_event(t_s, sender, TruthEventKind.MESSAGE_BROADCAST, text=text,
                                     recipients=recipients)
         for recipient in recipients:
             self._deliver(Message(sender, recipient, text, t_s, broadcast=True))
@@ -114,7 +117,7 @@ class Radio:
             inbox.clear()
             inbox.extend(kept)
         if messages:
-            self._recorder.record_event(self._clock(), drone_id, "messages_read",
+            self._recorder.record_event(self._clock(), drone_id, TruthEventKind.MESSAGES_READ,
                                         count=len(messages))
         return messages
 

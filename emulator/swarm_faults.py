@@ -22,6 +22,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from emulator.link_faults import DIRECTIONS, UPLINK, LinkFaults, LinkGate
+from emulator.truth_events import TruthEventKind
 
 if TYPE_CHECKING:
     from emulator.flight.autopilot import Autopilot
@@ -65,7 +66,7 @@ class SwarmFaults:
             k = ap.k
             if record:
                 up, down = self.gate.profile(k, UPLINK), self.gate.profile(k, 1 - UPLINK)
-                ap.event("link_faults", seed=faults.seed, uplink=up.to_json(),
+                ap.event(TruthEventKind.LINK_FAULTS, seed=faults.seed, uplink=up.to_json(),
                          downlink=down.to_json())
             for name, direction in DIRECTIONS.items():
                 for start, end in self.gate.profile(k, direction).outages:
@@ -97,14 +98,14 @@ class SwarmFaults:
     def _outage_start(self, ap: Autopilot, direction: str, start_s: float, end_s: float
                       ) -> Callable[[], None]:
         def fire() -> None:
-            ap.event("link_outage", direction=direction, until_s=end_s)
+            ap.event(TruthEventKind.LINK_OUTAGE, direction=direction, until_s=end_s)
             if direction == "uplink":
                 self._schedule_link_check(ap)
         return fire
 
     def _outage_end(self, ap: Autopilot, direction: str) -> Callable[[], None]:
         def fire() -> None:
-            ap.event("link_restored", direction=direction)
+            ap.event(TruthEventKind.LINK_RESTORED, direction=direction)
             if not self.gate.link_down(ap.k, self._fleet.now_s):
                 ap.failures.data_link_regained()
         return fire

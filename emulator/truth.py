@@ -26,6 +26,8 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from emulator.truth_events import TruthEventKind
+
 __all__ = ["TRAJECTORY_COLUMNS", "TargetRows", "TruthEvent", "TruthHistory", "TruthLog",
            "TruthRecorder"]
 
@@ -77,15 +79,20 @@ class TruthEvent:
 
     t_s: float
     vehicle_id: str
-    kind: str
+    kind: TruthEventKind  # given as its word (a str), it becomes the member
     data: Mapping[str, Any]
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.t_s):
             raise ValueError(f"event t_s must be finite, got {self.t_s!r}")
-        for name in ("vehicle_id", "kind"):
-            if not isinstance(value := getattr(self, name), str) or not value:
-                raise ValueError(f"event {name} must be a non-empty string, got {value!r}")
+        if not isinstance(self.vehicle_id, str) or not self.vehicle_id:
+            raise ValueError(f"event vehicle_id must be a non-empty string, "
+                             f"got {self.vehicle_id!r}")
+        try:
+            object.__setattr__(self, "kind", TruthEventKind(self.kind))
+        except ValueError:
+            raise ValueError(f"event kind must be a truth event kind "
+                             f"({', '.join(TruthEventKind)}), got {self.kind!r}") from None
         try:
             plain = json.loads(json.dumps(dict(self.data), default=_json_default))
         except (TypeError, ValueError) as exc:
@@ -565,7 +572,8 @@ class TruthRecorder(TruthHistory):
         self._was_moving[k] = False
         self._all_index = (~self._left).nonzero()[0]
 
-    def record_event(self, t_s: float, vehicle_id: str, kind: str, **data: Any) -> TruthEvent:
+    def record_event(self, t_s: float, vehicle_id: str, kind: TruthEventKind, **data: Any
+                     ) -> TruthEvent:
         """Record an event for a known vehicle; ``data`` must be JSON-serialisable."""
         event = TruthEvent(t_s=float(t_s), vehicle_id=vehicle_id, kind=kind, data=data)
         self._add_event(event)

@@ -26,6 +26,7 @@ from llm_tools.batch import (
 )
 from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
 from llm_tools.schema import describe, schema_for, validate
+from mavlink_vocabulary import FlightState
 
 __all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry", "served_registry"]
 
@@ -34,7 +35,9 @@ OUTPUT_SCHEMA: dict[str, Any] = {
     "properties": {
         "status": {"type": "string", "enum": list(RESULT_STATUSES)},
         "message": {"type": "string"},
-        "state": {"type": "object", "description": "the drone's state after the call"},
+        "state": {"type": "object", "description": "the drone's state after the call",
+                  "properties": {"flight_state": {"type": "string",
+                                                  "enum": [s.value for s in FlightState]}}},
     },
     "required": ["status", "message"],
 }

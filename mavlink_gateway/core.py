@@ -22,7 +22,7 @@ from mavlink_gateway.lockstep_wait import (
     wait_lockstep,
 )
 from mavlink_gateway.outcomes import Outcome, Status
-from mavlink_vocabulary import FAILSAFE_TEXTS, OBSTACLE_TEXT
+from mavlink_vocabulary import GOAL_ENDING_MESSAGES, FlightState, ObstacleHold, parse_statustext
 
 if TYPE_CHECKING:
     from mavlink_gateway.fleet import FleetConnection
@@ -160,7 +160,7 @@ class GatewayCore:
     # -------------------------------------------------------- preconditions
     @staticmethod
     def _require_air(link: DroneLink) -> None:
-        if link.flight_state == "on_ground":
+        if link.flight_state == FlightState.ON_GROUND:
             raise Refusal(f"drone {link.drone_id} is on the ground: take off first")
 
     @staticmethod
@@ -286,10 +286,10 @@ class GatewayCore:
             if failure is not None:
                 return failure
             for text in new_texts:
-                if text.startswith(FAILSAFE_TEXTS):
+                if isinstance(parse_statustext(text), GOAL_ENDING_MESSAGES):
                     return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())
             if watch_obstacles and obstacle_mark is None and \
-                    any(t.startswith(OBSTACLE_TEXT) for t in new_texts):
+                    any(isinstance(parse_statustext(t), ObstacleHold) for t in new_texts):
                 obstacle_mark = dict(link.seen)
             # The text comes the moment the vehicle stops; speed, mode and position come at
             # their own rates and may still describe the start of the move (in stepped mode a
@@ -298,7 +298,8 @@ class GatewayCore:
                     link.refreshed_since(obstacle_mark, ("position", "velocity"), 2) and \
                     link.speed_m_s < ARRIVED_SPEED_M_S and link.mode == "HOLD":
                 x, y, z = link.position_m or (math.nan,) * 3
-                obstacle = next(t for t in new_texts if t.startswith(OBSTACLE_TEXT))
+                obstacle = next(t for t in new_texts
+                                if isinstance(parse_statustext(t), ObstacleHold))
                 return Outcome(Status.BLOCKED, f"{what} stopped at ({x:.1f}, {y:.1f}, {z:.1f}): "
                                f"{obstacle.lower()}", link.state())
             elapsed = self.services.clock_s() - start_sim
@@ -338,7 +339,7 @@ class GatewayCore:
         """Switch an airborne drone to HOLD (it brakes and stays); True if it was sent. An
         armed drone is held even where telemetry still says it is on the ground: early in a
         take-off the climb has begun before telemetry tells it."""
-        if link.flight_state == "on_ground" and not link.armed:
+        if link.flight_state == FlightState.ON_GROUND and not link.armed:
             return False
         try:
             await link.action.hold()
@@ -353,7 +354,8 @@ class GatewayCore:
         positions, and an outcome built on the landed state alone could report a landed drone
         still at its flight altitude."""
         pos = link.position_m
-        return link.flight_state == "on_ground" and pos is not None and pos[2] < LANDED_Z_M
+        return link.flight_state == FlightState.ON_GROUND and pos is not None and \
+            pos[2] < LANDED_Z_M
 
     @staticmethod
     def _arrived(link: DroneLink, target: tuple[float, float, float], tolerance_m: float

@@ -26,11 +26,20 @@ from mavsdk.asyncio.plugins.telemetry import TelemetryAsync
 
 from mavlink_gateway.interfaces import GeoFrame, wrap_heading_deg
 from mavlink_gateway.outcomes import DroneState
-from mavlink_vocabulary import FAILURE_TEXTS, REPAIRED_TEXT
+from mavlink_vocabulary import (
+    OUT_OF_TASK_MESSAGES,
+    FailuresCleared,
+    FlightState,
+    MavLandedState,
+    derive_flight_state,
+    parse_statustext,
+)
 
 __all__ = ["UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
 
-HOVER_SPEED_M_S = 0.5
+# MAVSDK's landed-state names as MAV_LANDED_STATE (anything else: undefined)
+_LANDED_STATES = {"ON_GROUND": MavLandedState.ON_GROUND, "IN_AIR": MavLandedState.IN_AIR,
+                  "TAKING_OFF": MavLandedState.TAKEOFF, "LANDING": MavLandedState.LANDING}
 # EXTENDED_SYS_STATE (landed state, in air) is 1 Hz by default (PX4 and the emulator): a
 # take-off or landing would be seen up to a second after it ended. Asked for once per drone
 # with SET_MESSAGE_INTERVAL; a vehicle that refuses keeps its default rate.
@@ -87,7 +96,7 @@ class DroneLink:
         self.param = ParamAsync(system)
         self.direct = MavlinkDirectAsync(system)
         self.capture_sequence = 0  # the camera protocol's capture sequence number, per drone
-        self.failure: str | None = None  # a failure the drone reported (FAILURE_TEXTS)
+        self.failure: str | None = None  # a failure the drone reported (OUT_OF_TASK_MESSAGES)
         self.last_update_wall_s = time.monotonic()
         self.position_m: tuple[float, float, float] | None = None
         self.velocity_m_s = (0.0, 0.0, 0.0)
@@ -200,9 +209,10 @@ class DroneLink:
 
     def _on_status_text(self, s: Any) -> None:
         self.status_texts.append(s.text)
-        if s.text.startswith(FAILURE_TEXTS) and self.failure is None:
+        message = parse_statustext(s.text)
+        if isinstance(message, OUT_OF_TASK_MESSAGES) and self.failure is None:
             self.failure = s.text
-        elif s.text.startswith(REPAIRED_TEXT):
+        elif isinstance(message, FailuresCleared):
             self.failure = None
 
     def silent_for_s(self) -> float:
@@ -251,25 +261,20 @@ class DroneLink:
         return math.sqrt(sum(v * v for v in self.velocity_m_s))
 
     @property
-    def reported_state(self) -> str:
+    def reported_state(self) -> FlightState:
         """`flight_state`, or "unreachable" (no telemetry for UNREACHABLE_WALL_S) or "failed"
         (the drone reported a failure that takes it out)."""
         if self.silent_for_s() > UNREACHABLE_WALL_S:
-            return "unreachable"
+            return FlightState.UNREACHABLE
         if self.failure is not None:
-            return "failed"
+            return FlightState.FAILED
         return self.flight_state
 
     @property
-    def flight_state(self) -> str:
+    def flight_state(self) -> FlightState:
         """on_ground, taking_off, hovering, flying or landing, by telemetry."""
-        if self.landed_state == "ON_GROUND" or not self.in_air:
-            return "on_ground"
-        if self.landed_state == "TAKING_OFF":
-            return "taking_off"
-        if self.landed_state == "LANDING":
-            return "landing"
-        return "hovering" if self.speed_m_s < HOVER_SPEED_M_S else "flying"
+        landed = _LANDED_STATES.get(self.landed_state, MavLandedState.UNDEFINED)
+        return derive_flight_state(landed, self.in_air, self.speed_m_s)
 
     def state(self) -> DroneState:
         x, y, z = self.position_m or (math.nan, math.nan, math.nan)

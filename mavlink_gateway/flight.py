@@ -20,7 +20,7 @@ from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
 from mavlink_gateway.drone_link import DroneLink
 from mavlink_gateway.interfaces import wrap_heading_deg
 from mavlink_gateway.outcomes import Outcome, Status
-from mavlink_vocabulary import MavCmd, MavFrame
+from mavlink_vocabulary import FlightState, MavCmd, MavFrame
 
 __all__ = ["FlightPrimitives"]
 
@@ -45,7 +45,7 @@ class FlightPrimitives(GatewayCore):
     async def take_off(self, drone: str, altitude_m: float) -> Outcome:
         async def body(link: DroneLink) -> Outcome:
             altitude = self._altitude(link, altitude_m)
-            if link.flight_state != "on_ground":
+            if link.flight_state != FlightState.ON_GROUND:
                 raise Refusal(f"drone {link.drone_id} is already in the air")
             if link.battery_pct < 10.0:
                 raise Refusal(f"battery {link.battery_pct:.0f}% is too low to take off")
@@ -61,7 +61,7 @@ class FlightPrimitives(GatewayCore):
             def done() -> Outcome | None:
                 # Armed comes with the 1 Hz heartbeat, position at 10 Hz: without waiting for
                 # it the state reported could be "hovering" and "disarmed" at once.
-                if link.flight_state == "hovering" and link.armed and \
+                if link.flight_state == FlightState.HOVERING and link.armed and \
                         self._arrived(link, target, ARRIVAL_M):
                     return Outcome(Status.OK, f"{link.drone_id} took off to {altitude:.1f} m",
                                    link.state())
@@ -177,7 +177,7 @@ class FlightPrimitives(GatewayCore):
             interrupted = self._replaced.get(link.drone_id)
             data = {"interrupted": interrupted}
             if interrupted is None:
-                if link.flight_state == "on_ground":
+                if link.flight_state == FlightState.ON_GROUND:
                     return Outcome(Status.OK, f"{link.drone_id} is on the ground: nothing to "
                                    "hold", link.state(), data)
                 await self._mavsdk(link, "hold", link.action.hold, effects.holding)

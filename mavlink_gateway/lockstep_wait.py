@@ -21,7 +21,12 @@ from mavlink_gateway.goals import Goal
 from mavlink_gateway.interfaces import Services
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_gateway.pacing import current_thinker
-from mavlink_vocabulary import FAILSAFE_TEXTS, FAILURE_TEXTS, OBSTACLE_TEXT
+from mavlink_vocabulary import (
+    GOAL_ENDING_MESSAGES,
+    OUT_OF_TASK_MESSAGES,
+    ObstacleHold,
+    parse_statustext,
+)
 
 __all__ = ["judge_failure", "judge_stop", "settle_telemetry", "wait_instant", "wait_lockstep",
            "wait_world"]
@@ -56,7 +61,8 @@ async def settle_telemetry(link: DroneLink, services: Services | None = None) ->
 
 def judge_failure(link: DroneLink, what: str, texts: int) -> Outcome | None:
     """A failure that takes the drone out (a motor, its GPS), reported since `texts`."""
-    failure = next((t for t in link.status_texts[texts:] if t.startswith(FAILURE_TEXTS)), None)
+    failure = next((t for t in link.status_texts[texts:]
+                    if isinstance(parse_statustext(t), OUT_OF_TASK_MESSAGES)), None)
     if failure is None:
         return None
     return Outcome(Status.FAILED, f"{what} ended: {failure}; the drone is out of the task",
@@ -81,9 +87,10 @@ def judge_stop(link: DroneLink, what: str, texts: int, watch_obstacles: bool
         return failure
     new_texts = link.status_texts[texts:]
     for text in new_texts:
-        if text.startswith(FAILSAFE_TEXTS):
+        if isinstance(parse_statustext(text), GOAL_ENDING_MESSAGES):
             return Outcome(Status.BLOCKED, f"{what} stopped: {text}", link.state())
-    obstacle = next((t for t in new_texts if t.startswith(OBSTACLE_TEXT)), None)
+    obstacle = next((t for t in new_texts if isinstance(parse_statustext(t), ObstacleHold)),
+                    None)
     if watch_obstacles and obstacle is not None and link.speed_m_s < ARRIVED_SPEED_M_S \
             and link.mode == "HOLD":
         x, y, z = link.position_m or (math.nan,) * 3

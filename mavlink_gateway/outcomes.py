@@ -7,6 +7,8 @@ from dataclasses import asdict, dataclass
 from enum import StrEnum
 from typing import Any
 
+from mavlink_vocabulary import FlightState
+
 __all__ = ["RESERVED_KEYS", "DroneState", "Outcome", "Status"]
 
 RESERVED_KEYS = frozenset({"status", "message", "state"})
@@ -36,7 +38,7 @@ class DroneState:
     battery_pct: float
     # on_ground, taking_off, hovering, flying, landing; failed (a motor or GPS failure
     # reported), unreachable (no telemetry for a while: the state is as last seen)
-    flight_state: str
+    flight_state: FlightState
     armed: bool
     mode: str
     home_x_m: float = math.nan

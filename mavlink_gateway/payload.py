@@ -14,7 +14,7 @@ from mavlink_gateway.flight import FlightPrimitives
 from mavlink_gateway.interfaces import Sensed, SensedWorld
 from mavlink_gateway.lockstep_wait import wait_instant, wait_world
 from mavlink_gateway.outcomes import Outcome, Status
-from mavlink_vocabulary import MavCmd, MavComponent, MavResult
+from mavlink_vocabulary import FlightState, MavCmd, MavComponent, MavResult
 
 __all__ = ["PayloadPrimitives", "perception_dict"]
 
@@ -103,7 +103,7 @@ class PayloadPrimitives(FlightPrimitives):
                               f" of {link.drone_id}")
             station = stations[0]
             texts = len(link.status_texts)
-            if link.flight_state == "on_ground":
+            if link.flight_state == FlightState.ON_GROUND:
                 if station.distance_m > 0.0:
                     raise Refusal(f"{link.drone_id} is on the ground {station.distance_m:.0f} m "
                                   f"from station {station.id}: take off and charge again")

@@ -2,8 +2,10 @@
 
 Named IntEnums for the MAVLink numbers the code uses, each member spelled as in the pymavlink
 common dialect without its enum's prefix (`MavCmd.NAV_TAKEOFF` is `MAV_CMD_NAV_TAKEOFF`;
-tests/test_mavlink_vocabulary.py checks every value against the dialect), and the STATUSTEXT
-reasons a ground station reads to tell why a vehicle stopped or refused.
+tests/test_mavlink_vocabulary.py checks every value against the dialect); the STATUSTEXT
+messages a vehicle sends of its own accord, built and parsed by one pair of functions
+(`build_statustext`, `parse_statustext`); and the flight state a ground station derives from
+telemetry (`FlightState`, `derive_flight_state`).
 
 This is the bottom layer: it imports nothing of mavswarm (and not even pymavlink).
 """
@@ -34,23 +36,64 @@ from mavlink_vocabulary.enums import (
     PositionTargetTypemask,
     SpeedType,
 )
+from mavlink_vocabulary.flight_state import (
+    HOVER_SPEED_M_S,
+    TELEMETRY_FLIGHT_STATES,
+    FlightState,
+    derive_flight_state,
+)
 from mavlink_vocabulary.ids import MavCmd, MessageId
-from mavlink_vocabulary.reasons import (
-    FAILSAFE_TEXTS,
-    FAILURE_TEXTS,
-    OBSTACLE_TEXT,
-    REPAIRED_TEXT,
+from mavlink_vocabulary.statustext import (
+    GOAL_ENDING_MESSAGES,
+    OUT_OF_TASK_MESSAGES,
+    STATUSTEXT_MAX_CHARS,
+    Announcement,
+    BatteryFailsafe,
+    BatteryFailure,
+    BatteryLevel,
+    DataLinkLost,
+    FailsafeAction,
+    FailuresCleared,
+    FreeText,
+    GeofenceAction,
+    GeofenceBreached,
+    GeofenceReached,
+    GpsLost,
+    LowBattery,
+    ManualControlLost,
+    MotorFailure,
+    ObstacleHold,
+    OffboardLost,
+    StatusMessage,
+    build_statustext,
+    parse_statustext,
 )
 
 __all__ = [
-    "FAILSAFE_TEXTS",
-    "FAILURE_TEXTS",
-    "OBSTACLE_TEXT",
-    "REPAIRED_TEXT",
+    "GOAL_ENDING_MESSAGES",
+    "HOVER_SPEED_M_S",
+    "OUT_OF_TASK_MESSAGES",
+    "STATUSTEXT_MAX_CHARS",
+    "TELEMETRY_FLIGHT_STATES",
+    "Announcement",
+    "BatteryFailsafe",
+    "BatteryFailure",
+    "BatteryLevel",
     "CameraCapFlags",
+    "DataLinkLost",
+    "FailsafeAction",
     "FailureType",
     "FailureUnit",
+    "FailuresCleared",
+    "FlightState",
+    "FreeText",
+    "GeofenceAction",
+    "GeofenceBreached",
+    "GeofenceReached",
     "GpsFixType",
+    "GpsLost",
+    "LowBattery",
+    "ManualControlLost",
     "MavAutopilot",
     "MavBatteryChargeState",
     "MavBatteryFunction",
@@ -71,6 +114,13 @@ __all__ = [
     "MavType",
     "MavVtolState",
     "MessageId",
+    "MotorFailure",
+    "ObstacleHold",
+    "OffboardLost",
     "PositionTargetTypemask",
     "SpeedType",
+    "StatusMessage",
+    "build_statustext",
+    "derive_flight_state",
+    "parse_statustext",
 ]

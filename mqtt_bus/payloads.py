@@ -4,11 +4,23 @@ reports) becomes an `osd` payload and a `state` payload; events are built here t
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from typing import Any
 
+from mavlink_vocabulary import (
+    BatteryFailsafe,
+    BatteryLevel,
+    FlightState,
+    GeofenceReached,
+    ObstacleHold,
+    OffboardLost,
+    StatusMessage,
+    parse_statustext,
+)
+
 __all__ = [
+    "FAILSAFE_ACTIONS",
+    "FAILSAFE_REASONS",
     "DroneSample",
     "encode",
     "event_payload",
@@ -20,10 +32,27 @@ __all__ = [
     "statustext_event",
 ]
 
-_OBSTACLE = re.compile(r"^Obstacle (?P<obstacle>.+) ahead: holding$")
-_FAILSAFE = re.compile(r"^(?P<level>Critical|Emergency) battery (?P<pct>[\d.]+)%: "
-                       r"(?P<action>returning home|landing)$")
-_LINK_FAILSAFE = ("Offboard setpoints lost: holding", "Geofence reached: holding")
+
+
+def _failsafe(message: StatusMessage) -> tuple[str, str] | None:
+    """(reason, action) of a failsafe event, for the messages the bus reports as one."""
+    match message:
+        case BatteryFailsafe(level=level):
+            return f"battery_{level.lower()}", message.action.replace(" ", "_")
+        case OffboardLost():
+            return "offboard_lost", "hold"
+        case GeofenceReached():
+            return "geofence", "hold"
+    return None
+
+
+_BUS_FAILSAFES: list[StatusMessage] = [*(BatteryFailsafe(level, 0.0) for level in BatteryLevel),
+                                       OffboardLost(), GeofenceReached()]
+_FAILSAFES = [_failsafe(m) for m in _BUS_FAILSAFES]
+FAILSAFE_REASONS: tuple[str, ...] = tuple(dict.fromkeys(f[0] for f in _FAILSAFES if f))
+"""Every `reason` of a failsafe event."""
+FAILSAFE_ACTIONS: tuple[str, ...] = tuple(dict.fromkeys(f[1] for f in _FAILSAFES if f))
+"""Every `action` of a failsafe event."""
 
 
 def _r(value: float, digits: int = 2) -> float | None:
@@ -44,7 +73,7 @@ class DroneSample:
     battery_pct: float
     mode: str
     armed: bool
-    flight_state: str  # on_ground, taking_off, hovering, flying, landing
+    flight_state: FlightState  # one of TELEMETRY_FLIGHT_STATES
     home_m: tuple[float, float, float] | None
     home_geodetic: tuple[float, float, float] | None
     primitive: str | None = None  # the gateway primitive running for it, if any
@@ -86,19 +115,15 @@ def statustext_event(drone: str, time_s: float, severity: int | None, text: str
                      ) -> dict[str, Any]:
     """A STATUSTEXT, classified: obstacle holds and failsafes get their own kind (the text
     is kept)."""
-    held = _OBSTACLE.match(text)
-    if held:
+    message = parse_statustext(text)
+    if isinstance(message, ObstacleHold):
         return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
-                             obstacle=held["obstacle"])
-    failsafe = _FAILSAFE.match(text)
-    if failsafe:
-        reason = f"battery_{failsafe['level'].lower()}"
+                             obstacle=message.obstacle)
+    failsafe = _failsafe(message)
+    if failsafe is not None:
+        reason, action = failsafe
         return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                             reason=reason, action=failsafe["action"].replace(" ", "_"))
-    if text in _LINK_FAILSAFE:
-        reason = "offboard_lost" if text.startswith("Offboard") else "geofence"
-        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                             reason=reason, action="hold")
+                             reason=reason, action=action)
     return event_payload(drone, time_s, "statustext", severity=severity, text=text)
 
 

@@ -9,6 +9,8 @@ import json
 from typing import Any
 
 from agent_contract.tools import RESULT_STATUSES
+from mavlink_vocabulary import TELEMETRY_FLIGHT_STATES
+from mqtt_bus.payloads import FAILSAFE_ACTIONS, FAILSAFE_REASONS
 
 __all__ = ["SCHEMAS"]
 
@@ -53,8 +55,7 @@ STATE: dict[str, Any] = {
     "required": ["drone", "time_s", "flight_state", "mode", "armed", "home", "primitive"],
     "properties": {
         **_COMMON,
-        "flight_state": {"enum": ["on_ground", "taking_off", "hovering", "flying",
-                                  "landing"]},
+        "flight_state": {"enum": [s.value for s in TELEMETRY_FLIGHT_STATES]},
         "mode": {"type": "string"}, "armed": {"type": "boolean"},
         "home": {"oneOf": [{"type": "null"}, {
             "type": "object", "additionalProperties": False,
@@ -81,9 +82,8 @@ EVENTS: dict[str, Any] = {
                         "obstacle": {"type": "string"}},
          "required": ["severity", "text", "obstacle"], "additionalProperties": False},
         {"properties": {**_EVENT_BASE, "kind": {"const": "failsafe"},
-                        "reason": {"enum": ["battery_critical", "battery_emergency",
-                                            "offboard_lost", "geofence"]},
-                        "action": {"enum": ["returning_home", "landing", "hold"]}},
+                        "reason": {"enum": list(FAILSAFE_REASONS)},
+                        "action": {"enum": list(FAILSAFE_ACTIONS)}},
          "required": ["severity", "text", "reason", "action"], "additionalProperties": False},
         {"properties": {**_COMMON, "kind": {"const": "photo"},
                         "index": {"type": "integer"}, "position": _XYZ,

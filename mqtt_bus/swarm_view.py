@@ -18,13 +18,11 @@ import numpy as np
 from emulator.flight.camera import ImageCapture
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.mission import MissionItem
-from emulator.flight.modes import LandedState
 from emulator.swarm import Swarm
+from mavlink_vocabulary import derive_flight_state
 from mqtt_bus.payloads import DroneSample, photo_event, statustext_event
 
 __all__ = ["SwarmView"]
-
-HOVER_SPEED_M_S = 0.5  # as the gateway's flight states
 
 
 class _Tee:
@@ -145,18 +143,10 @@ class SwarmView:
                 geodetic=(lat[k], lon[k], amsl[k]), velocity_m_s=(ve, vn, vu),
                 heading_deg=yaws[k], battery_pct=battery[k], mode=ap.mode.name.lower(),
                 armed=armed[k],
-                flight_state=_flight_state(ap.landed_state, airborne[k], speeds[k]),
+                flight_state=derive_flight_state(ap.landed_state.value, airborne[k],
+                                                 speeds[k]),
                 home_m=home, home_geodetic=home_geo,
                 primitive=primitive_of(drone) if primitive_of else None,
             ))
         return out
 
-
-def _flight_state(landed: LandedState, airborne: bool, speed_m_s: float) -> str:
-    if landed is LandedState.ON_GROUND or not airborne:
-        return "on_ground"
-    if landed is LandedState.TAKEOFF:
-        return "taking_off"
-    if landed is LandedState.LANDING:
-        return "landing"
-    return "hovering" if speed_m_s < HOVER_SPEED_M_S else "flying"

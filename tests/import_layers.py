@@ -35,6 +35,7 @@ _BOTTOM = frozenset({"mavlink_vocabulary"})
 _AGENT_SIDE = _BOTTOM | {"mavlink_gateway", "agent_contract", "llm_tools"}
 _SESSIONS_AND_CHECKS = frozenset({"benchmark.authoring.session_file",
                                   "benchmark.authoring.task_faults",
+                                  "benchmark.authoring.plan_steps",
                                   "benchmark.scoring.validators"})
 _AGENTS = frozenset({"swarm_agents", "swarm_agents.llm", "swarm_agents.baselines",
                      "swarm_agents.teams", "swarm_agents.oracle", "swarm_agents.plugins"})
@@ -52,8 +53,10 @@ LAYERS: dict[str, frozenset[str]] = {
     "mqtt_bus": _AGENT_SIDE | {"emulator"},
     "benchmark.authoring.task_faults": _AGENT_SIDE | {"emulator"},
     "benchmark.scoring.validators": _AGENT_SIDE | {"emulator"},
+    "benchmark.authoring.plan_steps": _BOTTOM,
     "benchmark.authoring.session_file": _AGENT_SIDE | {"emulator",
                                                        "benchmark.authoring.task_faults",
+                                                       "benchmark.authoring.plan_steps",
                                                        "benchmark.scoring.validators"},
     "swarm_agents.oracle": _AGENT_SIDE | {"emulator"} | _SESSIONS_AND_CHECKS,
     "swarm_agents.plugins": (_AGENT_SIDE | _SESSIONS_AND_CHECKS

@@ -59,10 +59,16 @@ def test_message_ids_are_the_dialects() -> None:
         assert mavlink.mavlink_map[member.value].msgname == member.name
 
 
+# The vocabulary's own words, not MAVLink's (tested in test_flight_state.py and
+# test_statustext.py)
+OWN_ENUMS: set[type[enum.Enum]] = {vocab.FlightState, vocab.BatteryLevel, vocab.FailsafeAction,
+                                   vocab.GeofenceAction}
+
+
 def test_every_exported_enum_is_checked() -> None:
     exported = {getattr(vocab, n) for n in vocab.__all__}
     enums = {c for c in exported if isinstance(c, type) and issubclass(c, enum.Enum)}
-    assert enums == set(DIALECT_ENUMS) | {vocab.MessageId}
+    assert enums == set(DIALECT_ENUMS) | {vocab.MessageId} | OWN_ENUMS
 
 
 def test_the_flight_logics_mavlink_tables_agree_with_the_vocabulary() -> None:

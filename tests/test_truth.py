@@ -161,12 +161,12 @@ def test_position_at_interpolates_and_clamps() -> None:
 
 def test_events_filtered_by_vehicle_window_and_kind() -> None:
     rec = TruthRecorder(["a", "b"])
-    rec.record_event(1.0, "a", "armed")
-    rec.record_event(2.0, "b", "armed")
+    rec.record_event(1.0, "a", "arm")
+    rec.record_event(2.0, "b", "arm")
     landed = rec.record_event(3.0, "a", "landed", at=np.array([1.0, 2.0]), n=np.int64(3))
     rec.record_event(0.5, "b", "takeoff", altitude_m=10.0)
     assert [e.t_s for e in rec.events()] == [1.0, 2.0, 3.0, 0.5]
-    assert [e.kind for e in rec.events("a")] == ["armed", "landed"]
+    assert [e.kind for e in rec.events("a")] == ["arm", "landed"]
     assert [e.t_s for e in rec.events(t0_s=1.0, t1_s=2.0)] == [1.0, 2.0]
     assert rec.events(kinds=["landed", "takeoff"]) == [landed, rec.events("b")[1]]
     assert rec.events("b", t0_s=0.0, t1_s=1.0, kinds="takeoff")[0].data == {"altitude_m": 10.0}
@@ -174,9 +174,9 @@ def test_events_filtered_by_vehicle_window_and_kind() -> None:
     with pytest.raises(TypeError):
         landed.data["n"] = 4  # type: ignore[index]
     with pytest.raises(ValueError, match="JSON"):
-        rec.record_event(4.0, "a", "bad", thing=object())
+        rec.record_event(4.0, "a", "photo", thing=object())
     with pytest.raises(KeyError, match="known vehicles: a, b"):
-        rec.record_event(4.0, "zz", "armed")
+        rec.record_event(4.0, "zz", "arm")
     with pytest.raises(KeyError, match="zz"):
         rec.events("zz")
 
@@ -213,7 +213,7 @@ def test_export_load_round_trip(tmp_path: Path) -> None:
         moving = rng.random(4) < 0.3
         rec.record_step(step * DT_S, *_state(4, step), moving)
         if step % 50 == 0:
-            rec.record_event(step * DT_S, f"uav{step % 4}", "waypoint", seq=step, tag=["x", 1])
+            rec.record_event(step * DT_S, f"uav{step % 4}", "orbit", seq=step, tag=["x", 1])
     path = rec.export(tmp_path / "run.truth.npz")
     assert path == tmp_path / "run.truth.npz"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.truth.npz"]
@@ -229,7 +229,7 @@ def test_export_load_round_trip(tmp_path: Path) -> None:
         )
         assert log.position_at(vehicle_id, 2.345) == rec.position_at(vehicle_id, 2.345)
     assert log.events() == rec.events()
-    assert log.events("uav2", kinds=["waypoint"]) == rec.events("uav2", kinds=["waypoint"])
+    assert log.events("uav2", kinds=["orbit"]) == rec.events("uav2", kinds=["orbit"])
     assert rec.export(path) == path
     np.testing.assert_array_equal(TruthLog.load(path).trajectory("uav3"), log.trajectory("uav3"))
 
@@ -252,7 +252,7 @@ def test_snapshot_is_independent_of_later_steps() -> None:
 
 
 def test_event_equality_survives_json() -> None:
-    event = TruthEvent(1.5, "a", "geofence", {"fence": {"ids": [1, 2]}, "ok": True})
+    event = TruthEvent(1.5, "a", "failsafe", {"fence": {"ids": [1, 2]}, "ok": True})
     assert TruthEvent(**event.to_json()) == event
     assert event.data["fence"]["ids"] == (1, 2)
 

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from agent_contract.protocol import TaskBudget
+from benchmark.authoring.plan_steps import parse_plan
 from benchmark.authoring.task_faults import TaskFaults, task_faults
 from benchmark.scoring.validators import CheckDefinitionError, Node, parse_tree
 from emulator.scenario import Scenario, ScenarioError, scenario_from_dict
@@ -115,14 +116,12 @@ def _budget(where: str, raw: Any) -> TaskBudget:
 
 
 def _oracle(where: str, raw: Any) -> tuple[tuple[Mapping[str, Any], ...], ...] | None:
+    """The plan as the file writes it, once every step reads as its type."""
     if raw is None:
         return None
     if not isinstance(raw, list) or not all(isinstance(p, list) for p in raw):
         raise ValueError(f"{where}: expected a list of phases (lists of operations)")
-    for k, phase in enumerate(raw):
-        for j, op in enumerate(phase):
-            if not isinstance(op, Mapping) or not isinstance(op.get("op"), str):
-                raise ValueError(f"{where}[{k}][{j}]: expected an operation object with 'op'")
+    parse_plan(raw, where)
     return tuple(tuple(phase) for phase in raw)
 
 

@@ -35,6 +35,7 @@ from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
 from mavlink_gateway.drone_link import LANDED_STATE_HZ
 from mavlink_gateway.pacing import Thinker, run_as
+from mavlink_vocabulary import FlightState
 
 __all__ = ["BENCH_TELEMETRY_HZ", "CLOCKS", "EpisodeOptions", "base_record", "error_record",
            "record_key",
@@ -152,7 +153,7 @@ async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
             link = gateway.drones[ap.vehicle_id]
             p = link.position_m
             if (p is None or math.dist(p, ap.position_m) > 0.1 or link.armed
-                    or link.flight_state != "on_ground" or link.battery_pct < 99.0
+                    or link.flight_state != FlightState.ON_GROUND or link.battery_pct < 99.0
                     or link.home_m is None or math.dist(link.home_m, ap.home_m) > 0.1):
                 lagging.append(ap.vehicle_id)
         if not lagging:

@@ -38,7 +38,7 @@ from benchmark.server.session_loading import add_session_loading_routes
 from benchmark.server.views import session_view, task_view
 from llm_tools.body_limit import bound_inputs
 from llm_tools.input_limits import InputError, preview
-from llm_tools.registry import ToolRegistry, served_registry
+from llm_tools.registry import OUTPUT_SCHEMA, ToolRegistry, served_registry
 
 __all__ = ["create_app", "drone_or_404"]
 
@@ -128,7 +128,11 @@ def _add_session_routes(app: FastAPI, hub: Hub, registry: ToolRegistry) -> None:
                           "({status: error, message}) when the arguments are refused. The "
                           "`batch` tool runs several calls side by side, one result each. "
                           "Under the lockstep clock a key's calls run one at a time: a call "
-                          "while another of the same thread runs is `rejected`.")
+                          "while another of the same thread runs is `rejected`.",
+              responses={200: {"description": "The tool's result (`batch`: with `results`)",
+                               "content": {"application/json": {"schema": OUTPUT_SCHEMA}}},
+                         422: {"description": "The arguments were refused",
+                               "content": {"application/json": {"schema": OUTPUT_SCHEMA}}}})
     async def call_tool(session_id: str, name: str, request: Request,
                         caller: Annotated[Caller, Depends(actor)]) -> JSONResponse:
         live = live_session(hub, caller, session_id)

@@ -32,6 +32,8 @@ from emulator.flight.vehicle import Vehicle
 from emulator.flight.vehicle_state import MISSION_PHASES, Phase, TimerAction
 from emulator.geo import wrap_heading_deg
 from emulator.scenario import VehicleSpec
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import BatteryFailsafe, BatteryLevel, LowBattery, ObstacleHold
 
 __all__ = ["Autopilot", "AutopilotListener", "CommandRefused", "ImageCapture", "Severity"]
 
@@ -84,8 +86,8 @@ class Autopilot(Vehicle):
 
     def _stopped_by(self, obstacle_id: str | None, name: str) -> None:
         x, y, z = self.position_m
-        self.event("obstacle_stop", obstacle=obstacle_id, position_m=[x, y, z])
-        self.say(Severity.WARNING, f"Obstacle {name} ahead: holding")
+        self.event(TruthEventKind.OBSTACLE_STOP, obstacle=obstacle_id, position_m=[x, y, z])
+        self.announce(ObstacleHold(name))
         if self.state.mode is not FlightMode.OFFBOARD:
             self.mission.pause()
             self.switch_mode(FlightMode.HOLD)
@@ -104,7 +106,7 @@ class Autopilot(Vehicle):
         st.goal_pending = False
         st.phase = Phase.IDLE
         x, y, _ = self.position_m
-        self.event("landed", position_m=[x, y, 0.0])
+        self.event(TruthEventKind.LANDED, position_m=[x, y, 0.0])
         self.listener.on_state_changed()
         self.say(Severity.INFO, "Landing detected")
         self.mission.on_landed()
@@ -146,16 +148,16 @@ class Autopilot(Vehicle):
     def on_battery_level(self, level: int) -> None:
         pct = self.battery_pct
         if level == BATTERY_LOW:
-            self.say(Severity.WARNING, f"Low battery: {pct:.0f}% remaining")
+            self.announce(LowBattery(pct))
         elif level == BATTERY_CRITICAL and self.in_air and self.mode not in (
             FlightMode.RTL, FlightMode.LAND
         ):
-            self.event("failsafe", reason="battery_critical", battery_pct=pct)
-            self.say(Severity.CRITICAL, f"Critical battery {pct:.0f}%: returning home")
+            self.event(TruthEventKind.FAILSAFE, reason="battery_critical", battery_pct=pct)
+            self.announce(BatteryFailsafe(BatteryLevel.CRITICAL, pct))
             self.start_rtl()
         elif level == BATTERY_EMERGENCY and self.in_air and self.mode is not FlightMode.LAND:
-            self.event("failsafe", reason="battery_emergency", battery_pct=pct)
-            self.say(Severity.CRITICAL, f"Emergency battery {pct:.0f}%: landing")
+            self.event(TruthEventKind.FAILSAFE, reason="battery_emergency", battery_pct=pct)
+            self.announce(BatteryFailsafe(BatteryLevel.EMERGENCY, pct))
             self.start_land(None)
         self.update_charging()
 
@@ -168,7 +170,7 @@ class Autopilot(Vehicle):
         if self.fleet.bat.level[self.k] >= BATTERY_CRITICAL:
             raise CommandRefused(f"Arming denied: battery {self.battery_pct:.0f}% too low")
         self.fleet.armed[self.k] = True
-        self.event("arm")
+        self.event(TruthEventKind.ARM)
         self.listener.on_state_changed()
         self.update_charging()
         delay = self.params["COM_DISARM_PRFLT"]
@@ -187,12 +189,12 @@ class Autopilot(Vehicle):
         if self.in_air and not force:
             raise CommandRefused("Disarming denied: vehicle is in the air")
         if self.in_air:  # forced: motors stop and it falls; treated as an immediate landing
-            self.event("kill", position_m=list(self.position_m))
+            self.event(TruthEventKind.KILL, position_m=list(self.position_m))
             self.on_touchdown()
         self.cancel_timer()
         self.fleet.armed[self.k] = False
         self.fleet.dyn.control[self.k] = dy.CONTROL_NONE
-        self.event("disarm")
+        self.event(TruthEventKind.DISARM)
         self.listener.on_state_changed()
         self.say(Severity.INFO, "Disarmed")
         self.update_charging()
@@ -302,7 +304,7 @@ class Autopilot(Vehicle):
     def set_home(self, home_m: Vec3) -> None:
         """Move home; refused beyond SIM_HOME_MAXDIST or the geofence (see limits)."""
         self.state.home_m = check_home(self.params, home_m, self.position_m)
-        self.event("home", position_m=list(self.state.home_m))
+        self.event(TruthEventKind.HOME, position_m=list(self.state.home_m))
         self.listener.on_home_changed()
 
     def set_mode(self, mode: FlightMode, *, wall_now_s: float = 0.0) -> None:
@@ -339,6 +341,6 @@ class Autopilot(Vehicle):
     # ---------------------------------------------------------------- charging
     def on_charged(self) -> None:
         self.fleet.bat.charge_rate_pct_s[self.k] = 0.0
-        self.event("charged", battery_pct=self.battery_pct)
+        self.event(TruthEventKind.CHARGED, battery_pct=self.battery_pct)
         self.say(Severity.INFO, "Battery charged")
         self.refresh_busy()

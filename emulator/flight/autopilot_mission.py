@@ -15,6 +15,7 @@ from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.flight.vehicle_state import Phase, TimerAction
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["MissionRunner", "MissionState"]
 
@@ -88,7 +89,7 @@ class MissionRunner:
             self.current = 0
         self.active = True
         self.state = MissionState.ACTIVE
-        ap.event("mission_start", item=self.current, total=self.total)
+        ap.event(TruthEventKind.MISSION_START, item=self.current, total=self.total)
         if ap.in_air:
             self._execute(self.current)
             return
@@ -169,7 +170,7 @@ class MissionRunner:
         handler(self, item)
 
     def _reached(self, seq: int) -> None:
-        self.ap.event("mission_item_reached", item=seq)
+        self.ap.event(TruthEventKind.MISSION_ITEM_REACHED, item=seq)
         self.ap.listener.on_mission_item_reached(seq)
 
     def _reached_then_next(self, seq: int) -> None:
@@ -182,7 +183,7 @@ class MissionRunner:
         self.active = False
         self.state = MissionState.COMPLETE
         self.current = max(0, self.total - 1)
-        self.ap.event("mission_complete")
+        self.ap.event(TruthEventKind.MISSION_COMPLETE)
         self.ap.say(Severity.INFO, "Mission finished")
         self.ap.listener.on_mission_current()
 

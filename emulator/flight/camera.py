@@ -8,6 +8,7 @@ from typing import Protocol
 from emulator.flight.battery import PHOTO_COST_PCT
 from emulator.flight.fleet_view import FleetView
 from emulator.flight.params import ParamStore
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["CameraCarrier", "ImageCapture", "capture_image"]
 
@@ -38,7 +39,7 @@ class CameraCarrier(Protocol):
     def position_m(self) -> tuple[float, float, float]: ...
     @property
     def now_s(self) -> float: ...
-    def event(self, kind: str, **data: object) -> None: ...
+    def event(self, kind: TruthEventKind, **data: object) -> None: ...
 
 
 def _position(fleet: FleetView, k: int) -> tuple[float, float, float]:
@@ -57,7 +58,8 @@ def capture_image(ap: CameraCarrier, index: int) -> ImageCapture:
     capture = ImageCapture(index, ap.now_s, position, float(fleet.dyn.yaw_deg[k]),
                            tuple(t.id for t in seen.targets))
     ap.event(
-        "photo", index=capture.index, position_m=list(position), targets=list(capture.targets),
+        TruthEventKind.PHOTO, index=capture.index, position_m=list(position),
+        targets=list(capture.targets),
         obstacles=[o.id for o in seen.obstacles], vehicles=[v.id for v in seen.vehicles],
     )
     return capture

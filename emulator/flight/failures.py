@@ -19,9 +19,18 @@ from __future__ import annotations
 
 from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode, LandedState
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.flight.vehicle_state import Phase
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import (
+    BatteryFailure,
+    DataLinkLost,
+    FailsafeAction,
+    GpsLost,
+    MotorFailure,
+    build_statustext,
+)
 
 __all__ = ["DLL_ACTIONS", "FAILURE_KINDS", "VehicleFailures"]
 
@@ -52,11 +61,14 @@ class VehicleFailures:
         """The STATUSTEXT a vehicle out of the task keeps telling (the swarm sends it again with
         the vehicle's telemetry at a halt, so a report lost on the way still reaches the
         client); None when no such failure is in force."""
+        report: MotorFailure | GpsLost
         if self.motor_off:
-            return Severity.EMERGENCY, "Motor failure: vehicle out of service"
-        if self.gps_off:
-            return Severity.CRITICAL, "GPS lost: no position estimate"
-        return None
+            report = MotorFailure(falling=False)
+        elif self.gps_off:
+            report = GpsLost(landing=False)
+        else:
+            return None
+        return report.severity, build_statustext(report)
 
     def check_arming(self) -> None:
         if self.motor_off:
@@ -81,18 +93,18 @@ class VehicleFailures:
         ap = self._ap
         if kind not in FAILURE_KINDS:
             raise ValueError(f"unknown failure {kind!r} (known: {', '.join(FAILURE_KINDS)})")
-        ap.event("failure", unit=kind, source=source, position_m=list(ap.position_m))
+        ap.event(TruthEventKind.FAILURE, unit=kind, source=source, position_m=list(ap.position_m))
         if kind == "gps":
             self.gps_off = True
             if ap.in_air:
-                ap.event("failsafe", reason="gps_lost")
-                ap.say(Severity.CRITICAL, "GPS lost: no position estimate, landing")
+                ap.event(TruthEventKind.FAILSAFE, reason="gps_lost")
+                ap.announce(GpsLost(landing=True))
                 ap.start_land(None)
         elif kind == "motor":
             self.motor_off = True
             if ap.in_air:
-                ap.event("failsafe", reason="motor_failure")
-                ap.say(Severity.EMERGENCY, "Motor failure: vehicle going down")
+                ap.event(TruthEventKind.FAILSAFE, reason="motor_failure")
+                ap.announce(MotorFailure(falling=True))
                 ap.pause_mission()
                 ap.switch_mode(FlightMode.LAND)
                 x, y, _ = ap.position_m
@@ -101,7 +113,7 @@ class VehicleFailures:
                 ap.state.landed_state = LandedState.LANDING
             elif ap.armed:
                 ap.disarm()
-            ap.say(Severity.EMERGENCY, "Motor failure: vehicle out of service")
+            ap.announce(MotorFailure(falling=False))
         elif kind == "battery":
             bat, k = ap.fleet.bat, ap.k
             bat.pct[k] = max(0.0, min(float(bat.pct[k]),
@@ -109,7 +121,7 @@ class VehicleFailures:
             before = int(bat.level[k])
             bat.step(0.0, ap.fleet.airborne, ap.fleet.armed, ap.fleet.dyn.airspeed_m_s(),
                      ap.fleet.dyn.velocity_m_s[:, 2])
-            ap.say(Severity.CRITICAL, f"Battery failure: {ap.battery_pct:.0f}% remaining")
+            ap.announce(BatteryFailure(ap.battery_pct))
             if int(bat.level[k]) != before:
                 ap.on_battery_level(int(bat.level[k]))
         else:
@@ -120,10 +132,10 @@ class VehicleFailures:
         """A failure cleared by injection of 'ok' (GPS and MAVLink signal only)."""
         if kind == "gps" and self.gps_off:
             self.gps_off = False
-            self._ap.event("failure_cleared", unit=kind, source=source)
+            self._ap.event(TruthEventKind.FAILURE_CLEARED, unit=kind, source=source)
         elif kind == "mavlink" and self.mavlink_off:
             self._set_mavlink(False)
-            self._ap.event("failure_cleared", unit=kind, source=source)
+            self._ap.event(TruthEventKind.FAILURE_CLEARED, unit=kind, source=source)
 
     # --------------------------------------------------------- link failsafe
     def data_link_lost(self, timeout_s: float) -> None:
@@ -133,11 +145,11 @@ class VehicleFailures:
             return
         self.link_lost = True
         action = DLL_ACTIONS.get(int(ap.params["NAV_DLL_ACT"]))
-        ap.event("link_lost", timeout_s=timeout_s, action=action or "none")
+        ap.event(TruthEventKind.LINK_LOST, timeout_s=timeout_s, action=action or "none")
         if action is None or not ap.in_air or self.motor_off:
             return
-        ap.event("failsafe", reason="data_link_lost", action=action)
-        ap.say(Severity.CRITICAL, f"Data link lost: failsafe {action}")
+        ap.event(TruthEventKind.FAILSAFE, reason="data_link_lost", action=action)
+        ap.announce(DataLinkLost(FailsafeAction(action)))
         if action == "hold":
             ap.hold()
         elif action == "return" and ap.state.mode is not FlightMode.RTL:
@@ -148,4 +160,4 @@ class VehicleFailures:
     def data_link_regained(self) -> None:
         if self.link_lost:
             self.link_lost = False
-            self._ap.event("link_regained")
+            self._ap.event(TruthEventKind.LINK_REGAINED)

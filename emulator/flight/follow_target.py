@@ -24,6 +24,7 @@ from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import CommandRefused, Severity
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["TARGET_TIMEOUT_S", "FollowTarget", "TargetFix"]
 
@@ -94,7 +95,8 @@ class FollowTarget:
         dyn, k = ap.fleet.dyn, ap.k
         dyn.control[k] = dy.CONTROL_VELOCITY
         dyn.tracking[k] = dy.TRACK_NONE
-        ap.event("follow_target", target_m=list(self.estimate_m) if self.estimate_m else None)
+        ap.event(TruthEventKind.FOLLOW_TARGET,
+                 target_m=list(self.estimate_m) if self.estimate_m else None)
         ap.refresh_busy()
         self.on_step(0.0)
 
@@ -157,5 +159,5 @@ class FollowTarget:
         self._lost = True
         raw, _ = self._raw_target()
         self.fix = TargetFix(raw, (0.0, 0.0, 0.0), self.ap.now_s)
-        self.ap.event("follow_target_lost", target_m=list(raw))
+        self.ap.event(TruthEventKind.FOLLOW_TARGET_LOST, target_m=list(raw))
         self.ap.say(Severity.WARNING, "Follow target lost: holding")

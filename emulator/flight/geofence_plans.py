@@ -7,8 +7,10 @@ import math
 
 from emulator.flight.geofence import Fence, parse_fence, parse_rally
 from emulator.flight.mission import MissionItem
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import GeofenceAction, GeofenceBreached
 
 __all__ = ["GF_ACTION_NONE", "GeofencePlans"]
 
@@ -91,18 +93,18 @@ class GeofencePlans:
         action = int(ap.params["GF_ACTION"])
         if action == GF_ACTION_NONE:
             return
-        ap.event("failsafe", reason="geofence", action=action, position_m=[x, y, z])
+        ap.event(TruthEventKind.FAILSAFE, reason="geofence", action=action, position_m=[x, y, z])
         if action == GF_ACTION_WARN:
-            ap.say(Severity.WARNING, "Geofence breached")
+            ap.announce(GeofenceBreached(GeofenceAction.WARN))
         elif action == GF_ACTION_HOLD:
-            ap.say(Severity.WARNING, "Geofence breached: holding")
+            ap.announce(GeofenceBreached(GeofenceAction.HOLD))
             ap.hold()
         elif action == GF_ACTION_RTL:
-            ap.say(Severity.WARNING, "Geofence breached: returning")
+            ap.announce(GeofenceBreached(GeofenceAction.RETURN))
             ap.start_rtl()
         elif action == GF_ACTION_TERMINATE:
-            ap.say(Severity.CRITICAL, "Geofence breached: flight terminated")
+            ap.announce(GeofenceBreached(GeofenceAction.TERMINATE))
             ap.disarm(force=True)
         else:
-            ap.say(Severity.WARNING, "Geofence breached: landing")
+            ap.announce(GeofenceBreached(GeofenceAction.LAND))
             ap.start_land(None)

@@ -30,8 +30,10 @@ from emulator.flight.attitude_control import attitude_acceleration_enu
 from emulator.flight.failures import DLL_ACTIONS
 from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import FailsafeAction, ManualControlLost
 
 __all__ = ["JOYSTICK_RC_IN_MODES", "MANUAL_MODES", "ManualControl", "Sticks"]
 
@@ -168,8 +170,8 @@ class ManualControl:
         self._lost = True
         self._sticks = CENTRED
         action = DLL_ACTIONS.get(int(ap.params["NAV_RCL_ACT"]))
-        ap.event("failsafe", reason="manual_control_lost", action=action or "none")
-        ap.say(Severity.CRITICAL, f"Manual control lost: failsafe {action or 'sticks centred'}")
+        ap.event(TruthEventKind.FAILSAFE, reason="manual_control_lost", action=action or "none")
+        ap.announce(ManualControlLost(FailsafeAction(action) if action else None))
         if action == "hold":
             ap.hold()
         elif action == "return":

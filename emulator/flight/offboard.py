@@ -23,8 +23,10 @@ from emulator.flight.attitude_control import attitude_acceleration_enu
 from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode
 from emulator.flight.offboard_frames import body_to_enu
-from emulator.flight.refusal import CommandRefused, Severity
+from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import GeofenceReached, OffboardLost
 
 __all__ = ["OffboardControl", "Setpoint"]
 
@@ -158,8 +160,8 @@ class OffboardControl:
             (x - hx) * vx + (y - hy) * vy > 0.0
         )
         if above or outside:
-            ap.event("failsafe", reason="geofence")
-            ap.say(Severity.WARNING, "Geofence reached: holding")
+            ap.event(TruthEventKind.FAILSAFE, reason="geofence")
+            ap.announce(GeofenceReached())
             self._stop()
             ap.hold()
 
@@ -174,7 +176,7 @@ class OffboardControl:
         if ap.state.mode is FlightMode.OFFBOARD and (
             wall_now_s - self._received_wall_s > ap.params["COM_OF_LOSS_T"]
         ):
-            ap.event("failsafe", reason="offboard_lost")
-            ap.say(Severity.WARNING, "Offboard setpoints lost: holding")
+            ap.event(TruthEventKind.FAILSAFE, reason="offboard_lost")
+            ap.announce(OffboardLost())
             self._stop()
             ap.hold()

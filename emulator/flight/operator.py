@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 
 from emulator.flight import dynamics as dy
 from emulator.flight.modes import FlightMode, LandedState
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import FailuresCleared
 
 if TYPE_CHECKING:
     from emulator.flight.autopilot import Autopilot
@@ -40,12 +42,13 @@ def place_on_ground(ap: Autopilot, x_m: float, y_m: float, heading_deg: float | 
     ap.mode = FlightMode.HOLD
     repaired = ap.failures.any
     if repaired:
-        ap.event("operator_repair", failures=[name for name in ("gps", "motor", "mavlink")
-                                               if getattr(ap.failures, f"{name}_off")])
+        ap.event(TruthEventKind.OPERATOR_REPAIR,
+                 failures=[name for name in ("gps", "motor", "mavlink")
+                           if getattr(ap.failures, f"{name}_off")])
     ap.failures.clear()
     if repaired:
-        ap.listener.on_statustext(6, "Failures cleared by the operator")
-    ap.event("operator_place", position_m=[x_m, y_m, 0.0])
+        ap.announce(FailuresCleared())
+    ap.event(TruthEventKind.OPERATOR_PLACE, position_m=[x_m, y_m, 0.0])
     ap.update_charging()
     ap.listener.on_operator_reset()
 
@@ -59,6 +62,6 @@ def set_battery(ap: Autopilot, pct: float) -> None:
     bat.level[ap.k] = 0
     bat.step(0.0, ap.fleet.airborne, ap.fleet.armed,
              ap.fleet.dyn.airspeed_m_s(), ap.fleet.dyn.velocity_m_s[:, 2])
-    ap.event("operator_battery", battery_pct=pct)
+    ap.event(TruthEventKind.OPERATOR_BATTERY, battery_pct=pct)
     ap.update_charging()
     ap.listener.on_operator_reset()

@@ -18,6 +18,7 @@ from emulator.flight.limits import check_target
 from emulator.flight.modes import FlightMode
 from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["ORBIT_MIN_RADIUS_M", "OrbitControl", "OrbitYaw"]
 
@@ -95,7 +96,7 @@ class OrbitControl:
         if not orbiting:
             ap.pause_mission()
             ap.switch_mode(FlightMode.ORBIT)
-            ap.event("orbit", center_m=list(self.center_m), radius_m=radius_m,
+            ap.event(TruthEventKind.ORBIT, center_m=list(self.center_m), radius_m=radius_m,
                      speed_m_s=self.speed_m_s)
         ap.drop_goal()
         dyn, k = ap.fleet.dyn, ap.k

@@ -23,6 +23,7 @@ from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.refusal import CommandRefused
 from emulator.flight.vehicle_control import VehicleControl
 from emulator.flight.vehicle_state import Phase
+from emulator.truth_events import TruthEventKind
 
 __all__ = [
     "GROUND_GOAL_Z_M", "advance", "begin_climb", "descend_and_land", "land",
@@ -77,14 +78,14 @@ def begin_climb(ap: VehicleControl, target_m: Vec3, phase: Phase) -> None:
     ap.cancel_timer()
     ap.fleet.airborne[ap.k] = True
     ap.update_charging()
-    ap.event("takeoff", altitude_m=target_m[2])
+    ap.event(TruthEventKind.TAKEOFF, altitude_m=target_m[2])
     ap.fly_to(target_m, phase=phase, climb_m_s=ap.params["MPC_TKO_SPEED"])
     ap.state.landed_state = LandedState.TAKEOFF
 
 
 def _takeoff_complete(ap: VehicleControl) -> None:
     ap.state.landed_state = LandedState.IN_AIR
-    ap.event("takeoff_complete", position_m=list(ap.position_m))
+    ap.event(TruthEventKind.TAKEOFF_COMPLETE, position_m=list(ap.position_m))
     ap.listener.on_state_changed()
     ap.switch_mode(FlightMode.HOLD)
 

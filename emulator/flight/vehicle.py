@@ -19,6 +19,8 @@ from emulator.flight.params import ParamStore
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
 from emulator.geo import wrap_heading_deg
 from emulator.scenario import VehicleSpec
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import Announcement, build_statustext
 
 __all__ = ["Vehicle"]
 
@@ -139,20 +141,24 @@ class Vehicle:
             self.apply_params()
         return stored
 
-    def event(self, kind: str, **data: object) -> None:
+    def event(self, kind: TruthEventKind, **data: object) -> None:
         """Record a ground-truth event; a failsafe also ends the vehicle's goal."""
         self.fleet.recorder.record_event(self.now_s, self.vehicle_id, kind, **data)
-        if kind == "failsafe":
+        if kind is TruthEventKind.FAILSAFE:
             self.fleet.mark_ended(self.k)
 
     def say(self, severity: int, text: str) -> None:
         self.listener.on_statustext(severity, text)
 
+    def announce(self, message: Announcement) -> None:
+        """Send one of the vocabulary's STATUSTEXT messages, with its severity."""
+        self.say(message.severity, build_statustext(message))
+
     def switch_mode(self, mode: FlightMode) -> None:
         """Enter `mode`, recorded and announced; nothing else changes."""
         st = self.state
         if mode is not st.mode:
-            self.event("mode", previous=st.mode.label, mode=mode.label)
+            self.event(TruthEventKind.MODE, previous=st.mode.label, mode=mode.label)
             st.mode = mode
             self.listener.on_state_changed()
 
@@ -234,7 +240,7 @@ class Vehicle:
         self.state.landed_state = LandedState.IN_AIR
         self.cancel_timer()
         self.update_charging()
-        self.event("takeoff", altitude_m=altitude_m)
+        self.event(TruthEventKind.TAKEOFF, altitude_m=altitude_m)
 
     def brake_and_hold(self) -> None:
         """Stop where braking ends (PX4's hold) and stay there."""
@@ -268,5 +274,5 @@ class Vehicle:
         was = f.bat.charge_rate_pct_s[k]
         f.bat.charge_rate_pct_s[k] = rate
         if rate > 0.0 and was == 0.0 and self.battery_pct < 100.0:
-            self.event("charging", battery_pct=self.battery_pct)
+            self.event(TruthEventKind.CHARGING, battery_pct=self.battery_pct)
         self.refresh_busy()

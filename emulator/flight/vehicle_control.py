@@ -13,6 +13,8 @@ from emulator.flight.camera import CameraCarrier, ImageCapture
 from emulator.flight.listener import AutopilotListener
 from emulator.flight.modes import FlightMode
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
+from emulator.truth_events import TruthEventKind
+from mavlink_vocabulary import Announcement
 
 __all__ = ["VehicleControl"]
 
@@ -34,11 +36,14 @@ class VehicleControl(CameraCarrier, Protocol):
     def battery_pct(self) -> float: ...
 
     # ------------------------------------------------------------ bookkeeping
-    def event(self, kind: str, **data: object) -> None:
+    def event(self, kind: TruthEventKind, **data: object) -> None:
         """Record a ground-truth event of this vehicle."""
 
     def say(self, severity: int, text: str) -> None:
         """Announce a STATUSTEXT."""
+
+    def announce(self, message: Announcement) -> None:
+        """Send one of the vocabulary's STATUSTEXT messages, with its severity."""
 
     def switch_mode(self, mode: FlightMode) -> None:
         """Enter `mode` (recorded and announced); nothing else changes."""

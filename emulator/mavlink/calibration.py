@@ -15,6 +15,7 @@ from emulator.mavlink import messages as msgs
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.reply import Reply, SendMessage
 from emulator.mavlink.vehicle import Vehicle
+from emulator.truth_events import TruthEventKind
 from mavlink_vocabulary import MavResult
 
 __all__ = ["SIDES", "preflight_calibration"]
@@ -65,5 +66,5 @@ def preflight_calibration(v: Vehicle, a: CommandArgs) -> Reply:
         sensor, steps = "level", _simple("level")
     else:
         return Reply(MavResult.UNSUPPORTED, "Calibration: no supported sensor selected")
-    v.ap.event("calibration", sensor=sensor)
+    v.ap.event(TruthEventKind.CALIBRATION, sensor=sensor)
     return Reply.accepted(*steps)

@@ -18,6 +18,7 @@ from emulator.flight.autopilot import Autopilot
 from emulator.mavlink.codec import mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.reply import Reply, SendOnce
+from emulator.truth_events import TruthEventKind
 from mavlink_vocabulary import MavCmd, MessageId
 
 __all__ = ["STORAGE_TOTAL_MIB", "VIDEO_BITRATE_B_S", "VIDEO_COMMANDS", "CameraMode",
@@ -103,7 +104,7 @@ class VideoCapture:
         self.status_due_wall_s = None if hz == 0.0 else wall_now_s + 1.0 / hz
         if self.recording_since_s is None:  # a repeated start records on
             self.recording_since_s = ap.now_s
-            ap.event("video_start", position_m=list(ap.position_m))
+            ap.event(TruthEventKind.VIDEO_START, position_m=list(ap.position_m))
         return Reply.accepted(SendOnce(MessageId.CAMERA_CAPTURE_STATUS))
 
     def _stop(self, ap: Autopilot, a: CommandArgs) -> Reply:
@@ -113,7 +114,8 @@ class VideoCapture:
             duration_s = self.recording_s(ap)
             self.recorded_s += duration_s
             self.recording_since_s = None
-            ap.event("video_stop", position_m=list(ap.position_m), duration_s=duration_s)
+            ap.event(TruthEventKind.VIDEO_STOP, position_m=list(ap.position_m),
+                     duration_s=duration_s)
         self._status_interval_s = self.status_due_wall_s = None
         return Reply.accepted(SendOnce(MessageId.CAMERA_CAPTURE_STATUS))
 

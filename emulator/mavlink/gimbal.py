@@ -21,6 +21,7 @@ from emulator.mavlink.codec import mavlink
 from emulator.mavlink.command_args import CommandArgs
 from emulator.mavlink.messages import component_heartbeat
 from emulator.mavlink.reply import Reply, SendOnce
+from emulator.truth_events import TruthEventKind
 from mavlink_vocabulary import MavCmd, MavComponent, MavType, MessageId
 
 __all__ = ["GIMBAL_COMMANDS", "GIMBAL_COMPONENT_ID", "GIMBAL_MESSAGES", "GimbalComponent"]
@@ -128,7 +129,7 @@ class GimbalComponent:
         elif math.isfinite(yaw_rate) and yaw_rate:
             goal_yaw = YAW_RANGE_DEG[yaw_rate > 0]
         self._goal = (goal_pitch, goal_yaw)
-        ap.event("gimbal", pitch_deg=goal_pitch, yaw_deg=goal_yaw, earth_frame=lock)
+        ap.event(TruthEventKind.GIMBAL, pitch_deg=goal_pitch, yaw_deg=goal_yaw, earth_frame=lock)
         return ""
 
     # -------------------------------------------------------------- protocol

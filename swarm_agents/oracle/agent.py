@@ -7,12 +7,41 @@ import logging
 import math
 from collections.abc import Awaitable, Callable, Mapping, Sequence
 from functools import partial
-from typing import Any
+from typing import Any, assert_never
 
 from agent_contract import AgentTask, AgentTools
+from benchmark.authoring.plan_steps import (
+    Altitude,
+    Broadcast,
+    Charge,
+    DroneStep,
+    Goto,
+    Home,
+    Hover,
+    Intercept,
+    Land,
+    Meet,
+    Message,
+    Photo,
+    PhotoTarget,
+    Plan,
+    Reach,
+    Rotate,
+    SetHome,
+    Step,
+    Sweep,
+    Takeoff,
+    Towards,
+    Track,
+    UntilFault,
+    VisitTargets,
+    Waypoints,
+    parse_plan,
+)
 from benchmark.scoring.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
+from mavlink_vocabulary import FlightState
 from swarm_agents.oracle.coverage import lawnmower, order_visits, split_lanes
 from swarm_agents.oracle.derive import Unplannable, derive_plan
 from swarm_agents.oracle.planner import NoPath, PathPlanner
@@ -27,7 +56,6 @@ CHARGE_ALTITUDE_M = 15.0
 MAX_PATH_POINTS = 100
 # Paths keep this far from obstacles, so tracking errors never meet the 2 m stop margin.
 PLAN_CLEARANCE_M = 8.0
-TEAM_OPS = ("sweep", "visit_targets")
 # Meeting a moving target: the share of top speed assumed and the slack added to a flight.
 MEET_SPEED_SHARE = 0.8
 MEET_SLACK_S = 8.0
@@ -37,6 +65,10 @@ HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
 TRANSFER_RETRIES = 2
 TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+
+
+def _point(p: Sequence[float]) -> tuple[float, float, float]:
+    return float(p[0]), float(p[1]), float(p[2])
 
 
 async def _retried(call: Callable[[], Awaitable[Outcome]]) -> Outcome:
@@ -61,7 +93,7 @@ class OracleCannotPlan(RuntimeError):
     the task's record ends as agent_error with the leaf and the reason."""
 
 
-Op = Mapping[str, Any]
+Op = Mapping[str, Any]  # a step as plans are written (see benchmark.authoring.plan_steps)
 
 
 class OracleAgent:
@@ -88,7 +120,7 @@ class OracleAgent:
         self.failures: list[str] = []
 
     def set_plan(self, task_id: str, plan: Sequence[Sequence[Op]] | None) -> None:
-        """Give (or replace) the hidden plan of one task."""
+        """Give (or replace) the hidden plan of one task (as session files write it)."""
         if plan is None:
             self._plans.pop(task_id, None)
         else:
@@ -116,11 +148,18 @@ class OracleAgent:
         plan = None if self.derived_only else self._plans.get(task.task_id)
         if plan is None:
             plan = self.derive(task.task_id)
+        try:
+            steps = parse_plan(plan, f"task {task.task_id} plan")
+        except ValueError as error:
+            raise OracleCannotPlan(str(error)) from None
+        await self._run_plan(task, tools, steps)
+
+    async def _run_plan(self, task: AgentTask, tools: AgentTools, plan: Plan) -> None:
         for phase in plan:
-            queues: dict[str, list[Op]] = {}
-            for op in phase:
-                for drone, drone_op in self._expand(op):
-                    queues.setdefault(drone, []).append(drone_op)
+            queues: dict[str, list[DroneStep]] = {}
+            for step in phase:
+                for drone, drone_step in self._expand(step):
+                    queues.setdefault(drone, []).append(drone_step)
             results = await tools.concurrently(
                 *(self._run_queue(tools, drone, ops) for drone, ops in queues.items()))
             for result in results:
@@ -132,32 +171,32 @@ class OracleAgent:
         tools.finish("plan executed")
 
     # ------------------------------------------------------------- expansion
-    def _expand(self, op: Op) -> list[tuple[str, Op]]:
-        kind = op["op"]
-        if kind == "sweep":
-            return self._expand_sweep(op)
-        if kind == "visit_targets":
-            return self._expand_visits(op)
-        return [(op["drone"], op)]
+    def _expand(self, step: Step) -> list[tuple[str, DroneStep]]:
+        match step:
+            case Sweep():
+                return self._expand_sweep(step)
+            case VisitTargets():
+                return self._expand_visits(step)
+        return [(step.drone, step)]
 
     def _xy(self, drone: str) -> tuple[float, float]:
         s = self._state[drone]
         return float(s["x_m"]), float(s["y_m"])
 
-    def _expand_sweep(self, op: Op) -> list[tuple[str, Op]]:
-        drones = list(op["drones"])
-        target = self._world.target(op["target"])
+    def _expand_sweep(self, step: Sweep) -> list[tuple[str, DroneStep]]:
+        drones = list(step.drones)
+        target = self._world.target(step.target)
         radius = min(self._specs[d].task_radius_m for d in drones)
-        points = lawnmower(target.geometry, float(op["altitude_m"]),
+        points = lawnmower(target.geometry, step.altitude_m,
                            SWEEP_SPACING_SHARE * radius, start_xy=self._xy(drones[0]))
         pieces = split_lanes(points, len(drones))
-        return [(d, {"op": "path", "drone": d, "points": [list(p) for p in piece]})
+        return [(d, Waypoints(drone=d, points=tuple(_point(p) for p in piece)))
                 for d, piece in zip(drones, pieces, strict=True) if piece]
 
-    def _expand_visits(self, op: Op) -> list[tuple[str, Op]]:
-        drones = list(op["drones"])
-        alt = float(op["altitude_m"])
-        goals = {t: self._target_point(t) for t in op["targets"]}
+    def _expand_visits(self, step: VisitTargets) -> list[tuple[str, DroneStep]]:
+        drones = list(step.drones)
+        alt = step.altitude_m
+        goals = {t: self._target_point(t) for t in step.targets}
         ends = {d: self._xy(d) for d in drones}
         loads = dict.fromkeys(drones, 0.0)
         assigned: dict[str, list[str]] = {d: [] for d in drones}
@@ -169,13 +208,13 @@ class OracleAgent:
             loads[d], ends[d] = cost, goals[t]
             assigned[d].append(t)
             remaining.remove(t)
-        out: list[tuple[str, Op]] = []
+        out: list[tuple[str, DroneStep]] = []
         for d, targets in assigned.items():
             if not targets:
                 continue
             order = order_visits(self._xy(d), [goals[t] for t in targets])
-            points = [[*goals[targets[i]], alt] for i in order]
-            out.append((d, {"op": "path", "drone": d, "points": points}))
+            points = tuple((*goals[targets[i]], alt) for i in order)
+            out.append((d, Waypoints(drone=d, points=points)))
         return out
 
     def _target_point(self, target_id: str) -> tuple[float, float]:
@@ -188,9 +227,9 @@ class OracleAgent:
         return float(target.position_m[0]), float(target.position_m[1])
 
     # ------------------------------------------------------------- execution
-    async def _run_queue(self, tools: AgentTools, drone: str, ops: list[Op]) -> None:
-        for op in ops:
-            await self._run_op(tools, drone, op)
+    async def _run_queue(self, tools: AgentTools, drone: str, steps: list[DroneStep]) -> None:
+        for step in steps:
+            await self._run_step(tools, drone, step)
 
     def _check(self, drone: str, what: str, outcome: Outcome) -> Outcome:
         if outcome.state is not None:
@@ -200,68 +239,64 @@ class OracleAgent:
         return outcome
 
     def _airborne(self, drone: str) -> bool:
-        return self._state[drone]["flight_state"] != "on_ground"
+        return self._state[drone]["flight_state"] != FlightState.ON_GROUND
 
-    async def _run_op(self, tools: AgentTools, d: str, op: Op) -> None:
-        kind = op["op"]
-        if kind == "takeoff":
-            alt = float(op["altitude_m"])
-            if self._airborne(d):
+    async def _run_step(self, tools: AgentTools, d: str, step: DroneStep) -> None:
+        kind = step.op
+        match step:
+            case Takeoff(altitude_m=alt):
+                if self._airborne(d):
+                    self._check(d, kind, await tools.change_altitude(d, alt))
+                else:
+                    self._check(d, kind, await tools.take_off(d, alt))
+            case Goto(x=x, y=y, z=z):
+                await self._goto(tools, d, (x, y, z))
+            case Waypoints(points=points):
+                await self._path(tools, d, list(points))
+            case Land():
+                self._check(d, kind, await tools.land(d))
+            case Hover(duration_s=duration_s):
+                self._check(d, kind, await tools.hover(d, duration_s))
+            case Rotate(heading_deg=heading_deg):
+                self._check(d, kind, await tools.rotate(d, heading_deg))
+            case Altitude(altitude_m=alt):
                 self._check(d, kind, await tools.change_altitude(d, alt))
-            else:
-                self._check(d, kind, await tools.take_off(d, alt))
-        elif kind == "goto":
-            await self._goto(tools, d, (float(op["x"]), float(op["y"]), float(op["z"])))
-        elif kind == "path":
-            await self._path(tools, d, [tuple(map(float, p)) for p in op["points"]])
-        elif kind == "land":
-            self._check(d, kind, await tools.land(d))
-        elif kind == "hover":
-            self._check(d, kind, await tools.hover(d, float(op["duration_s"])))
-        elif kind == "rotate":
-            self._check(d, kind, await tools.rotate(d, float(op["heading_deg"])))
-        elif kind == "altitude":
-            self._check(d, kind, await tools.change_altitude(d, float(op["altitude_m"])))
-        elif kind == "towards":
-            self._check(d, kind, await tools.move_towards(d, float(op["heading_deg"]),
-                                                         float(op["distance_m"])))
-        elif kind == "photo":
-            self._check(d, kind, await tools.take_photo(d))
-        elif kind == "set_home":
-            self._check(d, kind, await tools.set_home(d))
-        elif kind == "home":
-            s = self._state[d]
-            alt = float(op.get("altitude_m", 20.0))
-            await self._goto(tools, d, (float(s["home_x_m"]), float(s["home_y_m"]), alt))
-            self._check(d, "land at home", await tools.land(d))
-        elif kind == "charge":
-            x, y = self._target_point(op["station"])
-            await self._goto(tools, d, (x, y, CHARGE_ALTITUDE_M))
-            self._check(d, "land on the station", await tools.land(d))
-            self._check(d, kind, await tools.charge(d))
-        elif kind == "message":
-            self._check(d, kind, tools.send_message(d, op["to"], op["text"]))
-        elif kind == "broadcast":
-            self._check(d, kind, tools.broadcast(d, op["text"]))
-        elif kind == "reach":
-            x, y = self._target_point(op["target"])
-            await self._goto(tools, d, (x, y, float(op["altitude_m"])))
-        elif kind == "track":
-            alt = float(op["altitude_m"])
-            met_s = await self._meet(tools, d, op["target"], alt)
-            await self._follow(tools, d, op["target"], alt, met_s + float(op["duration_s"]))
-        elif kind == "intercept":
-            zx, zy, zr = (float(v) for v in op["zone"])
-            await self._meet(tools, d, op["target"], float(op["altitude_m"]), zone=(zx, zy, zr))
-        elif kind == "until_fault":
-            await self._until_fault(tools, d, float(op["altitude_m"]), float(op["duration_s"]))
-        elif kind == "meet":
-            await self._meet(tools, d, op["target"], float(op["altitude_m"]))
-        elif kind == "photo_target":
-            await self._meet(tools, d, op["target"], float(op["altitude_m"]))
-            self._check(d, "photo", await tools.take_photo(d))
-        else:
-            raise OracleError(f"unknown plan operation {kind!r}")
+            case Towards(heading_deg=heading_deg, distance_m=distance_m):
+                self._check(d, kind, await tools.move_towards(d, heading_deg, distance_m))
+            case Photo():
+                self._check(d, kind, await tools.take_photo(d))
+            case SetHome():
+                self._check(d, kind, await tools.set_home(d))
+            case Home(altitude_m=alt):
+                s = self._state[d]
+                await self._goto(tools, d, (float(s["home_x_m"]), float(s["home_y_m"]), alt))
+                self._check(d, "land at home", await tools.land(d))
+            case Charge(station=station):
+                x, y = self._target_point(station)
+                await self._goto(tools, d, (x, y, CHARGE_ALTITUDE_M))
+                self._check(d, "land on the station", await tools.land(d))
+                self._check(d, kind, await tools.charge(d))
+            case Message(to=to, text=text):
+                self._check(d, kind, tools.send_message(d, to, text))
+            case Broadcast(text=text):
+                self._check(d, kind, tools.broadcast(d, text))
+            case Reach(target=target, altitude_m=alt):
+                x, y = self._target_point(target)
+                await self._goto(tools, d, (x, y, alt))
+            case Track(target=target, duration_s=duration_s, altitude_m=alt):
+                met_s = await self._meet(tools, d, target, alt)
+                await self._follow(tools, d, target, alt, met_s + duration_s)
+            case Intercept(target=target, zone=zone, altitude_m=alt):
+                await self._meet(tools, d, target, alt, zone=zone)
+            case UntilFault(altitude_m=alt, duration_s=duration_s):
+                await self._until_fault(tools, d, alt, duration_s)
+            case Meet(target=target, altitude_m=alt):
+                await self._meet(tools, d, target, alt)
+            case PhotoTarget(target=target, altitude_m=alt):
+                await self._meet(tools, d, target, alt)
+                self._check(d, "photo", await tools.take_photo(d))
+            case _:
+                assert_never(step)
 
     async def _until_fault(self, tools: AgentTools, d: str, altitude_m: float,
                            duration_s: float) -> None:

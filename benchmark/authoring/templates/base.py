@@ -8,7 +8,8 @@ depends on its seed alone.
 
 Oracle plans are lists of phases; a phase is a list of operations, each for one drone or a
 team. Within a phase, operations of different drones run concurrently and those of one drone
-run in order. Operations (all lengths in metres, angles in degrees):
+run in order. Operations (all lengths in metres, angles in degrees; each is a type of
+`benchmark.authoring.plan_steps`, which reads and checks them):
 
 - ``{"op": "takeoff", "drone", "altitude_m"}``
 - ``{"op": "goto", "drone", "x", "y", "z"}``: obstacle-free path, taking off first if needed

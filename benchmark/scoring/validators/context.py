@@ -17,6 +17,7 @@ from benchmark.scoring.validators._errors import EvaluationError
 from benchmark.scoring.validators.track import Track, build_track
 from emulator.scenario import Scenario, VehicleSpec
 from emulator.truth import TruthEvent, TruthHistory
+from emulator.truth_events import TruthEventKind
 from emulator.world import Obstacle, Target
 
 __all__ = ["AIRBORNE_M", "RECENT_S", "CheckContext", "DroneState"]
@@ -127,7 +128,7 @@ class CheckContext:
                               recent.max_speed_m_s())
         return self.cached(("state", drone_id), make)
 
-    def events(self, drone_id: str, kinds: Iterable[str]) -> list[TruthEvent]:
+    def events(self, drone_id: str, kinds: Iterable[TruthEventKind]) -> list[TruthEvent]:
         """The drone's events of the given kinds inside the window, in recording order."""
         self.vehicle(drone_id)
         if drone_id not in self.history.vehicle_ids:
@@ -138,7 +139,7 @@ class CheckContext:
         """position_m of the drone's last ``home`` event at or before t_s, else its spec home."""
         spec = self.vehicle(drone_id)
         if drone_id in self.history.vehicle_ids:
-            homes = self.history.events(drone_id, None, t_s, kinds=("home",))
+            homes = self.history.events(drone_id, None, t_s, kinds=(TruthEventKind.HOME,))
             if homes:
                 x, y, z = (float(v) for v in homes[-1].data["position_m"])
                 return x, y, z

@@ -33,6 +33,7 @@ from benchmark.scoring.validators.params import (
 )
 from benchmark.scoring.validators.state import is_on_ground
 from benchmark.scoring.validators.track import Track
+from emulator.truth_events import TruthEventKind
 
 __all__ = [
     "CHARGE_END_EVENTS",
@@ -48,7 +49,8 @@ HOVER_MAX_SPEED_M_S = 0.3
 DEFAULT_HOVER_S = 1.0
 MIN_DIRECTED_STEP_M = 1e-3
 FULL_BATTERY_PCT = 99.9
-CHARGE_END_EVENTS = ("charged", "arm", "takeoff", "operator_place", "operator_battery")
+CHARGE_END_EVENTS = (TruthEventKind.CHARGED, TruthEventKind.ARM, TruthEventKind.TAKEOFF,
+                     TruthEventKind.OPERATOR_PLACE, TruthEventKind.OPERATOR_BATTERY)
 _EPS = 1e-9
 
 
@@ -69,13 +71,13 @@ def _z(event_data: Mapping[str, object]) -> float:
 def _drone_has_taken_off(ctx: CheckContext, p: Params) -> Outcome:
     low = p["min_altitude"] - p["tolerance"]
     high = math.inf if p["max_altitude"] is None else p["max_altitude"] + p["tolerance"]
-    events = ctx.events(p["drone_id"], ("takeoff_complete",))
+    events = ctx.events(p["drone_id"], (TruthEventKind.TAKEOFF_COMPLETE,))
     count = sum(low <= _z(e.data) <= high for e in events)
     return Outcome(count > 0, count)
 
 
 def _drone_has_landed(ctx: CheckContext, p: Params) -> Outcome:
-    count = len(ctx.events(p["drone_id"], ("landed",)))
+    count = len(ctx.events(p["drone_id"], (TruthEventKind.LANDED,)))
     return Outcome(count >= p["min_count"], count)
 
 
@@ -146,7 +148,7 @@ def _drone_has_hovered(ctx: CheckContext, p: Params) -> Outcome:
 
 
 def _drone_has_taken_photo(ctx: CheckContext, p: Params) -> Outcome:
-    photos = ctx.events(p["drone_id"], ("photo",))
+    photos = ctx.events(p["drone_id"], (TruthEventKind.PHOTO,))
     where = p["at_position"]
     if where is not None:
         axes = ("x", "y", "z") if "z" in where else ("x", "y")
@@ -158,26 +160,26 @@ def _drone_has_taken_photo(ctx: CheckContext, p: Params) -> Outcome:
 
 
 def _target_in_photo_taken_by_drone(ctx: CheckContext, p: Params) -> Outcome:
-    photos = ctx.events(p["drone_id"], ("photo",))
+    photos = ctx.events(p["drone_id"], (TruthEventKind.PHOTO,))
     count = sum(p["target_id"] in e.data.get("targets", ()) for e in photos)
     return Outcome(count > 0, count)
 
 
 def _charges(ctx: CheckContext, drone_id: str) -> list[tuple[float, float]]:
     """(added amount, final battery) of every charge started in the window."""
-    events = ctx.events(drone_id, ("charging", *CHARGE_END_EVENTS))
+    events = ctx.events(drone_id, (TruthEventKind.CHARGING, *CHARGE_END_EVENTS))
     out: list[tuple[float, float]] = []
     start: float | None = None
     for event in events:
-        if start is not None and event.kind != "charging":
-            if event.kind == "charged":
+        if start is not None and event.kind is not TruthEventKind.CHARGING:
+            if event.kind is TruthEventKind.CHARGED:
                 end = float(event.data["battery_pct"])
             else:
                 end = ctx.battery_at(drone_id, event.t_s,
-                                     before=event.kind == "operator_battery")
+                                     before=event.kind is TruthEventKind.OPERATOR_BATTERY)
             out.append((end - start, end))
             start = None
-        elif event.kind == "charging":
+        elif event.kind is TruthEventKind.CHARGING:
             if start is not None:
                 end = ctx.battery_at(drone_id, event.t_s)
                 out.append((end - start, end))
@@ -199,8 +201,10 @@ def _drone_has_charged(ctx: CheckContext, p: Params) -> Outcome:
 
 def _messages(ctx: CheckContext, p: Params, content: str | None) -> int:
     count = 0
-    for event in ctx.events(p["drone_id"], ("message_sent", "message_broadcast")):
-        if event.kind == "message_sent" and p["to_drone_id"] not in (None, event.data.get("to")):
+    sent = (TruthEventKind.MESSAGE_SENT, TruthEventKind.MESSAGE_BROADCAST)
+    for event in ctx.events(p["drone_id"], sent):
+        if event.kind is TruthEventKind.MESSAGE_SENT and \
+                p["to_drone_id"] not in (None, event.data.get("to")):
             continue
         if content is not None and content not in str(event.data.get("text", "")):
             continue
@@ -221,7 +225,8 @@ def _drone_has_sent_message_content(ctx: CheckContext, p: Params) -> Outcome:
 def _all_drones_have_taken_off(ctx: CheckContext, p: Params) -> Outcome:
     if p["check_history"]:
         count = sum(any(_z(e.data) >= p["min_altitude"]
-                        for e in ctx.events(d, ("takeoff_complete",))) for d in ctx.drone_ids)
+                        for e in ctx.events(d, (TruthEventKind.TAKEOFF_COMPLETE,)))
+                    for d in ctx.drone_ids)
     else:
         count = sum(ctx.state(d).xyz_m[2] >= p["min_altitude"] for d in ctx.drone_ids)
     return Outcome(bool(ctx.drone_ids) and count == len(ctx.drone_ids), count)
@@ -229,7 +234,8 @@ def _all_drones_have_taken_off(ctx: CheckContext, p: Params) -> Outcome:
 
 def _all_drones_have_landed(ctx: CheckContext, p: Params) -> Outcome:
     if p["check_history"]:
-        count = sum(len(ctx.events(d, ("landed",))) >= p["min_count"] for d in ctx.drone_ids)
+        count = sum(len(ctx.events(d, (TruthEventKind.LANDED,))) >= p["min_count"]
+                    for d in ctx.drone_ids)
     else:
         count = sum(is_on_ground(ctx.state(d), 0.1) for d in ctx.drone_ids)
     return Outcome(bool(ctx.drone_ids) and count == len(ctx.drone_ids), count)

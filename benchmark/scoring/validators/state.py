@@ -26,6 +26,7 @@ from benchmark.scoring.validators.params import (
     text,
 )
 from benchmark.scoring.validators.reach import footprint
+from mavlink_vocabulary import HOVER_SPEED_M_S
 
 __all__ = [
     "DRONE_STATUSES",
@@ -36,9 +37,8 @@ __all__ = [
     "is_on_ground",
 ]
 
-HOVER_SPEED_M_S = 0.5
-"""Below this speed (max over the last 0.05 s) an airborne drone hovers; a drone on the ground
-must also be slower than this (current speed)."""
+# Below HOVER_SPEED_M_S (max over the last 0.05 s) an airborne drone hovers; a drone on the
+# ground must also be slower than it (current speed).
 DRONE_STATUSES = ("idle", "ready", "taking_off", "flying", "moving", "hovering", "landing",
                   "emergency", "offline")
 _STATUS_MATCHES = {

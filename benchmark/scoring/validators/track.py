@@ -15,10 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from emulator.truth import TruthHistory
+from emulator.truth_events import TruthEventKind
 
 __all__ = ["OPERATOR_EVENTS", "Track", "build_track"]
 
-OPERATOR_EVENTS = ("operator_place", "operator_battery")
+OPERATOR_EVENTS = (TruthEventKind.OPERATOR_PLACE, TruthEventKind.OPERATOR_BATTERY)
 # Extra history read before a window, so the row at or before its start is a true sample
 # (every vehicle gets a keyframe row at least every keyframe_s).
 _PAD_KEYFRAMES = 2.0
@@ -91,7 +92,7 @@ def _insert_resets(history: TruthHistory, vehicle_id: str, rows: np.ndarray, a_s
         base = rows[k - 1] if k > 0 else rows[0]
         new = base.copy()
         new[0] = event.t_s
-        if event.kind == "operator_place":
+        if event.kind is TruthEventKind.OPERATOR_PLACE:
             new[1:4] = [float(v) for v in event.data["position_m"]]
         else:
             new[5] = float(event.data["battery_pct"])

@@ -43,6 +43,7 @@ from benchmark.server.hub import Caller, Hub, LiveSession, Role
 from emulator.flight.operator import place_on_ground, set_battery
 from llm_tools.input_limits import preview
 from mavlink_gateway import DroneState, Status
+from mavlink_vocabulary import FlightState
 
 __all__ = ["BatteryBody", "DroneUpdate", "PositionBody", "add_compat_drone_admin_routes"]
 
@@ -158,7 +159,7 @@ async def _settle(live: LiveSession, shown: Callable[[DroneState], bool], ids: l
 
 
 def _grounded(state: DroneState) -> bool:
-    return state.flight_state == "on_ground" and state.altitude_m < 0.3
+    return state.flight_state == FlightState.ON_GROUND and state.altitude_m < 0.3
 
 
 def _status(live: LiveSession, state: DroneState) -> str:
@@ -225,7 +226,7 @@ async def _move(live: LiveSession, drone_id: str, body: PositionBody) -> dict[st
         await _settle(live, lambda s: _grounded(s) and abs(s.x_m - body.x) < 0.5
                       and abs(s.y_m - body.y) < 0.5, [drone_id])
         return compat_drone(live, _state(live, drone_id))
-    if _state(live, drone_id).flight_state == "on_ground":
+    if _state(live, drone_id).flight_state == FlightState.ON_GROUND:
         took = await live.gateway.take_off(drone_id, body.z)
         if took.status is not Status.OK:
             raise HTTPException(409, f"cannot take off to fly there: {took.message}")

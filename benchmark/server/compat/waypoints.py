@@ -14,6 +14,7 @@ from benchmark.server.compat.commands import resolve_session
 from benchmark.server.compat.world import perceived_ids
 from benchmark.server.hub import Caller, Hub, Role
 from llm_tools.input_limits import preview
+from mavlink_vocabulary import FlightState
 
 __all__ = ["add_compat_waypoint_routes"]
 
@@ -49,4 +50,4 @@ def add_compat_waypoint_routes(app: FastAPI, hub: Hub) -> None:
         return {"waypoint_id": station.id, "waypoint_name": station.name, "drone_id": drone,
                 "is_at_waypoint": inside, "distance": round(distance, 2),
                 "radius": station.radius_m,
-                "can_charge": inside and state.flight_state == "on_ground"}
+                "can_charge": inside and state.flight_state == FlightState.ON_GROUND}
