@@ -21,11 +21,14 @@ if TYPE_CHECKING:  # benchmark.templates loads its file templates through this m
     from benchmark.templates.base import SessionView, TaskDraft, Template
 
 __all__ = ["TemplateFileError", "dump_template", "load_template", "load_templates",
-           "read_template", "template_of"]
+           "parse_template", "read_template", "template_of"]
 
 
 class TemplateFileError(ValueError):
     """A template file that cannot be used: the message names the file, field and reason."""
+
+    field: str | None = None
+    """The field to blame (``values[1].max``), where `parse_template` knows it."""
 
 
 def _where(loc: Sequence[int | str]) -> str:
@@ -51,6 +54,33 @@ def read_template(path: str | Path) -> TemplateFile:
         reason = str(first["msg"]).removeprefix("Value error, ")
         raise TemplateFileError(f"{path}: {_where(first['loc'])}: {reason}") from None
     _check_tree(path, model)
+    return model
+
+
+def parse_template(text: str, source: str = "<text>") -> TemplateFile:
+    """The validated model of a template file's text (an editor's); the TemplateFileError
+    names `source`, the field (also as its `field`) and the reason."""
+    def refused(field: str, reason: str) -> TemplateFileError:
+        error = TemplateFileError(f"{source}: {field}: {reason}")
+        error.field = field
+        return error
+
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise refused("(file)", f"not JSON: {error}") from None
+    try:
+        model = TemplateFile.model_validate(raw)
+    except ValidationError as error:
+        first = error.errors()[0]
+        raise refused(_where(first["loc"]),
+                      str(first["msg"]).removeprefix("Value error, ")) from None
+    try:
+        _check_tree(Path(source), model)
+    except TemplateFileError as error:
+        reason = str(error).removeprefix(f"{source}: ")
+        field, _, why = reason.partition(": ")
+        raise refused(field if why else "checks", why or reason) from None
     return model
 
 
