@@ -16,6 +16,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+import shapely
+
 from benchmark.generate import build_task
 from benchmark.oracle.derive import Unplannable, derive_plan
 from benchmark.session_file import SessionFileError, session_from_dict, task_from_dict
@@ -209,8 +211,14 @@ def _place_problem(path: str, leaf: Leaf, view: SessionView) -> str | None:
     z_m = float(z) if isinstance(z, int | float) else 10.0
     if not (0.0 <= x <= view.map_w_m and 0.0 <= y <= view.map_h_m):
         return f"({x:g}, {y:g}) is outside the {view.map_w_m:g} x {view.map_h_m:g} m map"
-    if not view.scenario.world.clearance_ok(float(x), float(y), z_m):
-        return f"({x:g}, {y:g}) at {z_m:g} m is inside an obstacle or its safety margin"
+    world = view.scenario.world
+    margin_m = world.safety_margin_m
+    spot = shapely.Point(float(x), float(y))
+    for obstacle in world.obstacles:
+        above = obstacle.height_m > 0.0 and z_m > obstacle.height_m + margin_m
+        if not above and obstacle.footprint.buffer(margin_m).intersects(spot):
+            return (f"({x:g}, {y:g}) at {z_m:g} m is inside obstacle {obstacle.id} or its "
+                    f"{margin_m:g} m safety margin")
     return None
 
 

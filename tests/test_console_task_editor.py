@@ -199,7 +199,7 @@ async def test_every_task_is_rechecked_after_the_world_is_edited(
     first, second = after["tasks"]
     assert not first["solvable"] and second["solvable"]
     assert first["leaf"] == "checks[0]" and first["endpoint"] == "drone_has_visited_position"
-    assert "inside an obstacle" in first["reason"]
+    assert "inside obstacle o99" in first["reason"]
 
     drone = world["tasks"][1]["checks"]["checks"][0]["parameters"]["drone_id"]
     gone = {**world, "drones": [d for d in world["drones"] if d["id"] != drone]}

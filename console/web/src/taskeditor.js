@@ -114,7 +114,7 @@ export function taskEditor({ state, map, record, refresh }) {
       el("b", {}, `${d.task.id} `), d.task.text,
       el("div", { class: "muted entities", id: `drawn-entities-${k}` }, entityLine(d.entities)),
       el("ul", { class: "checks", id: `drawn-tree-${k}` }, treeView(d.tree)))),
-    te.drawn.length ? el("button", { id: "drawn-add", onclick: () => addDrawn() }, `add ${te.drawn.length} tasks to the session`) : null);
+    ...(te.drawn.length ? [el("button", { id: "drawn-add", onclick: () => addDrawn() }, `add ${te.drawn.length} tasks to the session`)] : []));
   }
 
   function addDrawn() {
@@ -194,8 +194,8 @@ export function taskEditor({ state, map, record, refresh }) {
     const line = proof.status === "error" || !r ? `${task.id}: the proof could not fly: ${proof.error}`
       : `${task.id} ${proof.status}: ${r.checks_passed}/${r.checks_total} checks, ${r.tool_calls} tool calls, ${r.sim_time_s} s simulated (${r.finish}${r.error ? `: ${r.error}` : ""})`;
     proofBox.replaceChildren(el("p", { id: "proof-status", class: proof.status === "passed" ? "ok" : "bad" }, line),
-      r ? checkTree(r, task.checks) : null,
-      r?.replay ? el("button", { id: "proof-replay", onclick: () => playBack(r.replay) }, "play the flight again") : null);
+      ...(r ? [checkTree(r, task.checks)] : []),
+      ...(r?.replay ? [el("button", { id: "proof-replay", onclick: () => playBack(r.replay) }, "play the flight again")] : []));
     if (r?.replay) playBack(r.replay);
   }
 
