@@ -27,7 +27,9 @@ KEYS = {"op-key": "operator", "admin-key": "admin", "agent-key": "agent"}
 OPERATOR = {"X-API-Key": "op-key"}
 PHOTO = (BUILT_IN_DIR / "photo_at_point.json").read_text()
 WORLD_FILE = ROOT / "benchmark/sessions/area_search-easy-1.json"
-ROUTES = [("GET", "/api/editor/templates", None), ("GET", "/api/editor/templates/checkpoint", None),
+ROUTES: list[tuple[str, str, dict[str, Any] | None]] = [
+          ("GET", "/api/editor/templates", None),
+          ("GET", "/api/editor/templates/checkpoint", None),
           ("POST", "/api/editor/templates/validate", {"text": PHOTO}),
           ("POST", "/api/editor/templates/instantiate", {"session": {}, "text": PHOTO}),
           ("POST", "/api/editor/templates/save", {"text": PHOTO}),

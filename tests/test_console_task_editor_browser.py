@@ -51,7 +51,8 @@ def _colour_near(page: Any, x_m: float, y_m: float, rgb: tuple[int, int, int],
             const m = window.consoleView.map;
             m.draw();
             const d = m.dpr, x0 = Math.round((sx - r) * d), y0 = Math.round((sy - r) * d);
-            const data = m.ctx.getImageData(x0, y0, Math.round(2 * r * d), Math.round(2 * r * d)).data;
+            const size = Math.round(2 * r * d);
+            const data = m.ctx.getImageData(x0, y0, size, size).data;
             let hits = 0;
             for (let k = 0; k < data.length; k += 4) {
                 if (Math.abs(data[k] - rgb[0]) < 20 && Math.abs(data[k + 1] - rgb[1]) < 20
@@ -143,6 +144,7 @@ def test_a_template_is_drawn_proved_rechecked_and_saved(browser: Any,
         page.fill("#save-path", "sessions/with-tasks.json")
         page.click("#save")
         saved = _text(page, "#editor-status", "saved to")
+    assert str(folder / "sessions" / "with-tasks.json") in saved
     template = folder / "templates" / "my_photo.json"
     assert str(template) in saved_template and json.loads(template.read_text())["id"] == "my_photo"
     session = load_session(folder / "sessions" / "with-tasks.json")
