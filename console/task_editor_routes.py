@@ -119,7 +119,9 @@ def add_task_editor_routes(app: FastAPI, state: "ConsoleState", staff: Callable[
     async def prove(role: Staff, body: Annotated[ProveBody, _body(ProveBody)]
                     ) -> JSONResponse:
         try:
-            proof = state.proofs.start(body.session, body.task_id)
+            session, spec = await run_in_threadpool(state.proofs.prepare, body.session,
+                                                    body.task_id)
+            proof = state.proofs.start(session, spec)
         except ProofBusy as busy:
             raise HTTPException(409, str(busy)) from None
         except ValueError as error:

@@ -21,7 +21,7 @@ from typing import Any
 
 from benchmark.episode import EpisodeOptions, run_task, session_swarm
 from benchmark.oracle.session_oracle import oracle_for_session
-from benchmark.session_file import session_from_dict
+from benchmark.session_file import Session, TaskSpec, session_from_dict
 from console.editor import EditorError, validate_session
 from console.live import LiveSwarm
 from emulator.scenario_export import scenario_to_dict
@@ -72,12 +72,15 @@ class ProofRunner:
     def running(self) -> Proof | None:
         return next((p for p in self.proofs.values() if p.status == "running"), None)
 
-    def start(self, data: Any, task_id: str) -> Proof:
-        """Check the session and its task, then start flying it (call from the server's
-        loop); raises EditorError for a session or task that cannot be flown, ProofBusy."""
+    def _check_idle(self) -> None:
         busy = self.running()
         if busy is not None:
             raise ProofBusy(f"proof {busy.id} of task {busy.task_id} is flying; wait for it")
+
+    def prepare(self, data: Any, task_id: str) -> tuple[Session, TaskSpec]:
+        """The session (its world and task `task_id` alone) a proof flies; raises EditorError
+        for a session or task that cannot be flown, ProofBusy. Any thread may call it."""
+        self._check_idle()
         if not isinstance(data, dict):
             raise EditorError("the session must be a JSON object")
         listed = [t for t in data.get("tasks") or [] if isinstance(t, dict)]
@@ -90,6 +93,12 @@ class ProofRunner:
         spec = session.tasks[0]
         if spec.error is not None or spec.checks is None or spec.budget is None:
             raise EditorError(f"tasks[0] ({task_id}): {spec.error or 'no checks or budget'}")
+        return session, spec
+
+    def start(self, session: Session, spec: TaskSpec) -> Proof:
+        """Start flying a prepared proof (call from the server's loop); raises ProofBusy."""
+        self._check_idle()
+        task_id = spec.id
         proof = Proof(f"proof-{next(self._numbers)}", task_id)
         self.proofs[proof.id] = proof
         self._evict()
