@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import subprocess
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
@@ -21,7 +23,8 @@ from console.app import ConsoleState, create_console_app
 from console.auth import ConsoleAuth
 from console.task_editor import BUILT_IN_DIR
 from tests.asgi_fixtures import listening
-from tests.cli_fixtures import ROOT
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until
+from tests.ports import unused_tcp_port
 
 KEYS = {"op-key": "operator", "admin-key": "admin", "agent-key": "agent"}
 OPERATOR = {"X-API-Key": "op-key"}
@@ -293,3 +296,48 @@ async def test_templates_are_saved_into_the_save_folder(
     (folder / "templates" / "broken.json").write_text("{")
     listed = (await client.get("/api/editor/templates")).json()["templates"]
     assert "not JSON" in next(t for t in listed if t["file"] == "broken.json")["error"]
+
+
+@pytest.mark.parametrize("family", ["area_search", "area_assignment_and_patrol",
+                                    "target_assignment", "target_tracking", "resilience"])
+async def test_shipped_tasks_are_rechecked_solvable(console: tuple[httpx.AsyncClient, Path],
+                                                    family: str) -> None:
+    """No false alarm: every task the shipped suite proved is re-checked solvable."""
+    client, _ = console
+    session = json.loads((ROOT / f"benchmark/sessions/{family}-hard-2.json").read_text())
+    answer = (await client.post("/api/editor/tasks/recheck", json={"session": session})).json()
+    assert answer["total"] == len(session["tasks"]) > 0
+    assert [r["reason"] for r in answer["tasks"] if not r["solvable"]] == []
+
+
+@pytest.mark.mavsdk
+def test_a_served_console_refuses_agents_the_task_editor(tmp_path: Path) -> None:
+    """`mavswarm serve` (agents have keys there): its console's task editor answers an
+    operator and refuses an agent with 403, over a real socket to a real server process."""
+    (tmp_path / "world.json").write_text(json.dumps(_world()))
+    port = unused_tcp_port()
+    proc = subprocess.Popen(
+        [*MAVSWARM, "serve", "--sessions", "world.json", "--port", str(port),
+         "--key", "operator=op", "--key", "agent=ag"],
+        cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        read_until(proc, "web console:", 60)
+        base = f"http://127.0.0.1:{port}/console"
+        with httpx.Client(base_url=base, timeout=60) as client:
+            for key, status in (("op", 200), ("ag", 403)):
+                listed = client.get("/api/editor/templates", headers={"X-API-Key": key})
+                assert listed.status_code == status, listed.text
+                drawn = client.post("/api/editor/templates/instantiate",
+                                    headers={"X-API-Key": key},
+                                    json={"session": _world(), "text": PHOTO})
+                assert drawn.status_code == status, drawn.text
+                if status == 403:
+                    assert "checks" not in drawn.text and "agent" in drawn.json()["detail"]
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
