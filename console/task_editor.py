@@ -62,15 +62,18 @@ def _files(root: Path) -> Iterator[tuple[str, Path]]:
 
 
 def template_listing(root: Path) -> list[dict[str, Any]]:
-    """Every template file: built-in ones, then those saved in `root`'s templates folder (a
-    saved file that does not load is listed with its error)."""
+    """Every template file (`id`: its name without .json, what `template_text` reads):
+    built-in ones, then those saved in `root`'s templates folder (a saved file that does not
+    load is listed with its error)."""
     out: list[dict[str, Any]] = []
     for source, path in _files(root):
         entry: dict[str, Any] = {"id": path.stem, "source": source, "file": path.name}
         try:
             model = parse_template(path.read_text(encoding="utf-8"), path.name)
-            entry.update(id=model.id, category=model.category, difficulty=model.difficulty,
+            entry.update(category=model.category, difficulty=model.difficulty,
                          description=model.description)
+            if model.id != path.stem:  # read back by its file's name
+                entry["template_id"] = model.id
         except (OSError, UnicodeDecodeError, TemplateFileError) as error:
             entry["error"] = str(error)
         out.append(entry)

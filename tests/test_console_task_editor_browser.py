@@ -3,7 +3,8 @@ the world being edited (its tasks' drones and points highlighted on the map, che
 readable), a bad edit of it refused naming the field, the tasks added to the session, one
 proved by the oracle (it passes and its flight plays on the map), the world edited so that a
 task can no longer be flown (the re-check names the leaf), and the session and an edited
-template saved into the editor's save folder."""
+template saved into the editor's save folder; a new template written from the page's skeleton
+validates and draws."""
 
 from __future__ import annotations
 
@@ -141,6 +142,16 @@ def test_a_template_is_drawn_proved_rechecked_and_saved(browser: Any,
                                                      '"id": "my_photo"'))
         page.click("#template-save")
         saved_template = _text(page, "#template-status", "saved template my_photo")
+        page.wait_for_selector("#template-pick optgroup[label='saved'] option[value='my_photo']",
+                               state="attached")
+
+        page.click("#template-new")  # writing one from the start
+        page.click("#template-validate")
+        _text(page, "#template-status", "valid template my_template")
+        page.fill("#template-count", "1")
+        page.click("#template-draw")
+        _text(page, "#template-status", "drew 1 tasks of my_template")
+        assert "drone on ground" in (page.text_content("#drawn-tree-0") or "")
         page.fill("#save-path", "sessions/with-tasks.json")
         page.click("#save")
         saved = _text(page, "#editor-status", "saved to")

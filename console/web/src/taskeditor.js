@@ -17,6 +17,17 @@ const CHOSEN = "#7b2cbf";    // those of the task picked
 const POLL_MS = 400;         // a proof's status is asked this often while it flies
 const PLAYBACK_S = 6;        // a proof's recorded window plays back in this many seconds
 const RECHECK_MS = 400;      // a re-check waits this long after the last edit
+// what "new" puts in the text box: a small template to start writing from
+const SKELETON = {
+  format: "mavswarm.template/1", id: "my_template", category: "navigation", difficulty: "easy",
+  entities: [{ group: "drone_1", kind: "drone" }],
+  values: [{ name: "alt", kind: "int", min: 10, max: 25 }, { name: "p", kind: "point" }],
+  phrasings: ["Fly {drone_1_name} to {p} at {alt} m and land there."],
+  checks: { logic: "and", checks: [
+    { endpoint: "drone_has_visited_position", parameters: { drone_id: "{drone_1_id}", x: "{p.x}", y: "{p.y}", z: "{alt}", tolerance: 3.0 } },
+    { endpoint: "drone_on_ground", parameters: { drone_id: "{drone_1_id}" } }] },
+  budget: { steps: 3, flight_diagonals: 1 },
+};
 
 function paramText(parameters) {
   return Object.entries(parameters || {}).map(([k, v]) => `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ");
@@ -45,6 +56,7 @@ export function taskEditor({ state, map, record, refresh }) {
   const node = el("section", { id: "task-editor", class: "task-editor" },
     el("h2", {}, "Tasks and templates"),
     el("div", { class: "filters" }, "template ", pick, el("button", { id: "template-load", onclick: () => loadTemplate() }, "open"),
+      el("button", { id: "template-new", onclick: () => newTemplate() }, "new"),
       " tasks ", count, " seed ", seed,
       el("button", { id: "template-validate", onclick: () => validate() }, "validate"),
       el("button", { id: "template-draw", onclick: () => draw() }, "draw on the map"),
@@ -78,6 +90,11 @@ export function taskEditor({ state, map, record, refresh }) {
     } catch (error) {
       say(status, `cannot open ${pick.value}: ${error.message}`, "bad");
     }
+  }
+
+  function newTemplate() {
+    text.value = `${JSON.stringify(SKELETON, null, 2)}\n`;
+    say(status, "a new template: edit it, validate, draw it on the map, save it", "muted");
   }
 
   function refusal(body) { return body.field ? `${body.field}: ${body.error}` : (body.error || body.detail); }
