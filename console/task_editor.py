@@ -169,7 +169,8 @@ def task_entities(tree: Node, session: Mapping[str, Any]) -> dict[str, Any]:
 def instantiate(session: Any, text: str, *, count: int = 1, seed: int = 1) -> dict[str, Any]:
     """`count` tasks of the template `text` drawn on the session's world (seeded by `seed`,
     the template's id and the task's slot), each with the entities its checks name and its
-    check tree; a draw the world cannot take is answered with why."""
+    check tree and its re-check (as `recheck`); a draw the world cannot take is answered with
+    why."""
     model = check_template(text)
     data, view = _world(session)
     template = template_of(model)
@@ -192,8 +193,10 @@ def instantiate(session: Any, text: str, *, count: int = 1, seed: int = 1) -> di
             unfit.append(f"task {slot + 1}: the template's checks do not fit: {error}")
             continue
         tree = parse_tree(task["checks"], view.scenario)
+        check = _recheck_one(slot, task, view)
         tasks.append({"task": task, "entities": task_entities(tree, data),
-                      "tree": tree_to_json(tree)})
+                      "tree": tree_to_json(tree),
+                      "check": {k: check[k] for k in ("solvable", "leaf", "endpoint", "reason")}})
     if not tasks:
         raise TemplateTextError(f"template {model.id!r} cannot be drawn on this world: "
                                 + "; ".join(dict.fromkeys(unfit)))
@@ -212,6 +215,10 @@ def _place_problem(path: str, leaf: Leaf, view: SessionView) -> str | None:
         return None
     z = p.get("z")
     z_m = float(z) if isinstance(z, int | float) else 10.0
+    drone = next((v for v in view.drones if v.id == p.get("drone_id")), None)
+    if drone is not None and z_m > drone.max_altitude_m:
+        return (f"{z_m:g} m is above {drone.id}'s maximum altitude of "
+                f"{drone.max_altitude_m:g} m")
     if not (0.0 <= x <= view.map_w_m and 0.0 <= y <= view.map_h_m):
         return f"({x:g}, {y:g}) is outside the {view.map_w_m:g} x {view.map_h_m:g} m map"
     world = view.scenario.world

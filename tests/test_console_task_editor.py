@@ -106,6 +106,10 @@ async def test_templates_are_listed_and_read_by_id(console: tuple[httpx.AsyncCli
     (lambda t: t.replace('"category": "search"', '"category": "sightseeing"'), "category",
      "is not one of"),
     (lambda t: t[:-3], "(file)", "not JSON"),
+    (lambda t: t.replace('"min": 15, "max": 30', '"min": 15, "max": 1e999'), "values[0].max",
+     "not a finite number"),
+    (lambda t: t.replace('"min": 15, "max": 30', '"min": -Infinity, "max": 30'),
+     "values[0].min", "not a finite number"),
     (lambda t: t.replace('{"name": "p", "kind": "point"}',
                          '{"name": "p", "kind": "hook", "call": "os:system"}'),
      "values[1].call", "not a built-in hook"),
@@ -167,6 +171,8 @@ async def test_tasks_are_drawn_on_the_world_with_entities_and_tree(
         assert [c["endpoint"] for c in item["tree"]["checks"]] == [
             "drone_has_visited_position", "drone_has_taken_photo"]
         parse_tree(task["checks"], scenario)
+        assert item["check"] == {"solvable": True, "leaf": None, "endpoint": None,
+                                 "reason": None}
     again = await _drawn(client, world, count=3)
     assert again == drawn
     other = await _drawn(client, world, count=3, seed=2)
@@ -181,6 +187,11 @@ async def test_a_template_the_world_cannot_take_is_answered_with_why(
                                json={"session": _world(), "text": follow})
     assert answer.status_code == 422
     assert "moving target" in answer.json()["error"]
+    high = PHOTO.replace('"min": 15, "max": 30', '"min": 500, "max": 600')
+    drawn = await _drawn(client, _world(), text=high, count=1)
+    check = drawn["tasks"][0]["check"]
+    assert not check["solvable"] and check["leaf"] == "checks[0]"
+    assert "above" in check["reason"] and "maximum altitude" in check["reason"]
     broken = await client.post("/api/editor/templates/instantiate",
                                json={"session": {**_world(), "drones": "many"}, "text": PHOTO})
     assert broken.status_code == 422 and "drones" in broken.json()["error"]
@@ -210,6 +221,11 @@ async def test_every_task_is_rechecked_after_the_world_is_edited(
     gone = {**world, "drones": [d for d in world["drones"] if d["id"] != drone]}
     missing = (await client.post("/api/editor/tasks/recheck", json={"session": gone})).json()
     assert not missing["tasks"][1]["solvable"] and drone in missing["tasks"][1]["reason"]
+
+    low = {**world, "drones": [{**d, "max_altitude": 12} for d in world["drones"]]}
+    ceiling = (await client.post("/api/editor/tasks/recheck", json={"session": low})).json()
+    assert all(not r["solvable"] and r["leaf"] == "checks[0]" and "above" in r["reason"]
+               and "12 m" in r["reason"] for r in ceiling["tasks"])
 
     outside = {**world, "map_size_m": [50.0, 50.0],
                "drones": [{**d, "position": {"x": 5.0 + 3 * k, "y": 5.0, "z": 0.0}}

@@ -99,6 +99,7 @@ def test_a_template_is_drawn_proved_rechecked_and_saved(browser: Any,
         tree = page.text_content("#drawn-tree-0") or ""
         assert "AND" in tree and "drone has visited position" in tree
         assert "drone has taken photo" in tree
+        assert page.text_content("#drawn-check-0") == "solvable"
         first = drawn[0]["entities"]
         entities = page.text_content("#drawn-entities-0") or ""
         assert f"drones: {first['drones'][0]}" in entities

@@ -8,7 +8,7 @@ import importlib
 import json
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -69,6 +69,9 @@ def parse_template(text: str, source: str = "<text>") -> TemplateFile:
         raw = json.loads(text)
     except json.JSONDecodeError as error:
         raise refused("(file)", f"not JSON: {error}") from None
+    for loc, value in _numbers(raw, ()):
+        if not math.isfinite(value):
+            raise refused(_where(loc), f"{value} is not a finite number")
     try:
         model = TemplateFile.model_validate(raw)
     except ValidationError as error:
@@ -82,6 +85,19 @@ def parse_template(text: str, source: str = "<text>") -> TemplateFile:
         field, _, why = reason.partition(": ")
         raise refused(field if why else "checks", why or reason) from None
     return model
+
+
+def _numbers(data: Any, loc: tuple[int | str, ...]
+             ) -> Iterator[tuple[tuple[int | str, ...], float]]:
+    """Every float of parsed JSON with where it is (JSON text may say Infinity, NaN, 1e999)."""
+    if isinstance(data, float):
+        yield loc, data
+    elif isinstance(data, dict):
+        for key, value in data.items():
+            yield from _numbers(value, (*loc, str(key)))
+    elif isinstance(data, list):
+        for k, value in enumerate(data):
+            yield from _numbers(value, (*loc, k))
 
 
 def _check_tree(path: Path, model: TemplateFile) -> None:

@@ -130,6 +130,7 @@ export function taskEditor({ state, map, record, refresh }) {
       onclick: () => { te.chosen = k; renderDrawn(); map.redraw(); } },
       el("b", {}, `${d.task.id} `), d.task.text,
       el("div", { class: "muted entities", id: `drawn-entities-${k}` }, entityLine(d.entities)),
+      el("div", { id: `drawn-check-${k}`, class: d.check.solvable ? "ok" : "bad" }, checkText(d.check)),
       el("ul", { class: "checks", id: `drawn-tree-${k}` }, treeView(d.tree)))),
     ...(te.drawn.length ? [el("button", { id: "drawn-add", onclick: () => addDrawn() }, `add ${te.drawn.length} tasks to the session`)] : []));
   }
@@ -172,11 +173,14 @@ export function taskEditor({ state, map, record, refresh }) {
     }
   }
 
+  function checkText(r) {
+    return r.solvable ? "solvable" : `unsolvable: ${r.leaf ? `${r.leaf} (${r.endpoint}): ` : ""}${r.reason}`;
+  }
+
   function checkNote(k) {
     const r = te.recheck?.tasks?.[k];
     if (!r) return el("span", { id: `task-check-${k}`, class: "muted" }, "");
-    return el("span", { id: `task-check-${k}`, class: r.solvable ? "ok" : "bad" },
-      r.solvable ? "solvable" : `unsolvable: ${r.leaf ? `${r.leaf} (${r.endpoint}): ` : ""}${r.reason}`);
+    return el("span", { id: `task-check-${k}`, class: r.solvable ? "ok" : "bad" }, checkText(r));
   }
 
   // ------------------------------------------------------------------ proving
