@@ -99,7 +99,10 @@ class ProofRunner:
         """Start flying a prepared proof (call from the server's loop); raises ProofBusy."""
         self._check_idle()
         task_id = spec.id
-        proof = Proof(f"proof-{next(self._numbers)}", task_id)
+        ident = f"proof-{next(self._numbers)}"
+        while ident in self.lives:  # never in place of a swarm the console shows
+            ident = f"proof-{next(self._numbers)}"
+        proof = Proof(ident, task_id)
         self.proofs[proof.id] = proof
         self._evict()
         agent = oracle_for_session(session, "hand")
