@@ -5,13 +5,15 @@ still parse and can be planned, and else which leaf fails and why); templates sa
 editor's save folder.
 
 Templates are the built-in files (`benchmark/templates/files`) and those saved under the
-save folder's `templates/`. A template written on the page may call only the built-in hooks
-(modules under `benchmark.templates.`): a page never names code to import.
+save folder's `templates/`. A template written on the page may call only the hooks the
+built-in template files call: a page never names code to import.
 """
 
 from __future__ import annotations
 
+import functools
 import random
+import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -28,13 +30,13 @@ from benchmark.validators import CheckDefinitionError, parse_tree, tree_to_json
 from benchmark.validators.tree import Leaf, Node
 from console.editor import EditorError, write_in_folder
 
-__all__ = ["BUILT_IN_DIR", "HOOK_PREFIX", "SAVED_TEMPLATES", "TemplateTextError",
+__all__ = ["BUILT_IN_DIR", "SAVED_TEMPLATES", "TemplateTextError", "built_in_hooks",
            "check_template", "instantiate", "recheck", "save_template", "template_listing",
            "template_text"]
 
 BUILT_IN_DIR = Path(__file__).resolve().parent.parent / "benchmark" / "templates" / "files"
 SAVED_TEMPLATES = "templates"
-HOOK_PREFIX = "benchmark.templates."
+_UNFILLED = re.compile(r"\{[A-Za-z][A-Za-z0-9_.:]*\}")
 TASK_LISTS = ("drones", "targets", "obstacles")
 
 
@@ -95,6 +97,15 @@ def template_text(ident: str, root: Path) -> dict[str, Any] | None:
 
 
 # ------------------------------------------------------------------ validating
+@functools.cache
+def built_in_hooks() -> frozenset[str]:
+    """The hooks (module:function) the built-in template files call."""
+    return frozenset(spec.call for path in BUILT_IN_DIR.glob("*.json")
+                     for spec in parse_template(path.read_text(encoding="utf-8"),
+                                                path.name).values
+                     if spec.call is not None)
+
+
 def check_template(text: str) -> TemplateFile:
     """The model of a template text; TemplateTextError names the field and the reason."""
     try:
@@ -102,9 +113,9 @@ def check_template(text: str) -> TemplateFile:
     except TemplateFileError as error:
         raise TemplateTextError(str(error), error.field) from None
     for k, spec in enumerate(model.values):
-        if spec.call is not None and not spec.call.startswith(HOOK_PREFIX):
+        if spec.call is not None and spec.call not in built_in_hooks():
             raise TemplateTextError(f"template: values[{k}].call: {spec.call!r} is not a "
-                                    f"built-in hook (a module under {HOOK_PREFIX})",
+                                    f"built-in hook (one of {', '.join(sorted(built_in_hooks()))})",
                                     f"values[{k}].call")
     return model
 
@@ -190,7 +201,7 @@ def instantiate(session: Any, text: str, *, count: int = 1, seed: int = 1) -> di
             unfit.append(f"task {slot + 1}: {error}")
             continue
         except (CheckDefinitionError, ValueError) as error:
-            unfit.append(f"task {slot + 1}: the template's checks do not fit: {error}")
+            unfit.append(f"task {slot + 1}: the template does not fill in: {error}")
             continue
         tree = parse_tree(task["checks"], view.scenario)
         check = _recheck_one(slot, task, view)
@@ -200,9 +211,16 @@ def instantiate(session: Any, text: str, *, count: int = 1, seed: int = 1) -> di
     if not tasks:
         raise TemplateTextError(f"template {model.id!r} cannot be drawn on this world: "
                                 + "; ".join(dict.fromkeys(unfit)))
-    fits = (not model.families or view.family in model.families)
-    note = "" if fits else (f"written for the families {', '.join(model.families)}; this world's "
-                            f"is {view.family!r}")
+    notes = []
+    if model.families and view.family not in model.families:
+        notes.append(f"written for the families {', '.join(model.families)}; this world's is "
+                     f"{view.family!r}")
+    texts = [t["task"]["text"] for t in tasks] + [a for t in tasks for a in t["task"]["aliases"]]
+    unfilled = sorted({m for text in texts for m in _UNFILLED.findall(text)})
+    if unfilled:
+        notes.append(f"placeholders left unfilled in the phrasings: {', '.join(unfilled)} (no "
+                     "entity group or value of that name)")
+    note = "; ".join(notes)
     return {"template": model.id, "tasks": tasks, "unfit": unfit, "note": note}
 
 

@@ -113,6 +113,10 @@ async def test_templates_are_listed_and_read_by_id(console: tuple[httpx.AsyncCli
     (lambda t: t.replace('{"name": "p", "kind": "point"}',
                          '{"name": "p", "kind": "hook", "call": "os:system"}'),
      "values[1].call", "not a built-in hook"),
+    (lambda t: t.replace('{"name": "p", "kind": "point"}',
+                         '{"name": "p", "kind": "hook", '
+                         '"call": "benchmark.templates.base:all_of"}'),
+     "values[1].call", "benchmark.templates.search:sweep_length"),
 ])
 async def test_a_bad_template_is_refused_naming_the_field(
         console: tuple[httpx.AsyncClient, Path], edit: Any, field: str, reason: str) -> None:
@@ -192,6 +196,14 @@ async def test_a_template_the_world_cannot_take_is_answered_with_why(
     check = drawn["tasks"][0]["check"]
     assert not check["solvable"] and check["leaf"] == "checks[0]"
     assert "above" in check["reason"] and "maximum altitude" in check["reason"]
+    typo = PHOTO.replace("Fly {drone_1_name}", "Fly {drone_one_name}")
+    noted = await _drawn(client, _world(), text=typo, count=1)
+    assert "placeholders left unfilled in the phrasings: {drone_one_name}" in noted["note"]
+    badly = PHOTO.replace('"steps": 3', '"steps": "{p}"')
+    refused = await client.post("/api/editor/templates/instantiate",
+                                json={"session": _world(), "text": badly})
+    assert refused.status_code == 422
+    assert "does not fill in" in refused.json()["error"] and "(" in refused.json()["error"]
     broken = await client.post("/api/editor/templates/instantiate",
                                json={"session": {**_world(), "drones": "many"}, "text": PHOTO})
     assert broken.status_code == 422 and "drones" in broken.json()["error"]
