@@ -12,6 +12,7 @@ built-in template files call: a page never names code to import.
 from __future__ import annotations
 
 import functools
+import json
 import random
 import re
 from collections.abc import Iterator, Mapping
@@ -100,10 +101,11 @@ def template_text(ident: str, root: Path) -> dict[str, Any] | None:
 @functools.cache
 def built_in_hooks() -> frozenset[str]:
     """The hooks (module:function) the built-in template files call."""
-    return frozenset(spec.call for path in BUILT_IN_DIR.glob("*.json")
-                     for spec in parse_template(path.read_text(encoding="utf-8"),
-                                                path.name).values
-                     if spec.call is not None)
+    calls: set[str] = set()
+    for path in BUILT_IN_DIR.glob("*.json"):
+        raw = json.loads(path.read_text(encoding="utf-8"))
+        calls.update(str(v["call"]) for v in raw.get("values", []) if v.get("call"))
+    return frozenset(calls)
 
 
 def check_template(text: str) -> TemplateFile:
