@@ -4,6 +4,8 @@ of a benchmark run), which the console shows as a live swarm (`proof-N`: its fra
 live WebSocket) while it flies; the proof's record then carries the checks' verdicts and the
 replay of the window, which the page plays back.
 
+As generation proves a task, the oracle gets `ORACLE_TRIES` flights from the same start (a rare
+telemetry hiccup does not fail a task the suite would keep); the proof says how many it took.
 One proof runs at a time per console (a second is refused while one flies); the last
 `KEEP_PROOFS` are kept to be read back. Nothing of a proof reaches any other swarm, session or
 results folder.
@@ -20,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from benchmark.episode import EpisodeOptions, run_task, session_swarm
+from benchmark.generate import ORACLE_TRIES
 from benchmark.oracle.session_oracle import oracle_for_session
 from benchmark.session_file import Session, TaskSpec, session_from_dict
 from console.editor import EditorError, validate_session
@@ -46,11 +49,12 @@ class Proof:
     record: dict[str, Any] | None = None
     error: str | None = None
     last_frame: dict[str, Any] | None = None
+    tries: int = 0
     task: asyncio.Task[None] | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"id": self.id, "task": self.task_id, "status": self.status,
-                               "error": self.error, "live": self.id}
+                               "error": self.error, "live": self.id, "tries": self.tries}
         if self.record is not None:
             keep = ("passed", "checks", "checks_total", "checks_passed", "finish", "error",
                     "tool_calls", "sim_time_s", "replay")
@@ -115,15 +119,23 @@ class ProofRunner:
                                      scenario_to_dict(session.scenario), swarm,
                                      task_text=spec.text)
                     self.lives[proof.id] = live
+                    start = services.operator_snapshot()
                     try:
-                        proof.record = await run_task(session, spec, agent, swarm, services,
-                                                      gateway, options)
+                        for attempt in range(1, ORACLE_TRIES + 1):  # as generation proves
+                            if attempt > 1:
+                                services.operator_restore(start)
+                            proof.tries = attempt
+                            record = await run_task(session, spec, agent, swarm, services,
+                                                    gateway, options)
+                            if record["passed"]:
+                                break
                     finally:  # the page keeps the last frame; the swarm goes
                         proof.last_frame = live.state()
                         live.swarm, live.frames = None, lambda: proof.last_frame
                         self.lives.pop(proof.id, None)
-                proof.status = "passed" if proof.record["passed"] else "failed"
-                proof.error = proof.record.get("error")
+                proof.record = record
+                proof.status = "passed" if record["passed"] else "failed"
+                proof.error = record.get("error")
             except asyncio.CancelledError:
                 proof.status, proof.error = "error", "the console stopped"
                 raise

@@ -118,7 +118,7 @@ def test_a_template_is_drawn_proved_rechecked_and_saved(browser: Any,
 
         page.click("#task-prove-0")
         status = _text(page, "#proof-status", "t01 passed", 90_000)
-        assert "2/2 checks" in status
+        assert "2/2 checks" in status and "flight " in status
         leaves = page.eval_on_selector_all("#proof li.leaf", "els => els.map(e => e.className)")
         assert leaves == ["leaf pass", "leaf pass"]
         page.wait_for_function("window.consoleView.tasks.played >= 1", timeout=30_000)

@@ -213,7 +213,7 @@ export function taskEditor({ state, map, record, refresh }) {
   function showProof(task, proof) {
     const r = proof.record;
     const line = proof.status === "error" || !r ? `${task.id}: the proof could not fly: ${proof.error}`
-      : `${task.id} ${proof.status}: ${r.checks_passed}/${r.checks_total} checks, ${r.tool_calls} tool calls, ${r.sim_time_s} s simulated (${r.finish}${r.error ? `: ${r.error}` : ""})`;
+      : `${task.id} ${proof.status}: ${r.checks_passed}/${r.checks_total} checks, ${r.tool_calls} tool calls, ${r.sim_time_s} s simulated (${r.finish}${r.error ? `: ${r.error}` : ""}; flight ${proof.tries})`;
     proofBox.replaceChildren(el("p", { id: "proof-status", class: proof.status === "passed" ? "ok" : "bad" }, line),
       ...(r ? [checkTree(r, task.checks)] : []),
       ...(r?.replay ? [el("button", { id: "proof-replay", onclick: () => playBack(r.replay) }, "play the flight again")] : []));
