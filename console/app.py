@@ -10,13 +10,15 @@ an operator or admin key (`X-API-Key` header or `key` query parameter) unless th
 opened for local files only (console.auth: 401, 403; the WebSocket closes with 4401, 4403,
 4404). Bodies are bounded and parsed as on the agent surfaces (llm_tools.body_limit: 413 over
 1 MiB, 422 naming the field); session files are read from the session folders only
-(benchmark.authoring.session_folders).
+(benchmark.authoring.session_folders). The editor's task and template routes are
+console.task_editor_routes.
 
 `/leaderboard` ranks every (run, agent) served (`/api/leaderboard`, with intervals);
 `/api/compare?a=RUN&b=RUN` pairs two of them (benchmark.reporting.compare) for the compare view.
 """
 
 
+import asyncio
 import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -46,6 +48,8 @@ from console.live import LiveFeed, LiveSwarm
 from console.live_routes import add_live_routes
 from console.request_bodies import EditorSaveBody
 from console.results_index import ReplayIndex
+from console.task_editor_routes import add_task_editor_routes
+from console.task_proof import ProofRunner
 from llm_tools.body_limit import bound_inputs, json_body
 from llm_tools.input_limits import MAX_SESSION_NUMBER_ABS
 
@@ -73,8 +77,18 @@ class ConsoleState:
     refresh: Callable[[], None] | None = None
     """Called before live swarms are looked up (sessions a server starts later)."""
 
+    proofs: ProofRunner = field(init=False)
+    """The editor's oracle proofs (console.task_proof): each a live swarm while it flies."""
+
     def __post_init__(self) -> None:
         self.session_folders.allow_folder(self.editor_root)
+        self.proofs = ProofRunner(self.lives, self.forget_feed)
+
+    def forget_feed(self, live_id: str) -> None:
+        """Stop and drop the frame feed of a live swarm that is gone."""
+        feed = self.feeds.pop(live_id, None)
+        if feed is not None:
+            asyncio.get_running_loop().create_task(feed.aclose())
 
     def live_swarms(self) -> dict[str, LiveSwarm]:
         if self.refresh is not None:
@@ -87,6 +101,7 @@ class ConsoleState:
         return self.feeds[live_id]
 
     async def aclose(self) -> None:
+        await self.proofs.aclose()
         for feed in self.feeds.values():
             await feed.aclose()
 
@@ -181,6 +196,7 @@ def create_console_app(state: ConsoleState, *, base: str = "") -> FastAPI:
 
     add_live_routes(app, state, staff)
     add_editor_routes(app, staff)
+    add_task_editor_routes(app, state, staff)
 
     def link_target(live_id: str, role: str) -> LinkTarget:
         live = live_or_404(live_id)

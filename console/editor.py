@@ -32,7 +32,7 @@ from benchmark.authoring.session_file import (
 from console.shipped import edited_id, shipped_ids
 
 __all__ = ["EditorError", "blank_session", "editable_session", "generated_session",
-           "save_session", "start_choices", "validate_session"]
+           "save_session", "start_choices", "validate_session", "write_in_folder"]
 
 MIN_DRONE_SPACING_M = 1.0
 _ENTITY = re.compile(r"\b(drones|targets|obstacles|tasks)\[(\d+)\]")
@@ -132,19 +132,26 @@ def save_session(data: Any, path: Path, root: Path) -> dict[str, Any]:
         raise EditorError(f"session id {summary['id']!r} is a shipped session's: save the edited "
                           f"copy under a new id (e.g. {edited_id(summary['id'])!r}) so its "
                           "results never mix with the shipped session's")
+    target = write_in_folder(dump_session(data), path, root)
+    return {**summary, "path": str(target)}
+
+
+def write_in_folder(text: str, path: Path, root: Path) -> Path:
+    """Write `text` to `path` (relative to `root`, or absolute inside it; ending in .json;
+    never over anything but a regular file), replacing it whole; the path written."""
     target = (root / path).resolve() if not path.is_absolute() else path.resolve()
     if not target.is_relative_to(root.resolve()):
-        raise EditorError(f"{path}: sessions are saved under {root}")
+        raise EditorError(f"{path}: files are saved under {root}")
     if target.suffix != ".json":
-        raise EditorError(f"{path}: a session file name ends in .json")
+        raise EditorError(f"{path}: a file name here ends in .json")
     try:
         if os.path.lexists(target) and not stat.S_ISREG(os.lstat(target).st_mode):
             raise EditorError(f"{path}: exists and is not a regular file; pick another name")
         target.parent.mkdir(parents=True, exist_ok=True)
-        _write_replacing(target, dump_session(data))
+        _write_replacing(target, text)
     except OSError as error:
         raise EditorError(f"{path}: cannot save there: {error.strerror}") from None
-    return {**summary, "path": str(target)}
+    return target
 
 
 def _write_replacing(target: Path, text: str) -> None:

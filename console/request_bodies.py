@@ -9,12 +9,18 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from benchmark.authoring.session_folders import MAX_SESSION_PATH_CHARS
-from llm_tools.input_limits import MAX_NAME_CHARS
+from llm_tools.input_limits import MAX_NAME_CHARS, MAX_STRING_CHARS
 
-__all__ = ["CommandBody", "EditorSaveBody"]
+MAX_TEMPLATE_CHARS = MAX_STRING_CHARS
+
+__all__ = ["CommandBody", "EditorSaveBody", "InstantiateBody", "ProveBody", "RecheckBody",
+           "TemplateTextBody"]
 
 
 Name = Annotated[str, Field(max_length=MAX_NAME_CHARS)]
+TemplateText = Annotated[str, Field(min_length=1, max_length=MAX_TEMPLATE_CHARS,
+                                    description="a template file's text (mavswarm.template/1)")]
+MAX_TEMPLATES_DRAWN = 20
 
 
 class CommandBody(BaseModel):
@@ -46,3 +52,36 @@ class EditorSaveBody(BaseModel):
     model_config = ConfigDict(extra="forbid")
     path: str = Field(min_length=1, max_length=MAX_SESSION_PATH_CHARS)
     session: dict[str, Any]
+
+
+class TemplateTextBody(BaseModel):
+    """`POST /api/editor/templates/validate` and `.../save`: a template file's text."""
+
+    model_config = ConfigDict(extra="forbid")
+    text: TemplateText
+
+
+class InstantiateBody(BaseModel):
+    """`POST /api/editor/templates/instantiate`: draw `count` tasks of the template `text` on
+    the world of `session` (the editor's), seeded by `seed`."""
+
+    model_config = ConfigDict(extra="forbid")
+    session: dict[str, Any]
+    text: TemplateText
+    count: int = Field(default=1, ge=1, le=MAX_TEMPLATES_DRAWN)
+    seed: int = Field(default=1, ge=0, le=2**31 - 1)
+
+
+class RecheckBody(BaseModel):
+    """`POST /api/editor/tasks/recheck`: every task of `session` against its world."""
+
+    model_config = ConfigDict(extra="forbid")
+    session: dict[str, Any]
+
+
+class ProveBody(BaseModel):
+    """`POST /api/editor/proofs`: prove task `task_id` of `session` with the oracle."""
+
+    model_config = ConfigDict(extra="forbid")
+    session: dict[str, Any]
+    task_id: Name = Field(min_length=1)

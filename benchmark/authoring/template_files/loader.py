@@ -8,7 +8,7 @@ import importlib
 import json
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,11 +21,14 @@ if TYPE_CHECKING:  # benchmark.authoring.templates loads its file templates thro
     from benchmark.authoring.templates.base import SessionView, TaskDraft, Template
 
 __all__ = ["TemplateFileError", "dump_template", "load_template", "load_templates",
-           "read_template", "template_of"]
+           "parse_template", "read_template", "template_of"]
 
 
 class TemplateFileError(ValueError):
     """A template file that cannot be used: the message names the file, field and reason."""
+
+    field: str | None = None
+    """The field to blame (``values[1].max``), where `parse_template` knows it."""
 
 
 def _where(loc: Sequence[int | str]) -> str:
@@ -52,6 +55,49 @@ def read_template(path: str | Path) -> TemplateFile:
         raise TemplateFileError(f"{path}: {_where(first['loc'])}: {reason}") from None
     _check_tree(path, model)
     return model
+
+
+def parse_template(text: str, source: str = "<text>") -> TemplateFile:
+    """The validated model of a template file's text (an editor's); the TemplateFileError
+    names `source`, the field (also as its `field`) and the reason."""
+    def refused(field: str, reason: str) -> TemplateFileError:
+        error = TemplateFileError(f"{source}: {field}: {reason}")
+        error.field = field
+        return error
+
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise refused("(file)", f"not JSON: {error}") from None
+    for loc, value in _numbers(raw, ()):
+        if not math.isfinite(value):
+            raise refused(_where(loc), f"{value} is not a finite number")
+    try:
+        model = TemplateFile.model_validate(raw)
+    except ValidationError as error:
+        first = error.errors()[0]
+        raise refused(_where(first["loc"]),
+                      str(first["msg"]).removeprefix("Value error, ")) from None
+    try:
+        _check_tree(Path(source), model)
+    except TemplateFileError as error:
+        reason = str(error).removeprefix(f"{source}: ")
+        field, _, why = reason.partition(": ")
+        raise refused(field if why else "checks", why or reason) from None
+    return model
+
+
+def _numbers(data: Any, loc: tuple[int | str, ...]
+             ) -> Iterator[tuple[tuple[int | str, ...], float]]:
+    """Every float of parsed JSON with where it is (JSON text may say Infinity, NaN, 1e999)."""
+    if isinstance(data, float):
+        yield loc, data
+    elif isinstance(data, dict):
+        for key, value in data.items():
+            yield from _numbers(value, (*loc, str(key)))
+    elif isinstance(data, list):
+        for k, value in enumerate(data):
+            yield from _numbers(value, (*loc, k))
 
 
 def _check_tree(path: Path, model: TemplateFile) -> None:

@@ -4,12 +4,14 @@
 // and the session cannot be saved until it is fixed. Every edit can be undone and redone (a
 // loaded session too); a load that fails leaves the session on the page as it was. A session
 // started from a shipped one or a generated level is proposed a new id (saving under a shipped
-// session's id is refused: the copy's results would mix with the shipped session's).
+// session's id is refused: the copy's results would mix with the shipped session's). Below the
+// map, the task and template editor (taskeditor.js) draws, proves and re-checks tasks.
 
 import { getAnswer, getJson, postJson, postText } from "./api.js";
 import { Map2D } from "./map2d.js";
 import { navLinks } from "./nav.js";
 import { el } from "./panel.js";
+import { taskEditor } from "./taskeditor.js";
 import { buildWorld, shapeOutline } from "./world.js";
 
 const TARGET_KINDS = ["fixed", "moving", "waypoint", "circle", "polygon"];
@@ -73,6 +75,9 @@ export async function showEditor(root) {
   map.toggles.labels = true;
   map.overlays.push((ctx, m, layer) => highlight(ctx, m, layer));
   window.consoleView = { map, state, history };
+  const tasksEditor = taskEditor({ state, map, record: () => record(), refresh: () => refresh() });
+  map.overlays.push((ctx, m, layer) => tasksEditor.overlay(ctx, m, layer));
+  root.append(tasksEditor.node);
   document.addEventListener("keydown", (e) => {
     if (!(e.ctrlKey || e.metaKey) || ["INPUT", "TEXTAREA", "SELECT"].includes(e.target.tagName)) return;
     const key = e.key.toLowerCase();
@@ -188,6 +193,7 @@ export async function showEditor(root) {
     renderProps();
     renderTasks();
     validate();
+    tasksEditor.worldEdited();
   }
 
   let pending = 0;
@@ -326,7 +332,8 @@ export async function showEditor(root) {
       el("label", {}, "tool calls ", el("input", { id: `task-calls-${k}`, type: "number", value: t.budget?.tool_calls ?? 0,
         onchange: (ev) => { record(); t.budget = { ...t.budget, tool_calls: Number(ev.target.value) }; validate(); } })),
       el("label", {}, " sim s ", el("input", { id: `task-sim-${k}`, type: "number", value: t.budget?.sim_time_s ?? 0,
-        onchange: (ev) => { record(); t.budget = { ...t.budget, sim_time_s: Number(ev.target.value) }; validate(); } })))));
+        onchange: (ev) => { record(); t.budget = { ...t.budget, sim_time_s: Number(ev.target.value) }; validate(); } })),
+      el("div", { class: "task-proof" }, tasksEditor.taskControls(k)))));
   }
 
   function highlight(ctx, m, layer) {
