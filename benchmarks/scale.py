@@ -9,8 +9,8 @@
                 (about a minute: the targets' figures and the largest N, alone)
 
 Each emulator is `Swarm(default_scenario(N))` in its own process at speed 1 (real-time
-pacing, 50 Hz physics; above 250 vehicles, swarms of 250 side by side in that one process,
-as MAVLink system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
+pacing, 50 Hz physics; above 250 vehicles, one swarm of several MAVLink networks of 250, each
+on its own socket, as system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
 (HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, GPS_RAW_INT, MISSION_CURRENT, camera HEARTBEAT
 1 Hz; GLOBAL_POSITION_INT, LOCAL_POSITION_NED, ATTITUDE 10 Hz; VFR_HUD 2 Hz; BATTERY_STATUS,
 HOME_POSITION 0.5 Hz), sending to one destination port and no GCS port. Vehicles sit on the
@@ -48,6 +48,7 @@ from _common import Emulator, UdpSink, free_udp_port, host_busy_s, machine_line,
 from _mavsdk import Client
 
 from emulator.mavlink.streams import DEFAULT_STREAMS
+from emulator.networks import network_count
 
 RTF_OK = 0.995  # the window edges are quantised to one 20 ms physics step
 TELE_OK = 99.0  # % of the nominal telemetry sent
@@ -96,7 +97,7 @@ def measure(emus: list[Emulator], clients: list[Client], warmup_s: float, window
 
 
 def alone_row(n: int, args) -> list:
-    sink = UdpSink()
+    sink = UdpSink(ports=network_count(n))  # network j of the swarm sends to port + j
     try:
         with Emulator(n, sink.port, telemetry_hz=STREAM_HZ,
                       timeout_s=60.0 + n / 20.0) as emu:

@@ -135,8 +135,9 @@ def _payload_lengths(payload: np.ndarray) -> np.ndarray:
     return last
 
 
-def frame_batch(parts: Sequence[FramePart]) -> Frames:
-    """Every row of `parts`, framed as pymavlink frames it, in order."""
+def frame_batch(parts: Sequence[FramePart], order: np.ndarray | None = None) -> Frames:
+    """Every row of `parts`, framed as pymavlink frames it, in order, or in the order of the
+    row indices `order` (a permutation of all the rows of `parts`) when given."""
     parts = [p for p in parts if len(p.records)]
     if not parts:
         return Frames(b"", np.zeros(0, np.int64), np.zeros(0, np.int64))
@@ -186,5 +187,7 @@ def frame_batch(parts: Sequence[FramePart]) -> Frames:
     m[at, tail] = state & 0xFF
     m[at, tail + 1] = state >> 8
     frame_len = tail + CRC_LEN
+    if order is not None:
+        m, frame_len = m[order], frame_len[order]
     keep = np.arange(width) < frame_len[:, None]
     return Frames(m[keep].tobytes(), np.cumsum(frame_len), frame_len)

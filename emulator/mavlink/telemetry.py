@@ -24,6 +24,7 @@ from emulator.mavlink.codec import mavlink
 from emulator.mavlink.frames import FramePart, MessageLayout
 from emulator.mavlink.imu import highres_imu_fields
 from emulator.mavlink.streams import CAMERA_HEARTBEAT
+from emulator.networks import VEHICLES_PER_NETWORK
 from mavlink_vocabulary import MavState
 
 __all__ = ["BATCHED_STREAMS", "FleetTelemetry"]
@@ -69,7 +70,7 @@ class FleetTelemetry:
     def __init__(self, fleet: Fleet) -> None:
         self.fleet = fleet
         n = fleet.n
-        self.system_ids = np.arange(1, n + 1, dtype=np.uint8)
+        self.system_ids = (np.arange(n) % VEHICLES_PER_NETWORK + 1).astype(np.uint8)
         # The next sequence number of each vehicle's autopilot and camera component.
         self.sequences = {AUTOPILOT_COMPONENT_ID: np.zeros(n, dtype=np.uint8),
                           CAMERA_COMPONENT_ID: np.zeros(n, dtype=np.uint8)}
