@@ -9,8 +9,8 @@
                 (about a minute: the targets' figures and the largest N, alone)
 
 Each emulator is `Swarm(default_scenario(N))` in its own process at speed 1 (real-time
-pacing, 50 Hz physics; above 250 vehicles, one swarm of several MAVLink networks of 250, each
-on its own socket, as system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
+pacing, 50 Hz physics; above 250 vehicles, the swarm's MAVLink networks of 250, a socket
+each, as system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
 (HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, GPS_RAW_INT, MISSION_CURRENT, camera HEARTBEAT
 1 Hz; GLOBAL_POSITION_INT, LOCAL_POSITION_NED, ATTITUDE 10 Hz; VFR_HUD 2 Hz; BATTERY_STATUS,
 HOME_POSITION 0.5 Hz), sending to one destination port and no GCS port. Vehicles sit on the
