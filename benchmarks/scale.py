@@ -4,6 +4,7 @@
                       [--networks 4] [--clients 4,1] [--api asyncio|callback]
                       [--streams default|issue] [--largest-step 500] [--largest-max 4000]
                       [--skip alone,largest,client,multi] [--profile FILE] [--quick]
+                      [--cost 1000,10000 [--cost-seconds 10]]
 
     --quick   = --sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2
                 (about a minute: the targets' figures and the largest N, alone)
@@ -24,6 +25,14 @@ ground (telemetry cost does not depend on flying).
   multi   `--networks` emulator processes of 250 (separate ports), alone, then with K
           clients for each K in --clients (client j on network j)
 
+--cost N,...: instead of the above, the CPU one process needs per second of real time for N
+vehicles, measured flat out so a busy machine cannot starve it: the swarm of N (MAVLink
+networks of 250, real sockets, into a drained sink) with its scheduler idle, driven turn by turn
+as the real-time scheduler drives it (a 20 ms turn: one 50 Hz physics step, the telemetry due,
+the link ticks every 50 ms, the datagrams sent) on a simulated wall clock, for --cost-seconds.
+"need %" = this thread's CPU s / simulated s (the event loop's sleeps and wake-ups are left
+out); the real-time run above is what shows it holding.
+
 --streams issue keeps only issue 16's "full telemetry" (HEARTBEAT, SYS_STATUS,
 EXTENDED_SYS_STATE 1 Hz; GLOBAL_POSITION_INT, ATTITUDE, LOCAL_POSITION_NED 10 Hz: 33 messages/s
 per vehicle); the default streams are a superset of it (39/s).
@@ -36,6 +45,7 @@ simulated time the clock gave up because the process could not keep up.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import contextlib
 import os
 import pstats
@@ -199,6 +209,56 @@ def profile(n: int, path: str, args) -> None:
     st.sort_stats("tottime").print_stats(20)
 
 
+async def _drive(n: int, seconds: float, sink_port: int) -> dict[str, float]:
+    from emulator.clock import ClockConfig
+    from emulator.scenario import default_scenario
+    from emulator.swarm import PortPlan, Swarm
+
+    swarm = Swarm(default_scenario(n), clock=ClockConfig(stepped=True),
+                  ports=PortPlan(bind_host="127.0.0.1", bind_port=0, api_host="127.0.0.1",
+                                 api_port=sink_port, gcs_port=0),
+                  telemetry_hz=STREAM_HZ or None)
+    async with swarm:
+        # the swarm's own scheduler stays idle: nothing flies, and its telemetry is due on a
+        # clock a day ahead, the one this loop drives
+        now = time.monotonic() + 86_400.0
+        swarm.streams.next_due_s += now - swarm.streams.next_wakeup_s()
+        fleet, turn_s, next_link = swarm.fleet, 0.02, now
+        turns = round(seconds / turn_s)
+        out0 = swarm.stats().frames_out
+        cpu0 = time.thread_time()
+        for _ in range(turns):
+            now += turn_s
+            fleet.step()
+            swarm.faults.fire_due()
+            if now >= next_link:
+                next_link = now + 0.05
+                swarm.tick_links(now)
+            swarm.send_due_telemetry(now)
+            await asyncio.sleep(0)  # the transports send what was queued
+        cpu = time.thread_time() - cpu0
+        out = swarm.stats().frames_out - out0
+        sim = turns * turn_s
+    return {"need": 100 * cpu / sim, "us": 1e6 * cpu / sim / n, "tele": 100 * out / sim / n /
+            NOMINAL}
+
+
+def run_cost(sizes: list[int], seconds: float) -> str:
+    rows = []
+    for n in sizes:
+        sink = UdpSink(ports=network_count(n))
+        try:
+            r = asyncio.run(_drive(n, seconds, sink.port))
+        finally:
+            sink.close()
+        rows.append([n, network_count(n), f"{r['need']:.1f}", f"{r['us']:.1f}",
+                     f"{r['tele']:.0f}", f"{os.getloadavg()[0]:.1f}"])
+        print("  cost", rows[-1], flush=True)
+    return ("\nCPU one process needs for real time, measured flat out (--cost):\n"
+            + table(["N", "networks", "need % of a core", "us CPU / vehicle / s", "tele %",
+                     "load avg"], rows))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", default="10,50,100,250")
@@ -214,6 +274,8 @@ def main() -> None:
                    help="'issue': only issue 16's six streams (see above)")
     p.add_argument("--largest-step", type=int, default=500)
     p.add_argument("--largest-max", type=int, default=4000)
+    p.add_argument("--cost", metavar="SIZES", help="only the CPU needed, flat out (above)")
+    p.add_argument("--cost-seconds", type=float, default=10.0)
     p.add_argument("--quick", action="store_true",
                    help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2")
     args = p.parse_args()
@@ -231,6 +293,9 @@ def main() -> None:
           f"physics 50 Hz, {args.streams} streams ({NOMINAL:g} messages/s per vehicle), "
           f"client api {args.api}, 127.0.0.1")
     print(machine_line(), flush=True)
+    if args.cost:
+        print(run_cost([int(s) for s in args.cost.split(",")], args.cost_seconds))
+        return
     out = []
     if "alone" not in skip:
         rows = run_alone(sizes, args)

@@ -554,13 +554,14 @@ class Swarm:
         data, emit, start, ends = frames.data, self._emit, 0, frames.ends.tolist()
         if len(self.networks) == 1 and self.networks[0].send_frames(data, ends):
             return  # one shared network and a clean link: the whole batch at once
-        if net is not None and self._send_by_network(data, ends, net):
+        if net is not None and self._send_by_network(data, frames.ends, ends, net):
             return
         for k, end in zip(ks.tolist(), ends, strict=True):
             emit(k, data[start:end])
             start = end
 
-    def _send_by_network(self, data: bytes, ends: list[int], net: np.ndarray) -> bool:
+    def _send_by_network(self, data: bytes, ends_at: np.ndarray, ends: list[int],
+                         net: np.ndarray) -> bool:
         """Frames sorted by network (`net`: each one's network), each network's at once.
         False, sending nothing, when a network present cannot take a whole batch (a link
         with faults)."""
@@ -572,7 +573,7 @@ class Swarm:
         base = 0
         for j, first, last in zip(nets, present, bounds, strict=True):
             top = ends[last - 1]
-            self.networks[j].send_frames(data[base:top], [e - base for e in ends[first:last]])
+            self.networks[j].send_frames(data[base:top], (ends_at[first:last] - base).tolist())
             base = top
         return True
 
