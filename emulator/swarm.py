@@ -271,6 +271,18 @@ class Swarm:
     def connection_urls(self) -> list[str]:
         p = self.ports
         urls = []
+        count = len(self.networks)
+        if count > 1 and not p.per_vehicle:  # networks of 250 (emulator.networks)
+            if p.api_port:
+                urls.append(f"MAVSDK:         udpin://0.0.0.0:{p.api_port} .. "
+                            f"{p.api_port + count - 1} (one per network of 250)")
+            if p.gcs_port:
+                urls.append(f"QGroundControl: UDP {p.gcs_port} .. {p.gcs_port + count - 1}")
+            if self.endpoints:
+                first, last = (e.local_address[1] for e in (self.endpoints[0],
+                                                            self.endpoints[-1]))
+                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{first} .. {last}")
+            return urls
         if p.api_port:
             if p.per_vehicle:
                 urls.append(f"udpin://0.0.0.0:{p.api_port} .. {p.api_port + self.n - 1} "

@@ -9,18 +9,23 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import signal
+import time
 
 import numpy as np
 import pytest
 
 from emulator.clock import ClockConfig
 from emulator.flight.fleet import Fleet
+from emulator.mavlink.codec import mavlink
 from emulator.mavlink.frames import frame_batch
 from emulator.mavlink.telemetry import FleetTelemetry
 from emulator.networks import VEHICLES_PER_NETWORK, network_count, network_of, system_id
 from emulator.scenario import default_scenario
 from emulator.swarm import PortPlan, Swarm
+from tests.cli_fixtures import read_until, start_up
 from tests.mavlink_client import LoopErrors, MavClient
+from tests.test_telemetry_batch import _consecutive_udp_sockets
 
 CMD_REQUEST_MESSAGE = 512
 UID_BASE = 0x4D53570000000000  # AUTOPILOT_VERSION.uid = UID_BASE + fleet index + 1
@@ -97,3 +102,35 @@ async def test_networks_carry_their_own_vehicles_and_route_by_system_id() -> Non
         with contextlib.suppress(Exception):
             await swarm.close()
         errors.uninstall()
+
+
+@pytest.mark.slow
+def test_up_runs_networks_of_250_in_one_process() -> None:
+    receivers = _consecutive_udp_sockets(2)  # the two networks' API ports
+    api = receivers[0].getsockname()[1]
+    proc = start_up("--drones", "260", "--no-truth", "--bind-host", "127.0.0.1",
+                    "--bind-port", "0", "--api-port", str(api), "--gcs-port", "0")
+    try:
+        text = read_until(proc, "MAVProxy", timeout_s=60.0)
+        assert "[nets 0-1] 260 vehicles" in text
+        assert f"udpin://0.0.0.0:{api} .. {api + 1} (one per network of 250)" in text
+        expected = [set(range(1, 251)), set(range(1, 11))]
+        seen: list[set[int]] = [set(), set()]
+        parsers = [mavlink.MAVLink(None), mavlink.MAVLink(None)]
+        deadline = time.monotonic() + 10.0
+        while seen != expected and time.monotonic() < deadline:
+            time.sleep(0.05)
+            for j, sock in enumerate(receivers):
+                with contextlib.suppress(BlockingIOError):
+                    while True:
+                        for m in parsers[j].parse_buffer(sock.recv(65535)) or []:
+                            if m.get_type() == "HEARTBEAT" and m.get_srcComponent() == 1:
+                                seen[j].add(m.get_srcSystem())
+        assert seen == expected
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=30)
+        for sock in receivers:
+            sock.close()
+    assert proc.returncode == 0, out
+    assert "stopping after" in out
