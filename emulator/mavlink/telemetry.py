@@ -176,7 +176,9 @@ class FleetTelemetry:
         lat, lon, alt = self._geo(p[:, 0], p[:, 1], p[:, 2])
         v = dyn.velocity_m_s[ks]
         hdg = _rint(dyn.yaw_deg[ks] * 100.0) % 36000
-        rel_mm = _rint((p[:, 2] - self._homes(ks)[:, 2]) * 1000.0)
+        aps = self.fleet.autopilots
+        home_z = np.array([aps[k].state.home_m[2] for k in ks.tolist()], dtype=float)
+        rel_mm = _rint((p[:, 2] - home_z) * 1000.0)
         return (self._time_boot_ms(), lat, lon, alt, rel_mm, _rint(v[:, 1] * 100.0),
                 _rint(v[:, 0] * 100.0), _rint(-v[:, 2] * 100.0), hdg)
 
