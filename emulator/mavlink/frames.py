@@ -168,19 +168,22 @@ def frame_batch(parts: Sequence[FramePart], order: np.ndarray | None = None) -> 
     at = np.arange(rows)
     tail = HEADER_LEN + lengths
     m[at, tail] = extra
-    # The checksum covers bytes 1 .. tail (header after STX, payload, CRC_EXTRA): two bytes
-    # per step, each row's register kept after every step, read back after its last word.
+    # The checksum covers bytes 1 .. tail (header after STX, payload, CRC_EXTRA), two bytes
+    # per step. With the rows longest first, step j updates only the rows that have a word j:
+    # a prefix, which stops moving once a row's words are done.
     words = tail // 2
     n_words = int(words.max())
-    w = np.ascontiguousarray(m[:, 1:1 + 2 * n_words]).view("<u2").T.copy()
-    history = np.empty((n_words, rows), dtype=np.uint16)
+    longest = np.argsort(-words, kind="stable")
+    w = m[longest, 1:1 + 2 * n_words].view("<u2").T.copy()
+    active = np.searchsorted(-words[longest], -np.arange(n_words), side="left").tolist()
     crc = np.full(rows, 0xFFFF, dtype=np.uint16)
     mixed = np.empty(rows, dtype=np.uint16)
     take, xor = _T16.take, np.bitwise_xor
-    for j in range(n_words):
-        xor(crc, w[j], out=mixed)
-        crc = take(mixed, out=history[j])
-    state = history[words - 1, at]
+    for j, count in enumerate(active):
+        xor(crc[:count], w[j, :count], out=mixed[:count])
+        take(mixed[:count], out=crc[:count])
+    state = np.empty(rows, dtype=np.uint16)
+    state[longest] = crc
     odd = (tail & 1).astype(bool)
     if odd.any():
         last = m[at, 1 + 2 * words]
