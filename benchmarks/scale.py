@@ -2,12 +2,13 @@
 
     ./dev bench scale [--sizes 10,50,100,250] [--window 15] [--alone-window 10]
                       [--networks 4] [--clients 4,1] [--api asyncio|callback]
-                      [--streams default|issue] [--largest-step 500] [--largest-max 4000]
+                      [--streams default|issue] [--largest-step 1000] [--largest-max 20000]
                       [--skip alone,largest,client,multi] [--profile FILE] [--quick]
                       [--cost 1000,10000 [--cost-seconds 10]]
 
     --quick   = --sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2
-                (about a minute: the targets' figures and the largest N, alone)
+                --largest-step 2500 (a few minutes: the targets' figures and the largest N
+                alone, to 2,500 vehicles)
 
 Each emulator is `Swarm(default_scenario(N))` in its own process at speed 1 (real-time
 pacing, 50 Hz physics; above 250 vehicles, the swarm's MAVLink networks of 250, a socket
@@ -58,7 +59,7 @@ from _common import Emulator, UdpSink, free_udp_port, host_busy_s, machine_line,
 from _mavsdk import Client
 
 from emulator.mavlink.streams import DEFAULT_STREAMS
-from emulator.networks import network_count
+from emulator.networks import MAX_FLEET_VEHICLES, network_count
 
 RTF_OK = 0.995  # the window edges are quantised to one 20 ms physics step
 TELE_OK = 99.0  # % of the nominal telemetry sent
@@ -272,16 +273,17 @@ def main() -> None:
     p.add_argument("--profile", metavar="FILE", help="then cProfile N=max(sizes) with client")
     p.add_argument("--streams", choices=("default", "issue"), default="default",
                    help="'issue': only issue 16's six streams (see above)")
-    p.add_argument("--largest-step", type=int, default=500)
-    p.add_argument("--largest-max", type=int, default=4000)
+    p.add_argument("--largest-step", type=int, default=1000)
+    p.add_argument("--largest-max", type=int, default=MAX_FLEET_VEHICLES)
     p.add_argument("--cost", metavar="SIZES", help="only the CPU needed, flat out (above)")
     p.add_argument("--cost-seconds", type=float, default=10.0)
     p.add_argument("--quick", action="store_true",
-                   help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2")
+                   help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2 "
+                        "--largest-step 2500")
     args = p.parse_args()
     if args.quick:
         args.sizes, args.skip = "250,1000", ",".join({"client", "multi", *args.skip.split(",")})
-        args.alone_window, args.warmup = 5.0, 2.0
+        args.alone_window, args.warmup, args.largest_step = 5.0, 2.0, 2500
     global NOMINAL
     if args.streams == "issue":
         STREAM_HZ.update({s.name: 0.0 for s in DEFAULT_STREAMS if s.name not in ISSUE_STREAMS})
