@@ -279,9 +279,10 @@ class Swarm:
             if p.gcs_port:
                 urls.append(f"QGroundControl: UDP {p.gcs_port} .. {p.gcs_port + count - 1}")
             if self.endpoints:
-                first, last = (e.local_address[1] for e in (self.endpoints[0],
-                                                            self.endpoints[-1]))
-                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{first} .. {last}")
+                first = self.endpoints[0].local_address[1]
+                where = (f"{first} .. {first + count - 1}" if p.bind_port else
+                         f"{first} (network 0; each network's port chosen by the OS)")
+                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{where}")
             return urls
         if p.api_port:
             if p.per_vehicle:

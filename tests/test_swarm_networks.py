@@ -114,6 +114,7 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
         text = read_until(proc, "MAVProxy", timeout_s=60.0)
         assert "[nets 0-1] 260 vehicles" in text
         assert f"udpin://0.0.0.0:{api} .. {api + 1} (one per network of 250)" in text
+        assert "each network's port chosen by the OS" in text
         expected = [set(range(1, 251)), set(range(1, 11))]
         seen: list[set[int]] = [set(), set()]
         parsers = [mavlink.MAVLink(None), mavlink.MAVLink(None)]
