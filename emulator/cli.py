@@ -6,7 +6,6 @@ import argparse
 import asyncio
 import contextlib
 import json
-import math
 import multiprocessing
 import os
 import signal
@@ -16,7 +15,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from emulator.capacity import MAX_VEHICLES_PER_NETWORK, Machine, check_capacity
+from emulator.capacity import (
+    MAX_VEHICLES_PER_NETWORK,
+    Machine,
+    check_capacity,
+    process_networks,
+)
 from emulator.clock import ClockConfig
 from emulator.link_faults import (
     LinkFaults,
@@ -194,22 +198,30 @@ def _up(args: argparse.Namespace) -> int:
 
 
 def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> int:
-    """More than 250 vehicles: one process per MAVLink network of at most 250."""
-    count = math.ceil(total / MAX_VEHICLES_PER_NETWORK)
-    link_faults = _link_faults(args, None)
+    """More than 250 vehicles: MAVLink networks of at most 250, network j at ports bind + j,
+    api + j and gcs + j, in as few processes as hold them (emulator.capacity)."""
     bind = args.bind_port if args.bind_port is not None else 14580
+    layout = PortPlan(bind_host=args.bind_host, bind_port=bind, api_port=args.api_port,
+                      gcs_port=args.gcs_port)
+    layout.check(total)  # every network's ports, before any process starts
+    link_faults = _link_faults(args, None)
+    plan = process_networks(total)
     procs = []
-    for j in range(count):
-        n = min(MAX_VEHICLES_PER_NETWORK, total - j * MAX_VEHICLES_PER_NETWORK)
-        ports = PortPlan(bind_host=args.bind_host, bind_port=bind + j,
+    for nets in plan:
+        j = nets.start
+        n = min(total, nets.stop * MAX_VEHICLES_PER_NETWORK) - j * MAX_VEHICLES_PER_NETWORK
+        ports = PortPlan(bind_host=args.bind_host, bind_port=bind + j if bind else 0,
                          api_port=args.api_port + j if args.api_port else 0,
                          gcs_port=args.gcs_port + j if args.gcs_port else 0)
-        truth = args.truth_out.with_suffix(f".net{j}.npz") if args.truth_out else None
+        name = f"net{j}" if len(nets) == 1 else f"nets{j}-{nets.stop - 1}"
+        truth = args.truth_out.with_suffix(f".{name}.npz") if args.truth_out else None
+        label = f"[net {j}] " if len(nets) == 1 else f"[nets {j}-{nets.stop - 1}] "
         proc = multiprocessing.Process(
-            target=_run_network, args=(default_scenario(n), clock, ports, f"[net {j}] ", truth,
-                                       tuple(getattr(args, "attachments", ())), j,
-                                       link_faults, getattr(args, "shared_local_origin", False)),
-            name=f"mavswarm-net{j}",
+            target=_run_network, args=(default_scenario(n), clock, ports, label, truth,
+                                       tuple(getattr(args, "attachments", ())),
+                                       None if len(plan) == 1 else j, link_faults,
+                                       getattr(args, "shared_local_origin", False)),
+            name=f"mavswarm-{name}",
         )
         proc.start()
         procs.append(proc)

@@ -28,6 +28,7 @@ from emulator.flight.battery import FleetBattery
 from emulator.flight.dynamics import FleetDynamics
 from emulator.flight.listener import SilentListener
 from emulator.mavlink.vehicle_link import VehicleLink
+from emulator.networks import VEHICLES_PER_NETWORK
 from emulator.scenario import VehicleSpec
 from emulator.truth_events import TruthEventKind
 
@@ -37,9 +38,9 @@ if TYPE_CHECKING:
 
 __all__ = ["MAX_VEHICLES", "join", "leave", "present_ids"]
 
-MAX_VEHICLES = 250
-"""A fleet's limit (emulator.flight.dynamics), counting vehicles that left: MAVLink system ids
-are never reused within a run."""
+MAX_VEHICLES = VEHICLES_PER_NETWORK
+"""A joinable swarm's limit (one MAVLink network), counting vehicles that left: MAVLink system
+ids are never reused within a run."""
 
 _DYN_ROWS = ("position_m", "velocity_m_s", "accel_m_s2", "yaw_deg", "control", "goal_m",
              "goal_yaw_deg", "velocity_sp_m_s", "tracking", "yaw_tracking", "_lim_h", "_lim_v",
@@ -122,7 +123,7 @@ def join(swarm: Swarm, spec: VehicleSpec) -> int:
     wall = time.monotonic()
     swarm.streams.add_vehicle(wall)
     telemetry = swarm.telemetry
-    telemetry.system_ids = np.append(telemetry.system_ids, np.uint8(k + 1))
+    telemetry.system_ids = np.append(telemetry.system_ids, np.uint8(ap.system_id))
     network = swarm.networks[0]
     link = VehicleLink(ap, network.send_frame, swarm.streams, time.monotonic)
     swarm.links.append(link)
@@ -133,10 +134,10 @@ def join(swarm: Swarm, spec: VehicleSpec) -> int:
             other.encoder(component).share_sequence(grown, other.k)
         grown[:k] = sequences
         telemetry.sequences[component] = grown
-    link.on_mavlink_signal = swarm.faults.mavlink_signal_changed
+    swarm.hook_link(link)
     network.add(link)
     swarm.watches.add_vehicle()
-    ap.event(TruthEventKind.JOINED, system_id=k + 1,
+    ap.event(TruthEventKind.JOINED, system_id=ap.system_id,
              position_m=[float(v) for v in dyn.position_m[k]])
     swarm.send_telemetry_of(spec.id)
     return k
@@ -151,7 +152,8 @@ def leave(swarm: Swarm, drone_id: str) -> None:
         raise KeyError(f"drone {drone_id!r} is not in the swarm")
     ap = fleet.autopilots[k]
     dyn = fleet.dyn
-    ap.event(TruthEventKind.LEFT, system_id=k + 1, position_m=[float(v) for v in dyn.position_m[k]])
+    ap.event(TruthEventKind.LEFT, system_id=ap.system_id,
+             position_m=[float(v) for v in dyn.position_m[k]])
     ap.listener = SilentListener()
     ap.mission.pause()
     ap.cancel_timer()

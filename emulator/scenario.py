@@ -21,6 +21,7 @@ import numpy as np
 import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin, wrap_heading_deg
+from emulator.networks import MAX_FLEET_VEHICLES
 from emulator.reference_mapping import (
     capacity_mah,
     home_altitude_m,
@@ -422,11 +423,13 @@ def load_scenario(path: str | Path) -> Scenario:
 def default_scenario(drone_count: int, *, origin: GeoOrigin = DEFAULT_ORIGIN) -> Scenario:
     """drone_count drones on the ground in rows of 10 at 5 m spacing from (0, 0), and a small
     demo world 60-400 m away: 3 fixed targets, a circle area, a charging station and one
-    obstacle of each kind."""
+    obstacle of each kind. Above 250 drones the fleet is several MAVLink networks
+    (emulator.networks)."""
     if isinstance(drone_count, bool) or not isinstance(drone_count, int):
         raise ValueError(f"drone_count must be an integer, got {drone_count!r}")
-    if not 1 <= drone_count <= 250:
-        raise ValueError(f"drone_count must be between 1 and 250, got {drone_count}")
+    if not 1 <= drone_count <= MAX_FLEET_VEHICLES:
+        raise ValueError(f"drone_count must be between 1 and {MAX_FLEET_VEHICLES}, "
+                         f"got {drone_count}")
     vehicles = tuple(
         VehicleSpec(
             id=f"d{k + 1}", name=f"Drone {k + 1}", model=DEFAULT_MODEL,

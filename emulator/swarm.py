@@ -23,6 +23,7 @@ from emulator.mavlink.protocol import Address, NetworkProtocol
 from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
+from emulator.networks import VEHICLES_PER_NETWORK, network_count
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
 from emulator.swarm_faults import SwarmFaults
@@ -50,6 +51,9 @@ class PortPlan:
     `api_port` (MAVSDK: ``udpin://0.0.0.0:14540``) and `gcs_port` (QGroundControl).
     Per-vehicle: vehicle k binds `bind_port + k - 1` and sends to `api_port + k - 1` and
     `gcs_port`, PX4 multi-instance style. 0 for `api_port`/`gcs_port` disables that target.
+    Shared with more than 250 vehicles: one socket per MAVLink network of 250
+    (emulator.networks); network j binds `bind_port + j` (all OS-chosen when `bind_port` is 0)
+    and sends to `api_port + j` and `gcs_port + j`, as if each were a swarm of its own.
     """
 
     bind_host: str = "0.0.0.0"
@@ -65,8 +69,7 @@ class PortPlan:
             if not 0 <= port <= 65535:
                 raise ValueError(f"{name} {port} outside 0..65535")
         if not self.per_vehicle:
-            if self.bind_port and self.bind_port in (self.api_port, self.gcs_port):
-                raise ValueError(f"bind port {self.bind_port} is also a destination port")
+            self._check_networks(network_count(n))
             return
         if self.bind_port == 0:
             raise ValueError("per-vehicle ports need an explicit bind port base")
@@ -83,6 +86,26 @@ class PortPlan:
             )
         if binds.stop - 1 > 65535 or (apis and apis.stop - 1 > 65535):
             raise ValueError("port range exceeds 65535")
+
+
+    def _check_networks(self, count: int) -> None:
+        """Shared sockets: `count` networks at bind/api/gcs port + j (see the class)."""
+        def span(port: int) -> range:
+            return range(port, port + count) if port else range(0)
+
+        binds, apis, gcs = span(self.bind_port), span(self.api_port), span(self.gcs_port)
+        for name, ports in (("bind", binds), ("API", apis), ("GCS", gcs)):
+            if ports and ports.stop - 1 > 65535:
+                raise ValueError(f"{count} networks need {name} ports {ports.start}-"
+                                 f"{ports.stop - 1}, beyond 65535")
+        if set(binds) & (set(apis) | set(gcs)):
+            if count == 1:
+                raise ValueError(f"bind port {self.bind_port} is also a destination port")
+            raise ValueError(f"{count} networks' bind ports {binds.start}-{binds.stop - 1} "
+                             "overlap their destination ports")
+        if count > 1 and set(apis) & set(gcs):
+            raise ValueError(f"{count} networks' API ports {apis.start}-{apis.stop - 1} "
+                             f"overlap their GCS ports {gcs.start}-{gcs.stop - 1}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -128,8 +151,13 @@ class Swarm:
         # One MAVLink network (emulator.mavlink.protocol) per socket: all vehicles, or one
         # each per-vehicle. A link's replies go straight into its network's queue.
         p = self.ports
-        groups = [[k] for k in range(self.fleet.n)] if p.per_vehicle else [
-            list(range(self.fleet.n))]
+        n = self.fleet.n
+        groups = [[k] for k in range(n)] if p.per_vehicle else [
+            list(range(j, min(n, j + VEHICLES_PER_NETWORK)))
+            for j in range(0, n, VEHICLES_PER_NETWORK)]
+        # each telemetry row's network when several share the batches (None: one, or one each)
+        self._network_index = (np.arange(n) // VEHICLES_PER_NETWORK
+                               if len(groups) > 1 and not p.per_vehicle else None)
         self.networks = [NetworkProtocol(self._destinations(i), self.faults.gate)
                          for i in range(len(groups))]
         self.network_of = [self.networks[0]] * self.fleet.n
@@ -148,8 +176,12 @@ class Swarm:
         for link in self.links:
             for component, sequences in self.telemetry.sequences.items():
                 link.encoder(component).share_sequence(sequences, link.k)
+        # The links that may have a wall-clock duty (VehicleLink.needs_tick): a link joins
+        # when it gets a message, its vehicle's state changes or it has a gimbal, and leaves
+        # when a tick finds it without one, so idle vehicles cost nothing per link tick.
+        self._tick_candidates: set[int] = set()
         for link in self.links:
-            link.on_mavlink_signal = self.faults.mavlink_signal_changed
+            self.hook_link(link)
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
@@ -178,16 +210,16 @@ class Swarm:
         p = self.ports
         dests = []
         if p.api_port:
-            dests.append((p.api_host, p.api_port + (i if p.per_vehicle else 0)))
+            dests.append((p.api_host, p.api_port + i))
         if p.gcs_port:
-            dests.append((p.api_host, p.gcs_port))
+            dests.append((p.api_host, p.gcs_port + (0 if p.per_vehicle else i)))
         return dests
 
     async def start(self) -> None:
         p = self.ports
         try:
             for i, network in enumerate(self.networks):
-                port = p.bind_port + i if p.per_vehicle else p.bind_port
+                port = p.bind_port + i if p.bind_port else 0
                 endpoint = UdpEndpoint(network, time.monotonic, self._wake.set)
                 endpoint.open(p.bind_host, port)
                 self.endpoints.append(endpoint)
@@ -215,6 +247,13 @@ class Swarm:
             if not fut.done():
                 fut.cancel()
 
+    def hook_link(self, link: VehicleLink) -> None:
+        """Hear what a vehicle's link tells the swarm (its MAVLink signal, its duties)."""
+        link.on_mavlink_signal = self.faults.mavlink_signal_changed
+        link.on_tick_duty = self._tick_candidates.add
+        if link.needs_tick:
+            self._tick_candidates.add(link.k)
+
     def _emit(self, k: int, data: bytes) -> None:
         """One telemetry frame of vehicle k into its network's queue."""
         self.network_of[k].send_frame(k, data)
@@ -232,6 +271,19 @@ class Swarm:
     def connection_urls(self) -> list[str]:
         p = self.ports
         urls = []
+        count = len(self.networks)
+        if count > 1 and not p.per_vehicle:  # networks of 250 (emulator.networks)
+            if p.api_port:
+                urls.append(f"MAVSDK:         udpin://0.0.0.0:{p.api_port} .. "
+                            f"{p.api_port + count - 1} (one per network of 250)")
+            if p.gcs_port:
+                urls.append(f"QGroundControl: UDP {p.gcs_port} .. {p.gcs_port + count - 1}")
+            if self.endpoints:
+                first = self.endpoints[0].local_address[1]
+                where = (f"{first} .. {first + count - 1}" if p.bind_port else
+                         f"{first} (network 0; each network's port chosen by the OS)")
+                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{where}")
+            return urls
         if p.api_port:
             if p.per_vehicle:
                 urls.append(f"udpin://0.0.0.0:{p.api_port} .. {p.api_port + self.n - 1} "
@@ -462,9 +514,14 @@ class Swarm:
 
     def tick_links(self, wall_now_s: float) -> None:
         """The links' wall-clock duties: mission item retries, the offboard failsafe."""
-        for link in self.links:
-            if link.needs_tick and link.k not in self.left:
+        links, idle = self.links, []
+        for k in sorted(self._tick_candidates):
+            link = links[k]
+            if not link.needs_tick:
+                idle.append(k)
+            elif k not in self.left:
                 link.tick(wall_now_s)
+        self._tick_candidates.difference_update(idle)
 
     def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
         """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together
@@ -493,20 +550,45 @@ class Swarm:
                 network.end_batch()
 
     def _emit_parts(self, parts: list[FramePart], order: list[np.ndarray]) -> None:
+        ks = np.concatenate(order)
+        rows = net = None
+        if self._network_index is not None:  # several networks: each one's frames together
+            net = self._network_index[ks]
+            rows = np.argsort(net, kind="stable")
+            ks, net = ks[rows], net[rows]
         try:
-            frames = frame_batch(parts)
+            frames = frame_batch(parts, rows)
         except Exception:  # the I/O edge: log, count, send them one by one
             self._telemetry_errors += 1
             log.exception("framing a telemetry batch failed")
-            for part, ks in zip(parts, order, strict=True):
-                self._send_one_by_one(part.layout.msg_id, ks)
+            for part, part_ks in zip(parts, order, strict=True):
+                self._send_one_by_one(part.layout.msg_id, part_ks)
             return
         data, emit, start, ends = frames.data, self._emit, 0, frames.ends.tolist()
         if len(self.networks) == 1 and self.networks[0].send_frames(data, ends):
             return  # one shared network and a clean link: the whole batch at once
-        for k, end in zip(np.concatenate(order).tolist(), ends, strict=True):
+        if net is not None and self._send_by_network(data, frames.ends, ends, net):
+            return
+        for k, end in zip(ks.tolist(), ends, strict=True):
             emit(k, data[start:end])
             start = end
+
+    def _send_by_network(self, data: bytes, ends_at: np.ndarray, ends: list[int],
+                         net: np.ndarray) -> bool:
+        """Frames sorted by network (`net`: each one's network), each network's at once.
+        False, sending nothing, when a network present cannot take a whole batch (a link
+        with faults)."""
+        present = np.flatnonzero(np.diff(net, prepend=-1)).tolist()  # first row of each
+        nets = net[present].tolist()
+        if not all(self.networks[j].can_send_frames() for j in nets):
+            return False
+        bounds = [*present[1:], len(ends)]
+        base = 0
+        for j, first, last in zip(nets, present, bounds, strict=True):
+            top = ends[last - 1]
+            self.networks[j].send_frames(data[base:top], (ends_at[first:last] - base).tolist())
+            base = top
+        return True
 
     def _send_one_by_one(self, msg_id: int, ks: np.ndarray) -> None:
         for k in ks.tolist():

@@ -14,6 +14,8 @@ import math
 import multiprocessing
 import os
 import platform
+import random
+import select
 import socket
 import threading
 import time
@@ -24,7 +26,6 @@ from emulator.clock import ClockConfig
 
 LOOPBACK = "127.0.0.1"
 _SPAWN = multiprocessing.get_context("spawn")
-NETWORK_MAX = 250  # vehicles per swarm (MAVLink network) in one emulator process
 
 
 def free_udp_port() -> int:
@@ -148,9 +149,9 @@ def _serve_commands(conn, snap, stop: asyncio.Event, extra=None) -> None:
 class Emulator(_Child):
     """`Swarm(default_scenario(n))` alone in a child process, sending to 127.0.0.1:api_port.
 
-    Above 250 vehicles the child runs swarms of 250 (one MAVLink network each, system ids
-    1-250) side by side in its one process and event loop; snap() then sums their counters
-    and reports the slowest one's simulated time.
+    Above 250 vehicles the swarm is several MAVLink networks of 250 (system ids 1-250 each,
+    emulator.networks), one socket each, in its one process and event loop: network j sends
+    to api_port + j.
 
     Shared-socket topology (one socket for all vehicles, bound to an OS-chosen port), no
     GCS destination. `snap()` returns wall/cpu and the swarm's stats (sim time, datagrams).
@@ -192,33 +193,24 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
 
     ports = PortPlan(bind_host=LOOPBACK, bind_port=0, api_host=LOOPBACK, api_port=api_port,
                      gcs_port=0)
-    # MAVLink system ids are 1-255 per network: beyond 250 vehicles the process runs several
-    # swarms of at most 250, each on its own socket, all in this one process and event loop.
-    sizes = [min(NETWORK_MAX, n - i) for i in range(0, n, NETWORK_MAX)]
-    swarms = [Swarm(default_scenario(m), clock=clock, ports=ports,
-                    telemetry_hz=telemetry_hz or None) for m in sizes]
-    swarm = swarms[0]
+    swarm = Swarm(default_scenario(n), clock=clock, ports=ports,
+                  telemetry_hz=telemetry_hz or None)
     stop = asyncio.Event()
 
     def snap() -> dict:
-        stats = [s.stats() for s in swarms]
-        d = {"wall": time.monotonic(), "cpu": time.process_time(), **asdict(stats[0]),
-             "sim": min(s.sim_time_s for s in stats),
-             "out": sum(s.frames_out for s in stats),
-             "dgrams": sum(s.datagrams_out for s in stats),
-             "in": sum(s.datagrams_in for s in stats),
-             "slipped": max(s.slipped_s for s in stats),
-             "send_errors": sum(e.stats.send_errors for s in swarms for e in s.endpoints)}
-        return d
+        stats = swarm.stats()
+        return {"wall": time.monotonic(), "cpu": time.process_time(), **asdict(stats),
+                "sim": stats.sim_time_s, "out": stats.frames_out,
+                "dgrams": stats.datagrams_out, "in": stats.datagrams_in,
+                "slipped": stats.slipped_s,
+                "send_errors": sum(e.stats.send_errors for e in swarm.endpoints)}
 
     def events() -> list[tuple[int, str, float]]:
         kinds = ("mission_start", "mission_complete")
         return [(swarm.fleet.index_by_id[e.vehicle_id], e.kind, e.t_s)
                 for e in swarm.recorder.events(kinds=kinds)]
 
-    async with contextlib.AsyncExitStack() as stack:
-        for s in swarms:
-            await stack.enter_async_context(s)
+    async with swarm:
         conn.send(("ready", swarm.endpoints[0].local_address[1]))
         _serve_commands(conn, snap, stop, {"events": events})
         await stop.wait()
@@ -226,18 +218,17 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
 
 # ---------------------------------------------------------------------------------- sink
 class UdpSink:
-    """A bound socket on 127.0.0.1 that a thread drains (so no ICMP unreachable, no drops).
+    """Bound sockets on 127.0.0.1 that a thread drains (so no ICMP unreachable, no drops):
+    `ports` consecutive ports from `self.port` (one per network of a swarm above 250).
 
     The thread wakes every `period_s` and reads everything queued (4 MiB receive buffer),
     so the emulator's sendto never has to wake a sleeping reader (on this VM that costs the
     sender about 5 us per datagram): emulator-only numbers measure the emulator.
     """
 
-    def __init__(self, period_s: float = 0.002) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
-        self.sock.bind((LOOPBACK, 0))
-        self.sock.setblocking(False)
+    def __init__(self, period_s: float = 0.002, ports: int = 1) -> None:
+        self.socks = _bind_consecutive(ports)
+        self.sock = self.socks[0]
         self.port = self.sock.getsockname()[1]
         self.count = 0
         self.mark = 0
@@ -248,18 +239,42 @@ class UdpSink:
 
     def _drain(self) -> None:
         buf = bytearray(4096)
-        recv = self.sock.recv_into
+        socks = self.socks
         while not self._stop.wait(self._period_s):
             try:
-                while True:
-                    recv(buf)
-                    self.count += 1
-            except BlockingIOError:
-                pass
-            except OSError:
+                ready = select.select(socks, [], [], 0)[0] if len(socks) > 1 else socks
+                for sock in ready:
+                    recv = sock.recv_into
+                    try:
+                        while True:
+                            recv(buf)
+                            self.count += 1
+                    except BlockingIOError:
+                        pass
+            except (OSError, ValueError):  # closed
                 return
 
     def close(self) -> None:
         self._stop.set()
         self._thread.join(2)
-        self.sock.close()
+        for sock in self.socks:
+            sock.close()
+
+
+def _bind_consecutive(count: int) -> list[socket.socket]:
+    """`count` non-blocking UDP sockets on consecutive ports of 127.0.0.1 (4 MiB buffers)."""
+    for _ in range(200):
+        base = 0 if count == 1 else random.randrange(20000, 60000 - count)
+        socks: list[socket.socket] = []
+        try:
+            for j in range(count):
+                sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                socks.append(sock)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+                sock.bind((LOOPBACK, base + j if base else 0))
+                sock.setblocking(False)
+            return socks
+        except OSError:
+            for sock in socks:
+                sock.close()
+    raise OSError(f"no {count} consecutive free UDP ports on {LOOPBACK}")

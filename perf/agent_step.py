@@ -2,7 +2,7 @@
 gateway, flight in stepped time, agent logic), with a scripted model in process that answers
 at once, so the outside share is the platform's own cost per step.
 
-    ./dev bench agent_step [--tasks 5]
+    ./dev perf agent_step [--tasks 5]
 """
 
 from __future__ import annotations

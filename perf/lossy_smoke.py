@@ -1,7 +1,7 @@
 """The oracle over the smoke suite through faulty links: pass rate, wall-time cost, and whether
 the same seed gives the same truth.
 
-    ./dev bench lossy_smoke [--loss 0.2] [--latency-ms 50] [--jitter-ms 20] [--seed 1]
+    ./dev perf lossy_smoke [--loss 0.2] [--latency-ms 50] [--jitter-ms 20] [--seed 1]
                             [--runs 2] [--sessions ID ...]
 
 Runs the smoke sessions' first 6 tasks with the oracle on a lockstep clock, once on a clean

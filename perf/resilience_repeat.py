@@ -1,7 +1,7 @@
 """Shipped resilience sessions flown twice by the oracle: whether the same seed gives the same
 truth and verdicts with the tasks' faults striking.
 
-    ./dev bench resilience_repeat [--sessions ID ...] [--tasks N] [--runs 2]
+    ./dev perf resilience_repeat [--sessions ID ...] [--tasks N] [--runs 2]
 
 Runs each session's first N tasks (default all 20) with the oracle on a lockstep clock, --runs
 times, each run in a fresh swarm. For each task it keeps the record (wall-clock fields and the

@@ -2,15 +2,17 @@
 
     ./dev perf scale [--sizes 10,50,100,250] [--window 15] [--alone-window 10]
                       [--networks 4] [--clients 4,1] [--api asyncio|callback]
-                      [--streams default|issue] [--largest-step 500] [--largest-max 4000]
+                      [--streams default|issue] [--largest-step 1000] [--largest-max 20000]
                       [--skip alone,largest,client,multi] [--profile FILE] [--quick]
+                      [--cost 1000,10000 [--cost-seconds 10]]
 
     --quick   = --sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2
-                (about a minute: the targets' figures and the largest N, alone)
+                --largest-step 2500 (a few minutes: the targets' figures and the largest N
+                alone, to 2,500 vehicles)
 
 Each emulator is `Swarm(default_scenario(N))` in its own process at speed 1 (real-time
-pacing, 50 Hz physics; above 250 vehicles, swarms of 250 side by side in that one process,
-as MAVLink system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
+pacing, 50 Hz physics; above 250 vehicles, the swarm's MAVLink networks of 250, a socket
+each, as system ids stop at 255), shared-socket topology on 127.0.0.1, default telemetry streams
 (HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, GPS_RAW_INT, MISSION_CURRENT, camera HEARTBEAT
 1 Hz; GLOBAL_POSITION_INT, LOCAL_POSITION_NED, ATTITUDE 10 Hz; VFR_HUD 2 Hz; BATTERY_STATUS,
 HOME_POSITION 0.5 Hz), sending to one destination port and no GCS port. Vehicles sit on the
@@ -24,6 +26,14 @@ ground (telemetry cost does not depend on flying).
   multi   `--networks` emulator processes of 250 (separate ports), alone, then with K
           clients for each K in --clients (client j on network j)
 
+--cost N,...: instead of the above, the CPU one process needs per second of real time for N
+vehicles, measured flat out so a busy machine cannot starve it: the swarm of N (MAVLink
+networks of 250, real sockets, into a drained sink) with its scheduler idle, driven turn by turn
+as the real-time scheduler drives it (a 20 ms turn: one 50 Hz physics step, the telemetry due,
+the link ticks every 50 ms, the datagrams sent) on a simulated wall clock, for --cost-seconds.
+"need %" = this thread's CPU s / simulated s (the event loop's sleeps and wake-ups are left
+out); the real-time run above is what shows it holding.
+
 --streams issue keeps only issue 16's "full telemetry" (HEARTBEAT, SYS_STATUS,
 EXTENDED_SYS_STATE 1 Hz; GLOBAL_POSITION_INT, ATTITUDE, LOCAL_POSITION_NED 10 Hz: 33 messages/s
 per vehicle); the default streams are a superset of it (39/s).
@@ -36,6 +46,7 @@ simulated time the clock gave up because the process could not keep up.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import contextlib
 import os
 import pstats
@@ -48,6 +59,7 @@ from _common import Emulator, UdpSink, free_udp_port, host_busy_s, machine_line,
 from _mavsdk import Client
 
 from emulator.mavlink.streams import DEFAULT_STREAMS
+from emulator.networks import MAX_FLEET_VEHICLES, network_count
 
 RTF_OK = 0.995  # the window edges are quantised to one 20 ms physics step
 TELE_OK = 99.0  # % of the nominal telemetry sent
@@ -96,7 +108,7 @@ def measure(emus: list[Emulator], clients: list[Client], warmup_s: float, window
 
 
 def alone_row(n: int, args) -> list:
-    sink = UdpSink()
+    sink = UdpSink(ports=network_count(n))  # network j of the swarm sends to port + j
     try:
         with Emulator(n, sink.port, telemetry_hz=STREAM_HZ,
                       timeout_s=60.0 + n / 20.0) as emu:
@@ -198,6 +210,56 @@ def profile(n: int, path: str, args) -> None:
     st.sort_stats("tottime").print_stats(20)
 
 
+async def _drive(n: int, seconds: float, sink_port: int) -> dict[str, float]:
+    from emulator.clock import ClockConfig
+    from emulator.scenario import default_scenario
+    from emulator.swarm import PortPlan, Swarm
+
+    swarm = Swarm(default_scenario(n), clock=ClockConfig(stepped=True),
+                  ports=PortPlan(bind_host="127.0.0.1", bind_port=0, api_host="127.0.0.1",
+                                 api_port=sink_port, gcs_port=0),
+                  telemetry_hz=STREAM_HZ or None)
+    async with swarm:
+        # the swarm's own scheduler stays idle: nothing flies, and its telemetry is due on a
+        # clock a day ahead, the one this loop drives
+        now = time.monotonic() + 86_400.0
+        swarm.streams.next_due_s += now - swarm.streams.next_wakeup_s()
+        fleet, turn_s, next_link = swarm.fleet, 0.02, now
+        turns = round(seconds / turn_s)
+        out0 = swarm.stats().frames_out
+        cpu0 = time.thread_time()
+        for _ in range(turns):
+            now += turn_s
+            fleet.step()
+            swarm.faults.fire_due()
+            if now >= next_link:
+                next_link = now + 0.05
+                swarm.tick_links(now)
+            swarm.send_due_telemetry(now)
+            await asyncio.sleep(0)  # the transports send what was queued
+        cpu = time.thread_time() - cpu0
+        out = swarm.stats().frames_out - out0
+        sim = turns * turn_s
+    return {"need": 100 * cpu / sim, "us": 1e6 * cpu / sim / n, "tele": 100 * out / sim / n /
+            NOMINAL}
+
+
+def run_cost(sizes: list[int], seconds: float) -> str:
+    rows = []
+    for n in sizes:
+        sink = UdpSink(ports=network_count(n))
+        try:
+            r = asyncio.run(_drive(n, seconds, sink.port))
+        finally:
+            sink.close()
+        rows.append([n, network_count(n), f"{r['need']:.1f}", f"{r['us']:.1f}",
+                     f"{r['tele']:.0f}", f"{os.getloadavg()[0]:.1f}"])
+        print("  cost", rows[-1], flush=True)
+    return ("\nCPU one process needs for real time, measured flat out (--cost):\n"
+            + table(["N", "networks", "need % of a core", "us CPU / vehicle / s", "tele %",
+                     "load avg"], rows))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", default="10,50,100,250")
@@ -211,14 +273,17 @@ def main() -> None:
     p.add_argument("--profile", metavar="FILE", help="then cProfile N=max(sizes) with client")
     p.add_argument("--streams", choices=("default", "issue"), default="default",
                    help="'issue': only issue 16's six streams (see above)")
-    p.add_argument("--largest-step", type=int, default=500)
-    p.add_argument("--largest-max", type=int, default=4000)
+    p.add_argument("--largest-step", type=int, default=1000)
+    p.add_argument("--largest-max", type=int, default=MAX_FLEET_VEHICLES)
+    p.add_argument("--cost", metavar="SIZES", help="only the CPU needed, flat out (above)")
+    p.add_argument("--cost-seconds", type=float, default=10.0)
     p.add_argument("--quick", action="store_true",
-                   help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2")
+                   help="--sizes 250,1000 --skip client,multi --alone-window 5 --warmup 2 "
+                        "--largest-step 2500")
     args = p.parse_args()
     if args.quick:
         args.sizes, args.skip = "250,1000", ",".join({"client", "multi", *args.skip.split(",")})
-        args.alone_window, args.warmup = 5.0, 2.0
+        args.alone_window, args.warmup, args.largest_step = 5.0, 2.0, 2500
     global NOMINAL
     if args.streams == "issue":
         STREAM_HZ.update({s.name: 0.0 for s in DEFAULT_STREAMS if s.name not in ISSUE_STREAMS})
@@ -230,6 +295,9 @@ def main() -> None:
           f"physics 50 Hz, {args.streams} streams ({NOMINAL:g} messages/s per vehicle), "
           f"client api {args.api}, 127.0.0.1")
     print(machine_line(), flush=True)
+    if args.cost:
+        print(run_cost([int(s) for s in args.cost.split(",")], args.cost_seconds))
+        return
     out = []
     if "alone" not in skip:
         rows = run_alone(sizes, args)

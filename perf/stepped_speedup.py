@@ -2,6 +2,7 @@
 
     ./dev perf stepped_speedup [--drones 10] [--physics-hz 50,20,100] [--repeat 1]
                                 [--prflt -1|keep] [--timeout 60] [--profile FILE] [--core]
+                                [--sessions [ID ...]] [--tasks N]
 
 The emulator (`Swarm(default_scenario(N), clock=ClockConfig(stepped=True, physics_hz=HZ))`)
 runs in its own process on 127.0.0.1; this process is the MAVSDK client (mavsdk.asyncio).
@@ -19,6 +20,11 @@ while nothing flies) to the last vehicle's first mission_complete truth event.
 run in slices of 50 steps as the stepped swarm runs them) and prints the simulated seconds per
 CPU second of the physics alone and a SHA-256 of the whole ground truth (every trajectory row
 and event), which must not change when the physics code is only made faster.
+
+--sessions flies the oracle in lockstep over benchmark sessions (default: the five
+`*-extreme-1` sessions, 30 drones each; `--tasks N`: their first N tasks), each session in one
+swarm with its gateway in this process, as `bench run` does, and prints per session the
+simulated seconds, the wall seconds and their ratio (the session's speed-up).
 """
 
 from __future__ import annotations
@@ -188,6 +194,51 @@ def fly_core(n: int, hz: float) -> dict:
     return {"sim": fleet.now_s, "cpu": cpu, "steps": steps, "digest": digest.hexdigest()[:16]}
 
 
+EXTREME_SESSIONS = ("area_search-extreme-1", "area_assignment_and_patrol-extreme-1",
+                    "target_assignment-extreme-1", "target_tracking-extreme-1",
+                    "resilience-extreme-1")
+
+
+async def fly_session(session_id: str, limit: int | None) -> list[object]:
+    """The oracle over one session in lockstep: sim s, wall s, speed-up, CPU s."""
+    from benchmark.authoring.session_file import load_session
+    from benchmark.authoring.suite import SESSIONS_DIR
+    from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+    from swarm_agents.oracle import OracleAgent
+
+    session = load_session(SESSIONS_DIR / f"{session_id}.json")
+    plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
+    tasks = session.tasks[:limit]
+    passed = 0
+    async with swarm_gateway(session, lockstep=True) as (swarm, services, gateway):
+        sim0, wall0, cpu0 = swarm.fleet.now_s, time.monotonic(), time.process_time()
+        for task in tasks:
+            record = await run_task(session, task, OracleAgent(session.scenario, plans), swarm,
+                                    services, gateway, EpisodeOptions())
+            passed += bool(record.get("passed"))
+        sim, wall = swarm.fleet.now_s - sim0, time.monotonic() - wall0
+        cpu = time.process_time() - cpu0
+    return [session_id, len(session.scenario.vehicles), f"{passed}/{len(tasks)}",
+            f"{sim:.1f}", f"{wall:.2f}", f"{sim / wall:.0f}", f"{cpu:.2f}", f"{sim / cpu:.0f}",
+            f"{os.getloadavg()[0]:.1f}"]
+
+
+def sessions_main(args) -> None:
+    ids = args.sessions or EXTREME_SESSIONS
+    print(f"stepped_speedup --sessions: the oracle in lockstep over {len(ids)} session(s)"
+          + (f", first {args.tasks} tasks each" if args.tasks else ""))
+    print(machine_line(), flush=True)
+    rows = []
+    for session_id in ids:
+        rows.append(asyncio.run(fly_session(session_id, args.tasks)))
+        print("  ", rows[-1], flush=True)
+    print("\n" + table(["session", "drones", "passed", "sim s", "wall s", "speed-up", "CPU s",
+                        "sim s / CPU s", "load avg"], rows))
+    print("sim s: simulated time over the session's tasks (operator resets included); wall s: "
+          "from the first task's start to the last one's record, oracle and gateway included; "
+          "CPU s: this process (emulator, gateway and oracle share it).")
+
+
 def core_main(args, hzs: list[float]) -> None:
     print(f"stepped_speedup --core: {args.drones} vehicles, the same missions on the pure core "
           f"(no MAVLink), {args.repeat} run(s) per physics Hz")
@@ -220,7 +271,14 @@ def main() -> None:
     p.add_argument("--core", action="store_true",
                    help="fly the missions on the pure core (no MAVLink): physics speed and a "
                         "digest of the ground truth")
+    p.add_argument("--sessions", nargs="*", metavar="ID",
+                   help="fly the oracle over these benchmark sessions in lockstep (none "
+                        "named: the five *-extreme-1 sessions) and print their speed-up")
+    p.add_argument("--tasks", type=int, help="with --sessions: the first N tasks of each")
     args = p.parse_args()
+    if args.sessions is not None:
+        sessions_main(args)
+        return
     prflt = None if args.prflt == "keep" else float(args.prflt)
     hzs = [float(h) for h in args.physics_hz.split(",")]
     if args.core:

@@ -2,8 +2,8 @@
 that acts on the world, as a model would, and many sessions run at once (PROCESSES worker
 processes, each holding up to SESSIONS sessions in one event loop).
 
-    ./dev bench think_latency --think-s 2 --processes 2 --sessions 12            # full suite
-    ./dev bench think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
+    ./dev perf think_latency --think-s 2 --processes 2 --sessions 12            # full suite
+    ./dev perf think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
 
 Prints wall time, pass rate, failed tasks and the peak memory of all workers together. With
 the lockstep clock, think time costs no simulated time, so every task the oracle passes

@@ -1,6 +1,6 @@
 """Digests of the oracle's ground truth and records, to show a change left results as they were.
 
-    ./dev bench truth_digest [--suite smoke] [--sessions ID ...] [--tasks N]
+    ./dev perf truth_digest [--suite smoke] [--sessions ID ...] [--tasks N]
 
 Flies the oracle (lockstep clock, as `bench run`) over the sessions of a suite (default: the
 smoke suite and its per-session task limit, plus target_tracking-easy-1 for moving targets)

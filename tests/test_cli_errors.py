@@ -15,7 +15,13 @@ from pathlib import Path
 
 import pytest
 
-from emulator.capacity import CapacityError, Machine, check_capacity, network_memory_mb
+from emulator.capacity import (
+    CapacityError,
+    Machine,
+    check_capacity,
+    network_memory_mb,
+    process_networks,
+)
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM
 from tests.ports import unused_tcp_port, unused_udp_port
@@ -66,25 +72,34 @@ def test_a_swarm_too_big_for_this_machine_is_refused_with_the_limits(tmp_path: P
     proc = _mavswarm(*_quiet_up("--drones", "100000"), cwd=tmp_path)
     cores = len(os.sched_getaffinity(0))
     line = _one_line_error(proc, "--drones 100000 cannot run here", "system ids 1-250",
-                           "400 processes", f"{cores} CPU core", "GB of memory available",
-                           f"at most {min(cores, 400) * 250} drones")
+                           "400 networks", "10 processes of up to 10000 vehicles",
+                           f"{cores} CPU core", "GB of memory available",
+                           f"at most {min(cores, 10) * 10000} drones")
     assert proc.stdout == "", proc.stdout  # no network, no process started
     assert "one per core" in line
 
 
 def test_capacity_per_process_and_per_machine() -> None:
     roomy = Machine(cores=4, memory_available_mb=64_000.0)
-    assert check_capacity(250, roomy) == 1 and check_capacity(1000, roomy) == 4
-    with pytest.raises(CapacityError, match=r"5 processes .* room for 4 processes .* at most "
-                                            r"1000 drones"):
-        check_capacity(1001, roomy)
-    small = Machine(cores=64, memory_available_mb=3 * network_memory_mb(250) / 0.8 + 1)
-    with pytest.raises(CapacityError, match=r"room for 3 processes .*at most 750 drones"):
-        check_capacity(1000, small)
+    assert check_capacity(250, roomy) == 1 and check_capacity(10_000, roomy) == 1
+    assert check_capacity(10_001, roomy) == 2 and check_capacity(40_000, roomy) == 4
+    with pytest.raises(CapacityError, match=r"161 networks .* 5 processes .* room for 4 "
+                                            r"processes .* at most 40000 drones"):
+        check_capacity(40_001, roomy)
+    small = Machine(cores=64, memory_available_mb=3 * network_memory_mb(10_000) / 0.8 + 1)
+    with pytest.raises(CapacityError, match=r"room for 3 processes .*at most 30000 drones"):
+        check_capacity(40_000, small)
     starved = Machine(cores=8, memory_available_mb=50.0)
     with pytest.raises(CapacityError, match=r"--drones 5 cannot run here: this machine has 8 "
                                             r"CPU cores and 0.0 GB .* room for 0 processes"):
         check_capacity(5, starved)
+
+
+def test_networks_are_shared_out_over_as_few_processes_as_hold_them() -> None:
+    assert process_networks(250) == [range(0, 1)]
+    assert process_networks(10_000) == [range(0, 40)]
+    assert process_networks(10_001) == [range(0, 21), range(21, 41)]
+    assert process_networks(25_000) == [range(0, 34), range(34, 67), range(67, 100)]
 
 
 @pytest.mark.mavsdk

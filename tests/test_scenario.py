@@ -14,6 +14,7 @@ import pytest
 import shapely
 
 from emulator.geo import DEFAULT_ORIGIN, GeoOrigin
+from emulator.networks import MAX_FLEET_VEHICLES
 from emulator.scenario import (
     CHARGE_AMOUNT_PERIOD_S,
     WIND_DIRECTIONS_DEG,
@@ -444,8 +445,8 @@ def test_default_scenario_world() -> None:
 def test_default_scenario_origin_and_bounds() -> None:
     origin = GeoOrigin(10.0, 20.0, 5.0)
     assert default_scenario(3, origin=origin).world.origin == origin
-    for bad in (0, 251, -1):
-        with pytest.raises(ValueError, match="between 1 and 250"):
+    for bad in (0, MAX_FLEET_VEHICLES + 1, -1):
+        with pytest.raises(ValueError, match=f"between 1 and {MAX_FLEET_VEHICLES}"):
             default_scenario(bad)
     with pytest.raises(ValueError, match="integer"):
         default_scenario(2.5)  # type: ignore[arg-type]

@@ -17,6 +17,7 @@ import numpy as np
 
 from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
+from emulator.networks import MAX_FLEET_VEHICLES
 
 __all__ = [
     "CONTROL_NONE",
@@ -113,8 +114,8 @@ class FleetDynamics:
     """State and limits of n vehicles; `step(dt_s)` advances all of them at once."""
 
     def __init__(self, n: int) -> None:
-        if not 1 <= n <= 250:
-            raise ValueError(f"a fleet holds 1 to 250 vehicles, got {n}")
+        if not 1 <= n <= MAX_FLEET_VEHICLES:
+            raise ValueError(f"a fleet holds 1 to {MAX_FLEET_VEHICLES} vehicles, got {n}")
         self.n = n
         self.position_m = np.zeros((n, 3))
         self.velocity_m_s = np.zeros((n, 3))

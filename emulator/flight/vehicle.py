@@ -18,6 +18,7 @@ from emulator.flight.modes import FlightMode, LandedState
 from emulator.flight.params import ParamStore
 from emulator.flight.vehicle_state import Phase, TimerAction, VehicleState
 from emulator.geo import wrap_heading_deg
+from emulator.networks import system_id
 from emulator.scenario import VehicleSpec
 from emulator.truth_events import TruthEventKind
 from mavlink_vocabulary import Announcement, build_statustext
@@ -32,6 +33,7 @@ class Vehicle:
 
     def __init__(self, k: int, spec: VehicleSpec, fleet: FleetView) -> None:
         self.k = k
+        self.system_id = system_id(k)  # MAVLink: network k // 250 (emulator.networks)
         self.vehicle_id = spec.id
         self.spec = spec
         self.fleet = fleet
@@ -43,7 +45,7 @@ class Vehicle:
             "SIM_SENS_RAD": spec.perceived_radius_m,
             "SIM_TASK_RAD": spec.task_radius_m,
             "BAT_CAPACITY": spec.battery_capacity_mah,
-            "MAV_SYS_ID": k + 1,
+            "MAV_SYS_ID": system_id(k),
         })
         self.state = VehicleState(home_m=spec.home_m)
         dyn = fleet.dyn

@@ -130,20 +130,24 @@ class Frames:
 
 def _payload_lengths(payload: np.ndarray) -> np.ndarray:
     """Bytes kept of each row: up to its last non-zero byte, at least one."""
-    width = payload.shape[1]
-    last = np.where(payload != 0, np.arange(1, width + 1, dtype=np.int64), 1).max(axis=1)
-    return last
+    nonzero = payload != 0
+    nonzero[:, 0] = True  # an all-zero payload keeps its first byte
+    return payload.shape[1] - nonzero[:, ::-1].argmax(axis=1)
 
 
-def frame_batch(parts: Sequence[FramePart]) -> Frames:
-    """Every row of `parts`, framed as pymavlink frames it, in order."""
+def frame_batch(parts: Sequence[FramePart], order: np.ndarray | None = None) -> Frames:
+    """Every row of `parts`, framed as pymavlink frames it, in order, or in the order of the
+    row indices `order` (a permutation of all the rows of `parts`) when given."""
     parts = [p for p in parts if len(p.records)]
     if not parts:
         return Frames(b"", np.zeros(0, np.int64), np.zeros(0, np.int64))
     rows = sum(len(p.records) for p in parts)
     widest = max(p.layout.dtype.itemsize for p in parts)
     width = HEADER_LEN + widest + CRC_LEN + 1
-    m = np.zeros((rows, width), dtype=np.uint8)
+    # Every byte a frame keeps is written below (bytes past a row's CRC are never read).
+    m = np.empty((rows, width), dtype=np.uint8)
+    m[:, 0] = STX_V2
+    m[:, 2:4] = 0  # incompatibility and compatibility flags
     lengths = np.empty(rows, dtype=np.int64)
     extra = np.empty(rows, dtype=np.uint8)
     r0 = 0
@@ -156,35 +160,38 @@ def frame_batch(parts: Sequence[FramePart]) -> Frames:
         lengths[r0:r1] = _payload_lengths(payload)
         block[:, 4] = p.sequences
         block[:, 5] = p.system_ids
-        block[:, 6] = p.component_id
         msg_id = p.layout.msg_id
-        block[:, 7] = msg_id & 0xFF
-        block[:, 8] = (msg_id >> 8) & 0xFF
-        block[:, 9] = msg_id >> 16
+        block[:, 6:10] = (p.component_id, msg_id & 0xFF, (msg_id >> 8) & 0xFF, msg_id >> 16)
         extra[r0:r1] = p.layout.crc_extra
         r0 = r1
-    m[:, 0] = STX_V2
     m[:, 1] = lengths
     at = np.arange(rows)
     tail = HEADER_LEN + lengths
     m[at, tail] = extra
-    # The checksum covers bytes 1 .. tail (header after STX, payload, CRC_EXTRA).
-    covered = tail
-    words = covered // 2
+    # The checksum covers bytes 1 .. tail (header after STX, payload, CRC_EXTRA), two bytes
+    # per step. With the rows longest first, step j updates only the rows that have a word j:
+    # a prefix, which stops moving once a row's words are done.
+    words = tail // 2
     n_words = int(words.max())
-    w = np.ascontiguousarray(m[:, 1:1 + 2 * n_words]).view("<u2").T.copy()
+    longest = np.argsort(-words, kind="stable")
+    w = m[longest, 1:1 + 2 * n_words].view("<u2").T.copy()
+    active = np.searchsorted(-words[longest], -np.arange(n_words), side="left").tolist()
     crc = np.full(rows, 0xFFFF, dtype=np.uint16)
-    take = _T16.take
-    history = []
-    for j in range(n_words):
-        crc = take(crc ^ w[j])
-        history.append(crc)
-    state = np.stack(history)[words - 1, at]
-    odd = (covered & 1).astype(bool)
-    last = m[at, 1 + 2 * words]
-    state = np.where(odd, (state >> 8) ^ _T8[(state ^ last) & 0xFF], state)
+    mixed = np.empty(rows, dtype=np.uint16)
+    take, xor = _T16.take, np.bitwise_xor
+    for j, count in enumerate(active):
+        xor(crc[:count], w[j, :count], out=mixed[:count])
+        take(mixed[:count], out=crc[:count])
+    state = np.empty(rows, dtype=np.uint16)
+    state[longest] = crc
+    odd = (tail & 1).astype(bool)
+    if odd.any():
+        last = m[at, 1 + 2 * words]
+        state = np.where(odd, (state >> 8) ^ _T8[(state ^ last) & 0xFF], state)
     m[at, tail] = state & 0xFF
     m[at, tail + 1] = state >> 8
     frame_len = tail + CRC_LEN
+    if order is not None:
+        m, frame_len = m[order], frame_len[order]
     keep = np.arange(width) < frame_len[:, None]
     return Frames(m[keep].tobytes(), np.cumsum(frame_len), frame_len)

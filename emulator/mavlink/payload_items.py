@@ -24,7 +24,7 @@ def payload_item_reply(v: Vehicle, item: MissionItem) -> Reply | None:
     args = CommandArgs(item.command, item.param1, item.param2, item.param3, item.param4,
                        None, None, item.z, item.frame, float(item.x))
     if item.command in GIMBAL_COMMANDS and v.gimbal is not None:
-        return v.gimbal.handle_command(v.ap, args, (v.ap.k + 1, MavComponent.AUTOPILOT1))
+        return v.gimbal.handle_command(v.ap, args, (v.ap.system_id, MavComponent.AUTOPILOT1))
     if item.command in VIDEO_COMMANDS:
         return v.camera.handle_command(v.ap, args, v.wall_now_s)
     return None

@@ -172,7 +172,7 @@ class NetworkProtocol:
 
     # ------------------------------------------------------------------- send
     def send_frame(self, k: int, frame: bytes) -> None:
-        """Queue one encoded frame of vehicle k (index k, system id k + 1)."""
+        """Queue one encoded frame of vehicle k (index k in the fleet)."""
         if not self.is_open:
             return
         self.stats.frames_out += 1
@@ -194,8 +194,7 @@ class NetworkProtocol:
         datagrams `send_frame` would pack them into one by one, without a call per frame.
         False, queuing nothing, unless frames are being batched on a clean link (the caller
         then sends each with `send_frame`)."""
-        gate = self.gate
-        if not self._batching or not self.is_open or (gate is not None and gate.active):
+        if not self.can_send_frames():
             return False
         self.stats.frames_out += len(ends)
         batch, start, i, count = self._batch, 0, 0, len(ends)
@@ -210,6 +209,11 @@ class NetworkProtocol:
             if i < count:
                 self._end_datagram()
         return True
+
+    def can_send_frames(self) -> bool:
+        """Whether `send_frames` takes a batch now (batching, open, a clean link)."""
+        gate = self.gate
+        return self._batching and self.is_open and (gate is None or not gate.active)
 
     def _queue_now(self, frame: bytes) -> None:
         if self._batching:

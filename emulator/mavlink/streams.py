@@ -78,17 +78,19 @@ class StreamSchedule:
 
     def due(self, wall_now_s: float) -> Iterator[tuple[int, np.ndarray]]:
         """(msg_id, vehicle indices) for every stream with something due; reschedules them."""
-        due = self.next_due_s <= wall_now_s
-        if not due.any():
+        ks, cols = np.nonzero(self.next_due_s <= wall_now_s)  # by vehicle, then stream
+        if not len(ks):
             return
-        for col in np.flatnonzero(due.any(axis=0)):
-            ks = np.flatnonzero(due[:, col])
-            period = self.period_s[ks, col]
-            nxt = self.next_due_s[ks, col] + period
-            late = nxt <= wall_now_s
-            nxt[late] = wall_now_s + period[late]
-            self.next_due_s[ks, col] = nxt
-            yield self.streams[col].msg_id, ks
+        period = self.period_s[ks, cols]
+        nxt = self.next_due_s[ks, cols] + period
+        late = nxt <= wall_now_s
+        nxt[late] = wall_now_s + period[late]
+        self.next_due_s[ks, cols] = nxt
+        by_stream = np.argsort(cols, kind="stable")  # each stream's vehicles in index order
+        ks, cols = ks[by_stream], cols[by_stream]
+        starts = np.flatnonzero(np.diff(cols, prepend=-1)).tolist()
+        for first, last in zip(starts, [*starts[1:], len(ks)], strict=True):
+            yield self.streams[int(cols[first])].msg_id, ks[first:last]
 
     def set_interval(self, k: int, msg_id: int, interval_s: float | None,
                      wall_now_s: float) -> bool:

@@ -24,6 +24,7 @@ from emulator.mavlink.codec import mavlink
 from emulator.mavlink.frames import FramePart, MessageLayout
 from emulator.mavlink.imu import highres_imu_fields
 from emulator.mavlink.streams import CAMERA_HEARTBEAT
+from emulator.networks import VEHICLES_PER_NETWORK
 from mavlink_vocabulary import MavState
 
 __all__ = ["BATCHED_STREAMS", "FleetTelemetry"]
@@ -69,7 +70,7 @@ class FleetTelemetry:
     def __init__(self, fleet: Fleet) -> None:
         self.fleet = fleet
         n = fleet.n
-        self.system_ids = np.arange(1, n + 1, dtype=np.uint8)
+        self.system_ids = (np.arange(n) % VEHICLES_PER_NETWORK + 1).astype(np.uint8)
         # The next sequence number of each vehicle's autopilot and camera component.
         self.sequences = {AUTOPILOT_COMPONENT_ID: np.zeros(n, dtype=np.uint8),
                           CAMERA_COMPONENT_ID: np.zeros(n, dtype=np.uint8)}
@@ -81,6 +82,8 @@ class FleetTelemetry:
             105: lambda ks: highres_imu_fields(self.fleet, ks),
             CAMERA_HEARTBEAT: self._camera_heartbeat,
         }
+        # per vehicle: the heading last seen by ATTITUDE, its cos, sin and wrapped radians
+        self._trig: tuple[np.ndarray, ...] | None = None
 
     def part(self, msg_id: int, ks: np.ndarray) -> FramePart:
         """Message `msg_id` of vehicles `ks` (distinct indices), taking their next sequence
@@ -173,7 +176,9 @@ class FleetTelemetry:
         lat, lon, alt = self._geo(p[:, 0], p[:, 1], p[:, 2])
         v = dyn.velocity_m_s[ks]
         hdg = _rint(dyn.yaw_deg[ks] * 100.0) % 36000
-        rel_mm = _rint((p[:, 2] - self._homes(ks)[:, 2]) * 1000.0)
+        aps = self.fleet.autopilots
+        home_z = np.array([aps[k].state.home_m[2] for k in ks.tolist()], dtype=float)
+        rel_mm = _rint((p[:, 2] - home_z) * 1000.0)
         return (self._time_boot_ms(), lat, lon, alt, rel_mm, _rint(v[:, 1] * 100.0),
                 _rint(v[:, 0] * 100.0), _rint(-v[:, 2] * 100.0), hdg)
 
@@ -185,19 +190,46 @@ class FleetTelemetry:
 
     def _attitude(self, ks: np.ndarray) -> Sequence[object]:
         dyn = self.fleet.dyn
-        yaw = dyn.yaw_deg[ks] * _DEG_TO_RAD
-        yaw_list = yaw.tolist()
-        cos = np.array([math.cos(y) for y in yaw_list])
-        sin = np.array([math.sin(y) for y in yaw_list])
+        yaw_deg = dyn.yaw_deg[ks]
+        cos, sin, wrapped = self._heading_trig(ks, yaw_deg)
         a = dyn.accel_m_s2[ks]
         a_north, a_east = a[:, 1], a[:, 0]
         forward = a_north * cos + a_east * sin
         right = -a_north * sin + a_east * cos
         g = msgs.GRAVITY_M_S2
-        pitch = [-math.atan2(x, g) for x in forward.tolist()]
-        roll = [math.atan2(x, g) for x in right.tolist()]
-        wrapped = [math.atan2(s, c) for s, c in zip(sin.tolist(), cos.tolist(), strict=True)]
+        # atan2(+-0, g) is +-0: only a vehicle that accelerates needs math.atan2
+        pitch = -forward
+        roll = right.copy()
+        tilted = np.flatnonzero(forward).tolist()
+        if tilted:
+            pitch[tilted] = [-math.atan2(x, g) for x in forward[tilted].tolist()]
+        tilted = np.flatnonzero(right).tolist()
+        if tilted:
+            roll[tilted] = [math.atan2(x, g) for x in right[tilted].tolist()]
         return (self._time_boot_ms(), roll, pitch, wrapped, 0.0, 0.0, 0.0)
+
+    def _heading_trig(self, ks: np.ndarray, yaw_deg: np.ndarray):
+        """cos, sin and atan2(sin, cos) of the vehicles' headings (radians), as Python's math
+        computes them, worked out again only for a vehicle whose heading changed."""
+        cache = self._trig
+        if cache is None or len(cache[0]) != self.fleet.n:
+            n = self.fleet.n
+            cache = self._trig = (np.zeros(n, dtype=bool), np.empty(n, dtype=np.int64),
+                                  np.empty(n), np.empty(n), np.empty(n))
+        known, last_bits, cos_all, sin_all, wrapped_all = cache
+        bits = yaw_deg.view(np.int64)  # the very same float, -0.0 and NaN included
+        changed = ks[~known[ks] | (last_bits[ks] != bits)]
+        if len(changed):
+            yaw = self.fleet.dyn.yaw_deg[changed]
+            radians = (yaw * _DEG_TO_RAD).tolist()
+            cos = [math.cos(y) for y in radians]
+            sin = [math.sin(y) for y in radians]
+            cos_all[changed] = cos
+            sin_all[changed] = sin
+            wrapped_all[changed] = [math.atan2(s, c) for s, c in zip(sin, cos, strict=True)]
+            last_bits[changed] = yaw.view(np.int64)
+            known[changed] = True
+        return cos_all[ks], sin_all[ks], wrapped_all[ks]
 
     def _ground_speed(self, v: np.ndarray) -> np.ndarray:
         return np.array([math.hypot(e, n) for e, n in v[:, :2].tolist()], dtype=float)

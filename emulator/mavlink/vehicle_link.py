@@ -46,13 +46,13 @@ _OPERATOR_RESET_STREAMS = (MessageId.SYS_STATUS, MessageId.BATTERY_STATUS,
 
 
 class VehicleLink:
-    """MAVLink side of vehicle `ap` (system id k + 1)."""
+    """MAVLink side of vehicle `ap` (system id k % 250 + 1: emulator.networks)."""
 
     def __init__(self, ap: Autopilot, emit: Callable[[int, bytes], None],
                  streams: StreamSchedule, wall_clock: Callable[[], float]) -> None:
         self.ap = ap
         self.k = ap.k
-        self.system_id = ap.k + 1
+        self.system_id = ap.system_id
         self._emit = emit
         self._streams = streams
         self._encoders: dict[int, Encoder] = {
@@ -73,6 +73,9 @@ class VehicleLink:
         self.last_reached: int | None = None  # the last MISSION_ITEM_REACHED of this mission
         # told when this vehicle's MAVLink goes off or comes back (the swarm's link faults)
         self.on_mavlink_signal: Callable[[Autopilot], None] | None = None
+        # told (with k) whenever this link may have gained a wall-clock duty (`needs_tick`):
+        # a message handled, the vehicle's state changed, a payload item reached
+        self.on_tick_duty: Callable[[int], None] | None = None
         ap.listener = self
 
     # ---------------------------------------------------------------- sending
@@ -158,11 +161,13 @@ class VehicleLink:
         reply = payload_item_reply(self, item)
         if reply is not None:
             self._answer(None, None, reply, AUTOPILOT_COMPONENT_ID)
+        self._tick_duty()
 
     def on_state_changed(self) -> None:
         """Mode, arming or landed state changed: say so now, not at the next 1 Hz slot."""
         self.send(msgs.heartbeat(self.ap))
         self.send(msgs.extended_sys_state(self.ap))
+        self._tick_duty()
 
     def on_operator_reset(self) -> None:
         """An operator moved the vehicle or refilled its battery: report the new state now."""
@@ -177,7 +182,14 @@ class VehicleLink:
         self.wall_now_s = wall_now_s
         handler = _DISPATCH.get(m.get_msgId())
         if handler is not None:
-            handler(self, m)
+            try:
+                handler(self, m)
+            finally:
+                self._tick_duty()
+
+    def _tick_duty(self) -> None:
+        if self.on_tick_duty is not None:
+            self.on_tick_duty(self.k)
 
     @property
     def needs_tick(self) -> bool:
