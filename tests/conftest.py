@@ -38,10 +38,19 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """A test that flies with MAVSDK or drives Chromium takes seconds: it is slow too, so
-    `-m "not slow"` (the fast tier) leaves it out."""
+    `-m "not slow"` (the fast tier) leaves it out.
+
+    Then the files with the most slow tests come first (each file's tests in their order):
+    the parallel run (`--dist loadfile`) hands out files in this order, so the long ones start
+    at once and the short ones fill in at the end, instead of a long file starting last and
+    running alone."""
+    slow_per_file: dict[str, int] = {}
     for item in items:
         if item.get_closest_marker("mavsdk") or item.get_closest_marker("browser"):
             item.add_marker(pytest.mark.slow)
+        slow = item.get_closest_marker("slow") is not None
+        slow_per_file[item.location[0]] = slow_per_file.get(item.location[0], 0) + slow
+    items.sort(key=lambda item: -slow_per_file[item.location[0]])  # stable: order in a file
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
