@@ -38,19 +38,31 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """A test that flies with MAVSDK or drives Chromium takes seconds: it is slow too, so
-    `-m "not slow"` (the fast tier) leaves it out.
-
-    Then the files with the most slow tests come first (each file's tests in their order):
-    the parallel run (`--dist loadfile`) hands out files in this order, so the long ones start
-    at once and the short ones fill in at the end, instead of a long file starting last and
-    running alone."""
-    slow_per_file: dict[str, int] = {}
+    `-m "not slow"` (the fast tier) leaves it out."""
     for item in items:
         if item.get_closest_marker("mavsdk") or item.get_closest_marker("browser"):
             item.add_marker(pytest.mark.slow)
-        slow = item.get_closest_marker("slow") is not None
-        slow_per_file[item.location[0]] = slow_per_file.get(item.location[0], 0) + slow
-    items.sort(key=lambda item: -slow_per_file[item.location[0]])  # stable: order in a file
+
+
+class _LongFilesFirst:
+    """Once the tests are selected, the files with the most slow tests, then the most tests,
+    come first (each file's tests in their order): the parallel run (`--dist loadfile
+    --no-loadscope-reorder`, as ./dev runs it) hands out files in this order, so the long ones
+    start at once and the short ones fill in at the end, instead of a long file starting last
+    and running alone."""
+
+    @pytest.hookimpl(trylast=True)
+    def pytest_collection_modifyitems(self, items: list[pytest.Item]) -> None:
+        weight: dict[str, tuple[int, int]] = {}
+        for item in items:
+            slow, count = weight.get(item.location[0], (0, 0))
+            weight[item.location[0]] = (slow + (item.get_closest_marker("slow") is not None),
+                                        count + 1)
+        items.sort(key=lambda item: tuple(-w for w in weight[item.location[0]]))  # stable
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.pluginmanager.register(_LongFilesFirst(), "mavswarm-long-files-first")
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
