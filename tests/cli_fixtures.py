@@ -49,7 +49,8 @@ def read_until(proc: subprocess.Popen[str], needle: str, timeout_s: float = 20.0
 def run_in_process(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     """`mavswarm ARGS` run by `mavswarm.cli.main` in this process, from `cwd`: its exit status
     and what it printed, as `subprocess.run(..., capture_output=True, text=True)` gives them.
-    An exception the command lets out is raised here (a subprocess would print a traceback)."""
+    An exception the command lets out is raised here (a subprocess would print a traceback).
+    Call it where no event loop runs (a plain `def` test): commands run their own."""
     from mavlink_gateway.mavsdk_log import mavsdk_log_enabled, set_mavsdk_log
     from mavswarm.cli import main
 
