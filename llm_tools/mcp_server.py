@@ -19,18 +19,18 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping
-from typing import Any
-
-import mcp_types as types
-from mcp.server.lowlevel import Server
-from mcp.server.stdio import stdio_server
-from starlette.applications import Starlette
+from typing import TYPE_CHECKING, Any
 
 from agent_contract import AgentTools, BudgetExhausted
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
 from llm_tools.registry import ToolRegistry
+
+if TYPE_CHECKING:  # the MCP SDK is imported where a server is built: the CLI starts faster
+    import mcp_types as types
+    from mcp.server.lowlevel import Server
+    from starlette.applications import Starlette
 
 __all__ = ["ERROR_STATUSES", "SERVER_NAME", "ToolsProvider", "build_server", "call_result",
            "mcp_tools", "serve_stdio", "streamable_http_app"]
@@ -47,6 +47,7 @@ _INSTRUCTIONS = ("Tools that command a swarm of drones. Every result has a statu
 
 def mcp_tools(registry: ToolRegistry) -> list[types.Tool]:
     """The registry's tools as MCP tool definitions (input and output schemas included)."""
+    import mcp_types as types
     return [types.Tool(name=spec.name, description=spec.description,
                        input_schema=spec.input_schema, output_schema=spec.output_schema)
             for spec in registry.specs()]
@@ -57,6 +58,7 @@ def call_result(result: Mapping[str, Any]) -> types.CallToolResult:
     text, and `is_error` for an "error" or "rejected" status."""
     if not isinstance(result, Mapping) or not isinstance(result.get("status"), str):
         raise ValueError(f"a tool result needs a string 'status', got {result!r}")
+    import mcp_types as types
     structured = dict(result)
     text = json.dumps(structured, separators=(",", ":"), ensure_ascii=False)
     return types.CallToolResult(content=[types.TextContent(text=text)],
@@ -71,6 +73,8 @@ def _error(message: str) -> dict[str, Any]:
 def build_server(registry: ToolRegistry, provider: ToolsProvider, *,
                  name: str = SERVER_NAME) -> Server[Any]:
     """An MCP server for `registry`, running each call on `provider()`'s tools."""
+    import mcp_types as types
+    from mcp.server.lowlevel import Server
     listed = types.ListToolsResult(tools=mcp_tools(registry))
 
     async def on_list_tools(ctx: Any, params: types.PaginatedRequestParams | None
@@ -108,6 +112,7 @@ async def _run(registry: ToolRegistry, provider: ToolsProvider, name: str,
 async def serve_stdio(registry: ToolRegistry, provider: ToolsProvider, *,
                       name: str = SERVER_NAME) -> None:
     """Serve one MCP client over this process's stdin/stdout until it disconnects."""
+    from mcp.server.stdio import stdio_server
     server = build_server(registry, provider, name=name)
     async with stdio_server() as (read_stream, write_stream):
         await server.run(read_stream, write_stream, server.create_initialization_options())

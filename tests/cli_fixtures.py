@@ -1,15 +1,19 @@
 """The shipped `mavswarm` command, as tests run it: the console script installed beside this
-interpreter."""
+interpreter, or (`run_in_process`) its `main` in this process, for the commands whose answer
+does not depend on being a process of their own (bad input refused before anything starts):
+a subprocess costs seconds of interpreter and import start-up per call."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-__all__ = ["MAVSWARM", "ROOT", "read_until", "start_up"]
+__all__ = ["MAVSWARM", "ROOT", "read_until", "run_in_process", "start_up"]
 
 ROOT = Path(__file__).resolve().parents[1]
 _SCRIPT = Path(sys.executable).with_name("mavswarm")
@@ -40,3 +44,28 @@ def read_until(proc: subprocess.Popen[str], needle: str, timeout_s: float = 20.0
         if needle in line:
             return "".join(seen)
     raise AssertionError(f"{needle!r} not printed; got:\n{''.join(seen)}")
+
+
+def run_in_process(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """`mavswarm ARGS` run by `mavswarm.cli.main` in this process, from `cwd`: its exit status
+    and what it printed, as `subprocess.run(..., capture_output=True, text=True)` gives them.
+    An exception the command lets out is raised here (a subprocess would print a traceback).
+    Call it where no event loop runs (a plain `def` test): commands run their own."""
+    from mavlink_gateway.mavsdk_log import mavsdk_log_enabled, set_mavsdk_log
+    from mavswarm.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    logging_before = mavsdk_log_enabled()  # main() sets it; the other tests keep theirs
+    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), \
+            contextlib.redirect_stderr(err):
+        try:
+            status = main(list(args))
+        except SystemExit as exit_:  # argparse's errors and --help
+            status = exit_.code if isinstance(exit_.code, int) else 1
+            if not isinstance(exit_.code, int | None):
+                print(exit_.code, file=sys.stderr)
+        finally:
+            set_mavsdk_log(logging_before)
+    return subprocess.CompletedProcess(["mavswarm", *args], status or 0, out.getvalue(),
+                                       err.getvalue())
+

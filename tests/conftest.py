@@ -44,6 +44,27 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker(pytest.mark.slow)
 
 
+class _LongFilesFirst:
+    """Once the tests are selected, the files with the most slow tests, then the most tests,
+    come first (each file's tests in their order): the parallel run (`--dist loadfile
+    --no-loadscope-reorder`, as ./dev runs it) hands out files in this order, so the long ones
+    start at once and the short ones fill in at the end, instead of a long file starting last
+    and running alone."""
+
+    @pytest.hookimpl(trylast=True)
+    def pytest_collection_modifyitems(self, items: list[pytest.Item]) -> None:
+        weight: dict[str, tuple[int, int]] = {}
+        for item in items:
+            slow, count = weight.get(item.location[0], (0, 0))
+            weight[item.location[0]] = (slow + (item.get_closest_marker("slow") is not None),
+                                        count + 1)
+        items.sort(key=lambda item: tuple(-w for w in weight[item.location[0]]))  # stable
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.pluginmanager.register(_LongFilesFirst(), "mavswarm-long-files-first")
+
+
 def pytest_sessionfinish(session: pytest.Session) -> None:
     drop_registry()  # the xdist workers' record of the ports handed out (tests/ports.py)
 

@@ -1,6 +1,7 @@
 """Plug-in agents through the `mavswarm` command, in real processes: the scripted example on
 the smoke suite in two worker processes, an agent that an installed distribution registers
-under the `mavswarm.agents` entry-point group, and bad specs refused in one line."""
+under the `mavswarm.agents` entry-point group; and bad specs refused in one line (the command's
+`main` in this process: nothing starts)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import pytest
 
 from benchmark.authoring.suite import suite_paths
 from tests.bench_fixtures import small_session, write_json
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import MAVSWARM, run_in_process
 from tests.plugin_fixtures import write_plugins
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -101,7 +102,6 @@ def test_an_installed_entry_point_is_listed_and_runs(tmp_path: Path) -> None:
     assert {r["tool_calls"] for r in _records(tmp_path / "noop")} == {0}
 
 
-@pytest.mark.slow
 def test_bad_specs_are_one_line_and_exit_2_before_anything_starts(tmp_path: Path) -> None:
     plugins = write_plugins(tmp_path)
     (tmp_path / "crashes.py").write_text("raise ImportError('needs torch')\n")
@@ -112,12 +112,12 @@ def test_bad_specs_are_one_line_and_exit_2_before_anything_starts(tmp_path: Path
              "no_such_package_xyz:Agent": "No module named 'no_such_package_xyz'"}
     for spec, reason in cases.items():
         out = tmp_path / "out"
-        run = _mavswarm("bench", "run", "--agent", spec, "--sessions", "whatever.json",
-                        "--out", str(out), cwd=tmp_path, timeout=60.0)
+        run = run_in_process("bench", "run", "--agent", spec, "--sessions", "whatever.json",
+                             "--out", str(out), cwd=tmp_path)
         assert run.returncode == 2, (spec, run.stderr)
         assert run.stderr.count("\n") == 1 and reason in run.stderr, (spec, run.stderr)
         assert run.stdout == "" and not out.exists(), spec
     for bad in ("0", "-5", "nan"):
-        run = _mavswarm("bench", "run", "--agent", "noop", "--agent-timeout-s", bad,
-                        "--sessions", "whatever.json", cwd=tmp_path, timeout=60.0)
+        run = run_in_process("bench", "run", "--agent", "noop", "--agent-timeout-s", bad,
+                             "--sessions", "whatever.json", cwd=tmp_path)
         assert run.returncode == 2 and "--agent-timeout-s must be > 0" in run.stderr, bad

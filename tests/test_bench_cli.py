@@ -1,4 +1,5 @@
-"""`mavswarm bench`: run, report and import from the command line."""
+"""`mavswarm bench`: run, report and import from the command line (a run in a real process;
+bad arguments and an import through the command's `main` in this process)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tests.bench_fixtures import reference_session, small_session, write_json
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import MAVSWARM, run_in_process
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -36,22 +37,22 @@ def test_run_then_report(tmp_path: Path) -> None:
     assert "Task Pass Rate" in report.stdout and (tmp_path / "rep" / "report.md").exists()
 
 
-@pytest.mark.slow
 def test_bad_arguments_say_what_is_wrong(tmp_path: Path) -> None:
-    agent = _mavswarm("bench", "run", "--agent", "gpt-9")
+    agent = run_in_process("bench", "run", "--agent", "gpt-9", cwd=ROOT)
     assert agent.returncode == 2 and "gpt-9" in agent.stderr
-    missing = _mavswarm("bench", "run", "--agent", "noop", "--sessions",
-                        str(tmp_path / "nope.json"), "--out", str(tmp_path / "o"))
+    missing = run_in_process("bench", "run", "--agent", "noop", "--sessions",
+                             str(tmp_path / "nope.json"), "--out", str(tmp_path / "o"), cwd=ROOT)
     assert missing.returncode == 2 and "nope.json" in missing.stderr
     corrupt = tmp_path / "bad.jsonl"
     corrupt.write_text('{"key": "a", "passed": true}\nnot json\n{"key": "b"}\n')
-    report = _mavswarm("bench", "report", str(corrupt))
+    report = run_in_process("bench", "report", str(corrupt), cwd=tmp_path)
     assert report.returncode == 2 and "bad.jsonl:2" in report.stderr
 
 
 def test_import_command(tmp_path: Path) -> None:
     source = write_json(tmp_path / "ref.json", reference_session())
-    result = _mavswarm("bench", "import", str(source), "--out", str(tmp_path / "out"))
+    result = run_in_process("bench", "import", str(source), "--out", str(tmp_path / "out"),
+                            cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     written = list((tmp_path / "out").glob("*.json"))
     assert len(written) == 1

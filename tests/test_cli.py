@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import signal
 import socket
-import subprocess
 import time
 from pathlib import Path
 
@@ -12,7 +11,7 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink
 
 from emulator.truth import TruthRecorder
-from tests.cli_fixtures import MAVSWARM, read_until, start_up
+from tests.cli_fixtures import read_until, run_in_process, start_up
 from tests.ports import unused_udp_port
 
 
@@ -61,9 +60,7 @@ def test_up_prints_urls_answers_a_client_and_stops_cleanly(tmp_path: Path):
          "include the GCS port 14550"),
     ],
 )
-@pytest.mark.slow
-def test_bad_options_give_a_clear_error(args: list[str], message: str):
-    proc = subprocess.run([*MAVSWARM, "up", *args],
-                          capture_output=True, text=True, timeout=30)
+def test_bad_options_give_a_clear_error(args: list[str], message: str, tmp_path: Path):
+    proc = run_in_process("up", *args, cwd=tmp_path)
     assert proc.returncode == 2
     assert message in proc.stderr, proc.stderr

@@ -1,7 +1,8 @@
-"""Every `mavswarm` error as a user meets it (the real command in a subprocess): one line on
-standard error, no traceback, exit status 2, and nothing started. Busy ports, missing and
-unusable files, bad values, a swarm bigger than this machine can run, and session files with
-nothing to run."""
+"""Every `mavswarm` error as a user meets it: one line on standard error, no traceback, exit
+status 2, and nothing started. Busy ports (the real command in a subprocess, for every server),
+missing and unusable files, bad values, a swarm bigger than this machine can run, and session
+files with nothing to run (the command's `main` in this process: refused before anything
+starts, they need no process of their own)."""
 
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from emulator.capacity import (
     process_networks,
 )
 from tests.bench_fixtures import small_session, write_json
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import MAVSWARM, run_in_process
 from tests.ports import unused_tcp_port, unused_udp_port
 
 
@@ -67,9 +68,8 @@ def _quiet_up(*extra: str) -> list[str]:
             str(unused_udp_port()), "--api-port", "0", "--gcs-port", "0", *extra]
 
 
-@pytest.mark.slow
 def test_a_swarm_too_big_for_this_machine_is_refused_with_the_limits(tmp_path: Path) -> None:
-    proc = _mavswarm(*_quiet_up("--drones", "100000"), cwd=tmp_path)
+    proc = run_in_process(*_quiet_up("--drones", "100000"), cwd=tmp_path)
     cores = len(os.sched_getaffinity(0))
     line = _one_line_error(proc, "--drones 100000 cannot run here", "system ids 1-250",
                            "400 networks", "10 processes of up to 10000 vehicles",
@@ -143,17 +143,16 @@ def test_a_busy_port_is_one_line_for_every_server(tmp_path: Path) -> None:
     (["mqtt-bridge", "--mavlink", "bogus", "--mqtt", "mqtt://127.0.0.1:1"],
      ["cannot open the MAVLink connection 'bogus'"]),
 ])
-@pytest.mark.slow
 def test_missing_files_and_bad_values_are_one_line(tmp_path: Path, args: list[str],
                                                    needles: list[str]) -> None:
-    _one_line_error(_mavswarm(*args, cwd=tmp_path), *needles)
+    _one_line_error(run_in_process(*args, cwd=tmp_path), *needles)
 
 
-@pytest.mark.slow
 def test_a_report_of_no_records_is_an_error(tmp_path: Path) -> None:
     torn = tmp_path / "results.jsonl"
     torn.write_text('{"key": "s/t01/noop/0", "pass')  # a killed run's only, torn line
-    proc = _mavswarm("bench", "report", str(torn), "--out", str(tmp_path / "rep"), cwd=tmp_path)
+    proc = run_in_process("bench", "report", str(torn), "--out", str(tmp_path / "rep"),
+                          cwd=tmp_path)
     _one_line_error(proc, str(torn), "no task records to report")
     assert not (tmp_path / "rep").exists()
 
@@ -163,13 +162,12 @@ def test_a_report_of_no_records_is_an_error(tmp_path: Path) -> None:
     ("[1, 2]", "the top level must be a JSON object"),
     (json.dumps({**small_session([]), "tasks": []}), "the session has no tasks"),
 ])
-@pytest.mark.slow
 def test_a_session_file_with_nothing_to_run_is_said_once(tmp_path: Path, text: str,
                                                          needle: str) -> None:
     session = tmp_path / "edited.json"
     session.write_text(text)
-    proc = _mavswarm("bench", "run", "--agent", "noop", "--sessions", str(session), "--out",
-                     str(tmp_path / "out"), cwd=tmp_path)
+    proc = run_in_process("bench", "run", "--agent", "noop", "--sessions", str(session),
+                          "--out", str(tmp_path / "out"), cwd=tmp_path)
     _one_line_error(proc, str(session), needle)
     assert "0 / 0" not in proc.stdout and "Task Pass Rate" not in proc.stdout
     assert not (tmp_path / "out").exists()  # nothing ran, nothing written

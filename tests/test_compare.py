@@ -15,7 +15,7 @@ import pytest
 
 from benchmark.reporting.compare import CompareError, compare_paths, compare_schema, write_compare
 from benchmark.reporting.compare.runs import task_fingerprint
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import MAVSWARM, run_in_process
 from tests.compare_fixtures import record, write_results
 
 # (session, task, family, level, category, template): outcome in A, outcome in B
@@ -163,8 +163,7 @@ def test_compare_command_line(tmp_path: Path) -> None:
             ([str(a), str(b), "--baseline", "runC"], "--baseline 'runC' is none of the runs"),
             ([str(a), str(b), "--resamples", "5"], "resamples must be an integer >= 100"),
             ([str(a), str(b), "--inspector-url", "ftp://x"], "--inspector-url must be")):
-        bad = subprocess.run([*MAVSWARM, "bench", "compare", *args, "--out", str(bad_out)],
-                             capture_output=True, text=True, timeout=120)
+        bad = run_in_process("bench", "compare", *args, "--out", str(bad_out), cwd=tmp_path)
         assert bad.returncode == 2 and message in bad.stderr, (args, bad.stderr)
         assert len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
     assert not bad_out.exists()

@@ -17,7 +17,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.cli_fixtures import MAVSWARM, ROOT, read_until
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process
 from tests.ports import unused_tcp_port
 
 pytestmark = pytest.mark.mavsdk
@@ -142,7 +142,6 @@ def test_the_editor_opens_files_of_the_session_folders_and_uploads(
 
 
 def test_a_session_dir_that_is_not_a_folder_stops_serve(tmp_path: Path) -> None:
-    run = subprocess.run([*MAVSWARM, "serve", "--suite", "smoke", "--session-dir",
-                          str(tmp_path / "nowhere")], capture_output=True, text=True,
-                         timeout=60)
+    run = run_in_process("serve", "--suite", "smoke", "--session-dir", str(tmp_path / "nowhere"),
+                         cwd=tmp_path)
     assert run.returncode == 2 and "is not a folder" in run.stderr, run.stderr

@@ -7,9 +7,7 @@ from __future__ import annotations
 import collections
 import hashlib
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -26,16 +24,15 @@ from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR, Draw, suite_keys
 from benchmark.running.episode import base_record, error_record
 from benchmark.running.generation import generate_session
+from tests.cli_fixtures import run_in_process
 
 ROOT = Path(__file__).resolve().parent.parent
-MAVSWARM = [sys.executable, "-m", "mavswarm"]
-ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT),
-                                                                  os.environ.get("PYTHONPATH")]))}
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*MAVSWARM, *args], capture_output=True, text=True, env=ENV,
-                          cwd=ROOT, timeout=600)
+    """`mavswarm ARGS` through its main in this process (what it prints and its status are the
+    command's; a process of its own would add only its start-up)."""
+    return run_in_process(*args, cwd=ROOT)
 
 
 def _stats(world: dict[str, Any]) -> tuple[Any, ...]:

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import asyncio
 import socket
-import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -17,7 +16,7 @@ import pytest
 
 from benchmark.running.results import read_records
 from llm_tools.input_limits import MAX_BODY_BYTES
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import run_in_process
 from tests.hosted_fixtures import session_file, start_host
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
@@ -135,8 +134,8 @@ def test_a_port_in_use_or_out_of_range_stops_before_anything_runs(tmp_path: Path
         taken.listen()
         port = taken.getsockname()[1]
         for bad, words in ((str(port), "cannot listen on 127.0.0.1"), ("70000", "0 to 65535")):
-            run = subprocess.run([*MAVSWARM, "bench", "run", "--agent", "external",
-                                  "--sessions", str(session), "--out", str(tmp_path / "out"),
-                                  "--port", bad], capture_output=True, text=True, timeout=60)
+            run = run_in_process("bench", "run", "--agent", "external", "--sessions",
+                                 str(session), "--out", str(tmp_path / "out"), "--port", bad,
+                                 cwd=tmp_path)
             assert run.returncode == 2 and words in run.stderr, (run.stdout, run.stderr)
     assert not (tmp_path / "out" / "results.jsonl").exists()

@@ -15,7 +15,7 @@ import pytest
 
 from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
-from tests.cli_fixtures import MAVSWARM, read_until, start_up
+from tests.cli_fixtures import MAVSWARM, read_until, run_in_process, start_up
 from tests.mosquitto_broker import Broker
 from tests.mqtt_helpers import broker, listener, request
 from tests.ports import unused_tcp_port, unused_udp_port
@@ -154,17 +154,16 @@ async def test_the_bridge_puts_a_swarm_of_another_process_on_the_bus(broker: Bro
     assert "messages published" in out
 
 
-def test_a_bad_mqtt_url_exits_2_with_the_reason() -> None:
+def test_a_bad_mqtt_url_exits_2_with_the_reason(tmp_path: Path) -> None:
     # every URL rule is in test_mqtt_units; here, that `up` reports one and starts nothing
-    out = subprocess.run([*MAVSWARM, "up", "--drones", "1", "--no-truth", "--mqtt",
-                          "mqtt://host/a+b"], capture_output=True, text=True, timeout=60)
+    out = run_in_process("up", "--drones", "1", "--no-truth", "--mqtt", "mqtt://host/a+b",
+                         cwd=tmp_path)
     assert out.returncode == 2, out.stderr
     assert "cannot be an MQTT topic level" in out.stderr and "vehicles" not in out.stdout
 
 
 def test_bench_run_with_a_bad_mqtt_url_runs_nothing(tmp_path: Path) -> None:
-    out = subprocess.run([*MAVSWARM, "bench", "run", "--agent", "noop", "--out",
-                          str(tmp_path / "r"), "--mqtt", "mqtts://h/x?ca=1&bad=2"],
-                         capture_output=True, text=True, timeout=60)
+    out = run_in_process("bench", "run", "--agent", "noop", "--out", str(tmp_path / "r"),
+                         "--mqtt", "mqtts://h/x?ca=1&bad=2", cwd=tmp_path)
     assert out.returncode == 2 and "unknown option 'bad'" in out.stderr, out.stderr
     assert not (tmp_path / "r").exists()

@@ -105,6 +105,7 @@ def test_every_endpoint_has_a_planning_rule() -> None:
     assert plannable_endpoints() == sorted(ENDPOINTS)
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds(), st.integers(12, 30), st.integers(0, 359))
 def test_positions_photos_hover_heading(world: dict[str, Any], alt: int, heading: int) -> None:
@@ -125,6 +126,7 @@ def test_positions_photos_hover_heading(world: dict[str, Any], alt: int, heading
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds(), st.integers(12, 25), st.integers(0, 3))
 def test_takeoff_landings_home_distances(world: dict[str, Any], alt: int, quarter: int) -> None:
@@ -146,6 +148,7 @@ def test_takeoff_landings_home_distances(world: dict[str, Any], alt: int, quarte
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds())
 def test_targets_photos_and_coverage(world: dict[str, Any]) -> None:
@@ -167,6 +170,7 @@ def test_targets_photos_and_coverage(world: dict[str, Any]) -> None:
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds(), st.integers(15, 30))
 def test_team_spacing_and_messages(world: dict[str, Any], alt: int) -> None:
@@ -187,6 +191,7 @@ def test_team_spacing_and_messages(world: dict[str, Any], alt: int) -> None:
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds())
 def test_charging_and_landing_everyone(world: dict[str, Any]) -> None:
@@ -204,6 +209,7 @@ def test_charging_and_landing_everyone(world: dict[str, Any]) -> None:
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds(), st.integers(40, 90))
 def test_moving_target(world: dict[str, Any], zone_at_s: int) -> None:
@@ -219,6 +225,7 @@ def test_moving_target(world: dict[str, Any], zone_at_s: int) -> None:
     _passed(_fly(world, checks))
 
 
+@pytest.mark.slow  # flies episodes: seconds each
 @FLIGHTS
 @given(worlds(task_type="target_assignment"))
 def test_task_progress_of_the_session(world: dict[str, Any]) -> None:

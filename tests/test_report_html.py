@@ -123,11 +123,10 @@ def test_report_html_holds_the_run(results: Path, tmp_path: Path) -> None:
 @pytest.mark.mavsdk
 @pytest.mark.slow
 def test_report_command_takes_the_inspector_url(results: Path, tmp_path: Path) -> None:
-    from tests.cli_fixtures import MAVSWARM
+    from tests.cli_fixtures import run_in_process
     out = tmp_path / "rep"
-    done = subprocess.run([*MAVSWARM, "bench", "report", str(results), "--out", str(out),
-                           "--inspector-url", "http://inspector.test:9000/"],
-                          capture_output=True, text=True, timeout=120)
+    done = run_in_process("bench", "report", str(results), "--out", str(out),
+                          "--inspector-url", "http://inspector.test:9000/", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert str(out / "report.html") in done.stdout
     page = (out / "report.html").read_text(encoding="utf-8")
@@ -135,9 +134,8 @@ def test_report_command_takes_the_inspector_url(results: Path, tmp_path: Path) -
     assert links and all(link.startswith("http://inspector.test:9000/inspect/")
                          for link in links)
     assert "http://127.0.0.1:8765" not in page
-    bad = subprocess.run([*MAVSWARM, "bench", "report", str(results), "--out",
-                          str(tmp_path / "bad"), "--inspector-url", "ftp://x"],
-                         capture_output=True, text=True, timeout=120)
+    bad = run_in_process("bench", "report", str(results), "--out", str(tmp_path / "bad"),
+                         "--inspector-url", "ftp://x", cwd=tmp_path)
     assert bad.returncode == 2 and "--inspector-url" in bad.stderr and "ftp://x" in bad.stderr
     assert not (tmp_path / "bad").exists()
 
