@@ -17,27 +17,20 @@ import sys
 import threading
 from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from benchmark import cli as bench_cli
-from benchmark.authoring.session_folders import SessionFolders
-from benchmark.running.replay_data import session_world
-from benchmark.server import Hub
-from benchmark.server.link_routes import LinkTarget, session_link_target
-from benchmark.server.operator_rule import served_refusal
-from benchmark.server.serve import ApiKey, serve_asgi
-from console.app import ConsoleState, create_console_app
-from console.auth import ConsoleAuth
-from console.bench_watch import LiveBoard, serve_in_thread
-from console.bundle import bundle_problem
-from console.commands import Commander
-from console.live import DEFAULT_RATE_HZ, LiveSwarm, check_rate_hz
-from console.results_index import open_paths
+from console.frame_rate import DEFAULT_RATE_HZ, check_rate_hz
 from emulator import cli as emulator_cli
-from emulator.scenario_export import scenario_to_dict
-from emulator.services import SwarmServices
-from emulator.swarm import Swarm
-from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
+
+if TYPE_CHECKING:  # the rest is imported by the commands that use it: `--help` stays quick
+    from benchmark.authoring.session_folders import SessionFolders
+    from benchmark.server import Hub
+    from benchmark.server.link_routes import LinkTarget
+    from benchmark.server.serve import ApiKey
+    from console.app import ConsoleState
+    from emulator.swarm import Swarm
+    from mavlink_gateway import Gateway
 
 __all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "add_parsers", "console_for_hub", "extend_parsers",
            "run_replay", "swarm_console"]
@@ -117,6 +110,7 @@ def _add_session_dir_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def _folders(dirs: Sequence[Path], files: Sequence[Path] = ()) -> SessionFolders:
+    from benchmark.authoring.session_folders import SessionFolders
     folders = SessionFolders(files=files)
     for folder in dirs:
         folders.allow_folder(folder)
@@ -125,6 +119,7 @@ def _folders(dirs: Sequence[Path], files: Sequence[Path] = ()) -> SessionFolders
 
 def _print(text: str) -> None:
     """Print a console URL; where the page is not built, say so (once) and how to build it."""
+    from console.bundle import bundle_problem
     print(text, flush=True)
     problem = bundle_problem()
     if problem is not None and not _warned:
@@ -144,6 +139,16 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
     """The console's live view of `swarm` served while inside; `on_ready(url, key)`;
     `session_folders`: where the editor opens session files (default: the shipped suite;
     its save folder is added)."""
+    from benchmark.authoring.session_folders import SessionFolders
+    from benchmark.server.link_routes import LinkTarget
+    from benchmark.server.serve import serve_asgi
+    from console.app import ConsoleState, create_console_app
+    from console.auth import ConsoleAuth
+    from console.commands import Commander
+    from console.live import LiveSwarm
+    from emulator.scenario_export import scenario_to_dict
+    from emulator.services import SwarmServices
+    from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
     auth, key = ConsoleAuth.single_key(key)
     scenario = swarm.fleet.scenario
     gateway_stack = contextlib.AsyncExitStack()
@@ -210,6 +215,7 @@ def _run_up(args: argparse.Namespace) -> int:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
+    from console.bench_watch import LiveBoard, serve_in_thread
     if args.bench_command != "run" or not args.web:
         return bench_cli.run_bench(args)
     board = LiveBoard()
@@ -253,6 +259,13 @@ def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey],
     """Mount the console on `serve`'s app at /console: operator and admin keys of the hub open
     it, agent keys are refused. Sessions loaded later appear as they start. The editor and
     `POST /sessions/load` share the hub's session folders, `session_dirs` added."""
+    from benchmark.running.replay_data import session_world
+    from benchmark.server.link_routes import session_link_target
+    from benchmark.server.operator_rule import served_refusal
+    from console.app import ConsoleState, create_console_app
+    from console.auth import ConsoleAuth
+    from console.commands import Commander
+    from console.live import LiveSwarm
     for folder in session_dirs:
         hub.session_folders.allow_folder(folder)
 
@@ -297,6 +310,10 @@ def console_for_hub(app: Any, hub: Hub, keys: Sequence[ApiKey],
 
 def run_replay(args: argparse.Namespace) -> int:
     """Serve the console over recorded runs until interrupted; bad paths exit 2."""
+    from benchmark.server.serve import serve_asgi
+    from console.app import ConsoleState, create_console_app
+    from console.auth import ConsoleAuth
+    from console.results_index import open_paths
     try:
         index = open_paths(args.paths, args.session)
     except ValueError as error:

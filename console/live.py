@@ -12,19 +12,18 @@ import asyncio
 import contextlib
 import json
 import logging
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from benchmark.server.link_routes import LinkTarget
 from console.commands import Commander
+from console.frame_rate import DEFAULT_RATE_HZ, check_rate_hz
 from emulator.live_state import live_state
 from emulator.swarm import Swarm
 
 __all__ = ["DEFAULT_RATE_HZ", "LiveFeed", "LiveSwarm", "check_rate_hz"]
 
-DEFAULT_RATE_HZ = 10.0
 log = logging.getLogger("mavswarm.console")
 QUEUE_FRAMES = 2  # a slow page skips frames rather than lagging behind
 
@@ -72,13 +71,6 @@ class LiveSwarm:
 def build_frame(live: LiveSwarm) -> str:
     """The frame of `live` now, as JSON text."""
     return json.dumps(live.state(), separators=(",", ":"))
-
-
-def check_rate_hz(rate_hz: float) -> float:
-    """`rate_hz` if it is a frame rate pages can take (0.5 to 60 Hz), else ValueError."""
-    if not (math.isfinite(rate_hz) and 0.5 <= rate_hz <= 60.0):
-        raise ValueError(f"rate_hz must be within 0.5..60, got {rate_hz}")
-    return rate_hz
 
 
 class LiveFeed:
