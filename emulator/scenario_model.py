@@ -6,12 +6,14 @@ drone's altitudes); `emulator.scenario` builds a world from them (the reference 
 by position, uniqueness and placement). They are lenient where the reference is: unknown
 fields are ignored, and a field given as ``null`` counts as absent (its default applies, or
 it is reported as required). Numbers are JSON numbers (not strings, not booleans) and finite.
-The JSON Schema of a scenario file is generated from `ScenarioFile`.
+The JSON Schema of a scenario file (`scenario.schema.json` beside this module) is generated
+from `ScenarioFile`: ``python -m emulator.scenario_model`` rewrites it.
 """
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
@@ -21,19 +23,20 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    GetPydanticSchema,
     PlainValidator,
     WithJsonSchema,
     model_validator,
 )
-from pydantic_core import ErrorDetails, PydanticCustomError
+from pydantic_core import ErrorDetails, PydanticCustomError, core_schema
 
 from emulator.geo import GeoOrigin
 from emulator.world import OBSTACLE_KINDS, TARGET_KINDS
 
 __all__ = [
-    "DEFAULT_MODEL", "WIND_DIRECTIONS_DEG", "DroneEntity", "EnvironmentEntity",
+    "DEFAULT_MODEL", "SCHEMA_PATH", "WIND_DIRECTIONS_DEG", "DroneEntity", "EnvironmentEntity",
     "ObstacleEntity", "OriginEntity", "PointEntity", "ScenarioFile", "TargetEntity",
-    "describe_error", "entity_label", "show",
+    "describe_error", "entity_label", "json_schema", "schema_text", "show",
 ]
 
 DEFAULT_MODEL = "generic-quad"
@@ -50,8 +53,11 @@ ENTITY_LISTS = ("drones", "targets", "obstacles")
 Number = Annotated[float, Field(strict=True, allow_inf_nan=False)]
 Positive = Annotated[float, Field(strict=True, allow_inf_nan=False, gt=0.0)]
 NonNegative = Annotated[float, Field(strict=True, allow_inf_nan=False, ge=0.0)]
-Text = Annotated[str, Field(strict=True, pattern=r"\S")]
-Ident = Annotated[str, Field(strict=True, min_length=1)]
+_NON_EMPTY = GetPydanticSchema(lambda tp, handler: core_schema.custom_error_schema(
+    handler(tp), custom_error_type="non_empty_string",
+    custom_error_message="must be a non-empty string"))
+Text = Annotated[str, Field(strict=True, pattern=r"\S"), _NON_EMPTY]
+Ident = Annotated[str, Field(strict=True, min_length=1), _NON_EMPTY]
 
 
 def show(value: object) -> str:
@@ -355,8 +361,10 @@ def _reason(error: ErrorDetails, field: str) -> str:
     if kind in bounds:
         limit = next(iter(ctx.values()))
         return f"must be {bounds[kind]} {limit:g}, got {got}"
-    if kind in ("string_type", "string_too_short", "string_pattern_mismatch"):
+    if kind == "non_empty_string":
         return f"must be a non-empty string, got {got}"
+    if kind == "string_type":
+        return f"must be a string, got {got}"
     if kind == "bool_type":
         return f"must be true or false, got {got}"
     if kind in ("model_type", "model_attributes_type", "dict_type"):
@@ -417,3 +425,24 @@ def _at(data: Any, loc: tuple[int | str, ...]) -> Any:
         except (KeyError, IndexError, TypeError):
             return None
     return data
+
+
+SCHEMA_PATH = Path(__file__).resolve().parent / "scenario.schema.json"
+
+
+def json_schema() -> dict[str, Any]:
+    """The JSON Schema of a scenario file (the MultiUAV-Plat session format's entities)."""
+    schema = ScenarioFile.model_json_schema()
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["$id"] = "https://mavswarm.dev/schemas/scenario-1.json"
+    return schema
+
+
+def schema_text() -> str:
+    """The JSON Schema file's text, as generated from the models."""
+    return json.dumps(json_schema(), indent=2, sort_keys=True) + "\n"
+
+
+if __name__ == "__main__":
+    SCHEMA_PATH.write_text(schema_text(), encoding="utf-8")
+    print(f"wrote {SCHEMA_PATH}")

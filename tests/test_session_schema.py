@@ -1,0 +1,157 @@
+"""The published JSON Schemas of scenario and session files are generated from the pydantic
+models that loading uses, and agree with what loading accepts and rejects."""
+
+from __future__ import annotations
+
+import copy
+import json
+import typing
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pytest
+
+from benchmark import session_model
+from benchmark.session_file import session_from_dict
+from benchmark.suite import SESSIONS_DIR
+from emulator import scenario_model
+from emulator.scenario import ScenarioError, scenario_from_dict
+from emulator.world import OBSTACLE_KINDS, TARGET_KINDS
+from tests.bench_fixtures import reference_session
+
+FAMILIES = ("area_search", "area_assignment_and_patrol", "target_assignment",
+            "target_tracking", "resilience")
+SAMPLES = [SESSIONS_DIR / f"{family}-{level}-1.json" for family in FAMILIES
+           for level in ("easy", "hard")]
+
+
+def _validator(schema: dict[str, Any]) -> jsonschema.Draft202012Validator:
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return jsonschema.Draft202012Validator(schema)
+
+
+SCENARIO = _validator(scenario_model.json_schema())
+SESSION = _validator(session_model.json_schema())
+
+
+@pytest.mark.parametrize("module", [scenario_model, session_model], ids=["scenario", "session"])
+def test_the_committed_schema_is_the_generated_one(module: Any) -> None:
+    assert module.SCHEMA_PATH.read_text(encoding="utf-8") == module.schema_text(), (
+        f"run python -m {module.__name__}")
+
+
+def test_the_unions_tags_are_the_worlds_kinds() -> None:
+    def tags(union: Any) -> tuple[str, ...]:
+        members = typing.get_args(typing.get_args(union)[0])
+        return tuple(typing.get_args(m.model_fields["type"].annotation)[0] for m in members)
+    assert set(tags(scenario_model.TargetEntity)) == set(TARGET_KINDS)
+    assert set(tags(scenario_model.ObstacleEntity)) == set(OBSTACLE_KINDS)
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.stem)
+def test_shipped_sessions_meet_the_session_schema(path: Path) -> None:
+    SESSION.validate(json.loads(path.read_text(encoding="utf-8")))
+
+
+def test_a_multiuav_plat_export_meets_the_scenario_schema() -> None:
+    data = reference_session()
+    data["targets"][0].update(velocity=None, moving_path=None, charge_amount=None)  # as exported
+    data["obstacles"][0].update(width=None, length=None)
+    SCENARIO.validate(data)
+    assert len(scenario_from_dict(data).vehicles) == 4
+
+
+# Shape errors: the schema and the loader both refuse them, and the loader's message names the
+# entity and the field.
+SHAPE_ERRORS: list[tuple[str, Any, str]] = [
+    ("drones", [], "session: drones must list at least one entry"),
+    ("drones.0.max_speed", "fast", "drones[0] (id a1b1c1d1): max_speed must be a number"),
+    ("drones.0.max_speed", True, "max_speed must be a number, got true"),
+    ("drones.0.battery_capacity", 0, "battery_capacity must be > 0, got 0"),
+    ("drones.0.name", " ", "name must be a non-empty string"),
+    ("drones.0.gimbal", "yes", "gimbal must be true or false"),
+    ("drones.0.position", [1, 2], "position must be an object with numbers x and y"),
+    ("drones.0.position", {"x": 1}, "position must be an object with numbers x and y"),
+    ("targets.0.type", "blob", "targets[0] (id 1a2b3c4d): type must be one of fixed, moving"),
+    ("targets.0.radius", -1, "radius must be >= 0, got -1"),
+    ("targets.2.charge_amount", 0, "targets[2] (id 9c0d1e2f): charge_amount must be > 0"),
+    ("obstacles.0.radius", "3", "obstacles[0] (id 0f1e2d3c): radius must be a number"),
+    ("obstacles.1.vertices", {"x": 0}, "vertices must be a list of {x, y} points"),
+    ("obstacles.1.vertices.1", {"y": 3}, "vertices[1] must be an object with numbers x and y"),
+    ("environment.wind_direction", "up", "environment: wind_direction must be one of north"),
+    ("environment.wind_speed", -1, "environment: wind_speed must be >= 0"),
+    ("safety_margin_m", "2", "session: safety_margin_m must be a number"),
+]
+
+
+def _set(data: Any, path: str, value: Any) -> None:
+    keys: list[Any] = [int(k) if k.isdigit() else k for k in path.split(".")]
+    for key in keys[:-1]:
+        data = data[key]
+    data[keys[-1]] = value
+
+
+@pytest.mark.parametrize(("path", "value", "message"), SHAPE_ERRORS,
+                         ids=[f"{p}={v!r}" for p, v, _ in SHAPE_ERRORS])
+def test_the_schema_and_the_loader_refuse_the_same_shapes(path: str, value: Any,
+                                                          message: str) -> None:
+    data = copy.deepcopy(reference_session())
+    _set(data, path, value)
+    assert not SCENARIO.is_valid(data)
+    with pytest.raises(ScenarioError) as caught:
+        scenario_from_dict(data, source="ref.json")
+    assert str(caught.value).startswith("ref.json: ") and message in str(caught.value)
+
+
+def test_null_reads_as_absent_in_the_loader_and_the_schema() -> None:
+    data = reference_session()
+    data["drones"][0].update(heading=None, perceived_radius=None, home_position=None)
+    data["targets"][0]["radius"] = None
+    data["environment"] = None
+    assert SCENARIO.is_valid(data)
+    scenario = scenario_from_dict(data)
+    assert scenario.vehicles[0].perceived_radius_m == scenario_model.DEFAULT_PERCEIVED_RADIUS_M
+    assert scenario.world.target("1a2b3c4d").radius_m == scenario_model.DEFAULT_TARGET_RADIUS_M
+    data["drones"][0]["name"] = None  # a required field given null is missing
+    assert not SCENARIO.is_valid(data)
+    with pytest.raises(ScenarioError, match=r"drones\[0\] \(id a1b1c1d1\): name is required"):
+        scenario_from_dict(data)
+
+
+@pytest.fixture(scope="module")
+def session_data() -> dict[str, Any]:
+    return json.loads((SESSIONS_DIR / "area_search-easy-1.json").read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"budget": {"tool_calls": 0, "sim_time_s": 10}}, "budget.tool_calls must be >= 1, got 0"),
+    ({"budget": {"tool_calls": "3", "sim_time_s": 10}},
+     "budget.tool_calls must be an integer, got \"3\""),
+    ({"text": "  "}, "text must be a non-empty string"),
+    ({"aliases": ["ok", 7]}, "aliases[1] must be a string, got 7"),
+    ({"difficulty": "brutal"}, "difficulty must be one of 'easy', 'medium' or 'hard'"),
+    ({"oracle": [[{"drone": "d1"}]]}, "oracle[0][0].op is required"),
+    ({"oracle": [{"op": "photo"}]}, "oracle[0] must be a list"),
+])
+def test_a_bad_task_names_the_field_path_and_the_schema_refuses_it(
+        session_data: dict[str, Any], change: dict[str, Any], message: str) -> None:
+    data = copy.deepcopy(session_data)
+    data["tasks"][0].update(change)
+    assert not SESSION.is_valid(data)
+    session = session_from_dict(data, source="s.json")
+    error = session.tasks[0].error
+    assert error is not None and error.startswith(f"tasks[0] (t01): {message}"), error
+    assert all(task.error is None for task in session.tasks[1:])
+
+
+def test_session_fields_are_named_in_errors(session_data: dict[str, Any]) -> None:
+    data = copy.deepcopy(session_data)
+    data["index"] = True
+    with pytest.raises(ValueError, match=r"s\.json: session: index must be an integer, got true"):
+        session_from_dict(data, source="s.json")
+    data = copy.deepcopy(session_data)
+    del data["family"]
+    assert not SESSION.is_valid(data)
+    with pytest.raises(ValueError, match=r"s\.json: session: family is required"):
+        session_from_dict(data, source="s.json")
