@@ -155,3 +155,27 @@ def test_session_fields_are_named_in_errors(session_data: dict[str, Any]) -> Non
     assert not SESSION.is_valid(data)
     with pytest.raises(ValueError, match=r"s\.json: session: family is required"):
         session_from_dict(data, source="s.json")
+
+
+def test_each_endpoints_parameters_have_a_schema_that_shipped_checks_meet() -> None:
+    from benchmark.validators.registry import ENDPOINTS
+    from benchmark.validators.tree import _LEAF_KEYS
+    validators = {name: _validator(ep.params_schema()) for name, ep in ENDPOINTS.items()}
+    for name, schema in ((n, ep.params_schema()) for n, ep in ENDPOINTS.items()):
+        assert set(schema["properties"]) == {p.name for p in ENDPOINTS[name].params}, name
+
+    def leaves(node: Any) -> list[dict[str, Any]]:
+        if isinstance(node, list):
+            return [leaf for child in node for leaf in leaves(child)]
+        if "endpoint" in node:
+            return [node]
+        return leaves(node.get("checks", []))
+    seen: set[str] = set()
+    for path in SAMPLES:
+        for task in json.loads(path.read_text(encoding="utf-8"))["tasks"]:
+            for leaf in leaves(task["checks"]):
+                assert set(leaf) <= _LEAF_KEYS | {"name", "description"}
+                validators[leaf["endpoint"]].validate(leaf.get("parameters", {}))
+                seen.add(leaf["endpoint"])
+    assert len(seen) >= 20
+    assert not validators["drone_hovering"].is_valid({"drone_id": "d1", "tolerance": -1})
