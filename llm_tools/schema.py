@@ -9,43 +9,28 @@ of readable problems rather than raising, so a model gets something it can act o
 from __future__ import annotations
 
 import inspect
-import re
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
+
+import docstring_parser
 
 from llm_tools.input_limits import MAX_ITEMS, InputError, check_bounds, check_text, preview
 
 __all__ = ["describe", "schema_for", "validate"]
 
 MAX_LISTED = 5  # unknown argument names echoed back at most
-_ARGS_LINE = re.compile(r"^\s+(\w+)(?:\s*\([^)]*\))?:\s*(.*)$")
 
 
 def describe(fn: Callable[..., Any]) -> tuple[str, dict[str, str]]:
-    """(summary, {parameter: description}) from a Google-style docstring."""
-    summary: list[str] = []
-    params: dict[str, str] = {}
-    section, current, indent = "summary", None, None
-    for line in (inspect.getdoc(fn) or "").splitlines():
-        stripped = line.strip()
-        if stripped in ("Args:", "Returns:", "Raises:"):
-            section, current = stripped[:-1], None
-            continue
-        if section == "summary":
-            summary.append(stripped)
-            continue
-        if section != "Args" or not stripped:
-            continue
-        depth = len(line) - len(line.lstrip())
-        match = _ARGS_LINE.match(line)
-        if match and (indent is None or depth == indent):
-            indent, current = depth, match.group(1)
-            params[current] = match.group(2).strip()
-        elif current is not None:
-            params[current] = f"{params[current]} {stripped}"
-    return " ".join(s for s in summary if s), params
+    """(summary, {parameter: description}) from a Google-style docstring (read by
+    docstring-parser); the summary is every paragraph before the sections, on one line."""
+    doc = docstring_parser.parse(inspect.getdoc(fn) or "",
+                                 style=docstring_parser.DocstringStyle.GOOGLE)
+    summary = " ".join(part for part in (doc.short_description, doc.long_description) if part)
+    params = {p.arg_name: " ".join((p.description or "").split()) for p in doc.params}
+    return " ".join(summary.split()), params
 
 
 def _type_schema(annotation: Any) -> dict[str, Any]:
