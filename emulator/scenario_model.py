@@ -28,6 +28,7 @@ from pydantic import (
     WithJsonSchema,
     model_validator,
 )
+from pydantic.dataclasses import dataclass as pydantic_dataclass
 from pydantic_core import ErrorDetails, PydanticCustomError, core_schema
 
 from emulator.geo import GeoOrigin
@@ -91,15 +92,14 @@ class _Entity(BaseModel):
     @model_validator(mode="before")
     @classmethod
     def _drop_nulls(cls, data: Any) -> Any:
-        if isinstance(data, dict):
+        if isinstance(data, dict) and None in data.values():
             return {k: v for k, v in data.items() if v is not None}
         return data
 
 
-class PointEntity(BaseModel):
+@pydantic_dataclass(frozen=True, slots=True, config=ConfigDict(extra="ignore"))
+class PointEntity:
     """A position in local ENU metres (x east, y north, z up; z defaults to 0)."""
-
-    model_config = ConfigDict(extra="ignore")
 
     x: Number
     y: Number
@@ -171,8 +171,8 @@ class DroneEntity(_Entity):
     @model_validator(mode="after")
     def _altitudes(self) -> DroneEntity:
         for field, point in (("position", self.position), ("home_position", self.home_position)):
-            z = 0.0 if point is None else point.xyz()[2]
-            if not 0.0 <= z <= self.max_altitude:
+            z = point.z if point is not None and point.z is not None else 0.0
+            if z < 0.0 or z > self.max_altitude:
                 raise _field_error(f"{field}.z", "must be between 0 and max_altitude "
                                    f"({self.max_altitude:g}), got {z:g}")
         return self
@@ -367,7 +367,7 @@ def _reason(error: ErrorDetails, field: str) -> str:
         return f"must be a string, got {got}"
     if kind == "bool_type":
         return f"must be true or false, got {got}"
-    if kind in ("model_type", "model_attributes_type", "dict_type"):
+    if kind in ("model_type", "model_attributes_type", "dict_type", "dataclass_type"):
         if ctx.get("class_name") == "PointEntity":
             return f"must be an object with numbers x and y, got {got}"
         return f"must be a JSON object, got {got}"
