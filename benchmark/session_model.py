@@ -15,7 +15,16 @@ import json
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr, WithJsonSchema
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictInt,
+    StrictStr,
+    WithJsonSchema,
+    with_config,
+)
+from typing_extensions import TypedDict
 
 from emulator.scenario_model import Number, Positive, ScenarioFile, Text
 
@@ -35,12 +44,11 @@ class Budget(BaseModel):
     sim_time_s: Positive
 
 
-class OracleOp(BaseModel):
+@with_config(ConfigDict(extra="allow"))
+class OracleOp(TypedDict):
     """One operation of the reference plan (`benchmark.oracle`): its kind and arguments."""
 
-    model_config = ConfigDict(extra="allow")
-
-    op: StrictStr = Field(description="goto, takeoff, photo, ... (benchmark.oracle)")
+    op: Annotated[StrictStr, Field(description="goto, takeoff, photo, ... (benchmark.oracle)")]
 
 
 class TaskFile(BaseModel):

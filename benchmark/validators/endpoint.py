@@ -79,7 +79,7 @@ class Endpoint:
             if not isinstance(key, str):
                 raise CheckDefinitionError(f"{path}: parameter names must be strings, got "
                                            f"{show(key)}")
-            if key not in names and key not in IGNORED_PARAMETERS | self.ignored:
+            if key not in names and key not in IGNORED_PARAMETERS and key not in self.ignored:
                 known = ", ".join(sorted(names)) or "none"
                 raise CheckDefinitionError(
                     f"{path}.{key}: unknown parameter for {self.name} (parameters: {known})")
@@ -94,7 +94,7 @@ class Endpoint:
             spec = next(p for p in self.params if p.name == name)
             problem = spec.problem(first, given.get(name))
             raise CheckDefinitionError(f"{path}.{name}{problem}") from None
-        params = MappingProxyType({p.name: getattr(model, p.name) for p in self.params})
+        params = MappingProxyType(model.__dict__)  # every parameter, in the specs' order
         check_entities(self, params, scenario, path)
         return params
 
@@ -108,18 +108,19 @@ class Endpoint:
                 "parameters": [p.to_json() for p in self.params]}
 
 
-_MODELS: dict[tuple[str, tuple[ParamSpec, ...]], type[BaseModel]] = {}
+_MODELS: dict[int, tuple[Endpoint, type[BaseModel]]] = {}
 
 
 def params_model(endpoint: Endpoint) -> type[BaseModel]:
-    """The pydantic model of an endpoint's parameters, built from its specs on first use."""
-    key = (endpoint.name, endpoint.params)
-    model = _MODELS.get(key)
-    if model is None:
-        model = create_model(  # type: ignore[call-overload]
-            f"{endpoint.name}_parameters", __config__=ConfigDict(extra="ignore"),
-            __doc__=endpoint.description, **{p.name: p.field() for p in endpoint.params})
-        _MODELS[key] = model
+    """The pydantic model of an endpoint's parameters, built from its specs on first use
+    (cached by identity: the cache holds the endpoint, so its id is not reused)."""
+    cached = _MODELS.get(id(endpoint))
+    if cached is not None and cached[0] is endpoint:
+        return cached[1]
+    model: type[BaseModel] = create_model(  # type: ignore[call-overload]
+        f"{endpoint.name}_parameters", __config__=ConfigDict(extra="ignore"),
+        __doc__=endpoint.description, **{p.name: p.field() for p in endpoint.params})
+    _MODELS[id(endpoint)] = (endpoint, model)
     return model
 
 
