@@ -37,7 +37,7 @@ from benchmark.session_model import SCHEMA, SessionHeader, TaskFile
 from benchmark.task_faults import TaskFaults, task_faults
 from benchmark.validators import CheckDefinitionError, Node, parse_tree
 from emulator.scenario import Scenario, ScenarioError, scenario_from_model
-from emulator.scenario_model import describe_error
+from emulator.scenario_errors import describe_error
 
 __all__ = [
     "SCHEMA",

@@ -29,6 +29,7 @@ from emulator.reference_mapping import (
     moving_target_note,
     within_param,
 )
+from emulator.scenario_errors import describe_error, entity_label, show
 from emulator.scenario_model import (
     DEFAULT_CHARGE_AMOUNT_PCT,
     DEFAULT_MODEL,
@@ -46,10 +47,7 @@ from emulator.scenario_model import (
     ScenarioFile,
     TargetEntity,
     WaypointTarget,
-    describe_error,
-    entity_label,
     rounded_mean,
-    show,
 )
 from emulator.target_motion import EntryFn, MotionSpec, motion_spec, obstacle_entry
 from emulator.world import CALM, Obstacle, Target, Wind, World
