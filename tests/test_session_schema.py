@@ -179,3 +179,16 @@ def test_each_endpoints_parameters_have_a_schema_that_shipped_checks_meet() -> N
                 seen.add(leaf["endpoint"])
     assert len(seen) >= 20
     assert not validators["drone_hovering"].is_valid({"drone_id": "d1", "tolerance": -1})
+
+
+def test_an_origin_error_names_the_file_once() -> None:
+    data = reference_session()
+    data["origin"] = {"latitude_deg": 47.0, "longitude_deg": 8.0, "altitude_amsl_m": "high"}
+    with pytest.raises(ScenarioError) as caught:
+        scenario_from_dict(data, source="ref.json")
+    assert str(caught.value) == 'ref.json: origin: altitude_amsl_m must be a number, got "high"'
+    data["origin"] = {"latitude_deg": 95.0, "longitude_deg": 8.0}
+    with pytest.raises(ScenarioError) as caught:
+        scenario_from_dict(data, source="ref.json")
+    assert str(caught.value).startswith("ref.json: origin: origin latitude 95")
+    assert str(caught.value).count("ref.json") == 1
