@@ -51,9 +51,6 @@ __all__ = [
     "task_from_dict",
 ]
 
-DIFFICULTIES = ("easy", "medium", "hard")
-
-
 class SessionFileError(ValueError):
     """Raised when a session file cannot be used at all; names the file and the field."""
 
