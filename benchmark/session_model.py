@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ForwardRef, Literal, Union
 
 from pydantic import (
     BaseModel,
@@ -22,9 +22,10 @@ from pydantic import (
     StrictInt,
     StrictStr,
     WithJsonSchema,
+    create_model,
     with_config,
 )
-from typing_extensions import TypedDict
+from typing_extensions import TypeAliasType, TypedDict
 
 from emulator.scenario_model import Number, Positive, ScenarioFile, Text
 
@@ -75,6 +76,43 @@ class TaskFile(BaseModel):
         None, description="hidden faults: {failures, link} (benchmark.task_faults)")
 
 
+def _schema_models() -> tuple[type[BaseModel], ...]:
+    """The task and the session as the schema publishes them, with the check tree typed
+    (canonical form: endpoint names as registered, `expect` a boolean): a group, a leaf of
+    one endpoint with that endpoint's parameters (`benchmark.validators`' models), or a list
+    (an "and" group). Loading reads the tree with `benchmark.validators.parse_tree`, which
+    also takes the reference's spellings. Built on first use (41 endpoint models)."""
+    from benchmark.validators.endpoint import params_model
+    from benchmark.validators.registry import ENDPOINTS
+
+    notes: dict[str, Any] = {"name": (str | None, None), "description": (str | None, None)}
+    leaves = tuple(
+        create_model(f"check_{name}", __config__=ConfigDict(extra="forbid"),
+                     __doc__=endpoint.description, **{
+                         "endpoint": (Literal[name], ...), "expect": (bool, True),
+                         "parameters": (params_model(endpoint) | None, None), **notes})
+        for name, endpoint in sorted(ENDPOINTS.items()))
+    leaf: Any = Annotated[Union[leaves], Field(discriminator="endpoint")]  # noqa: UP007
+    node: Any = TypeAliasType("CheckNode", Union[  # noqa: UP007
+        leaf, ForwardRef("CheckGroup"), list[ForwardRef("CheckNode")]])  # type: ignore[misc]
+    group_fields: dict[str, Any] = {"logic": (Literal["and", "or", "not"], "and"),
+                                    "checks": (list[node], Field(default_factory=list)),
+                                    **notes}
+    group = create_model("CheckGroup", __config__=ConfigDict(extra="forbid"),
+                         __doc__="and: all children pass; or: any passes; not: not all pass",
+                         **group_fields)
+    checks: dict[str, Any] = {"checks": (node, Field(
+        description=TaskFile.model_fields["checks"].description))}
+    task = create_model("TaskFile", __base__=TaskFile, __doc__=TaskFile.__doc__, **checks)
+    tasks: dict[str, Any] = {"tasks": (list[task], ...)}  # type: ignore[valid-type]
+    session = create_model("SessionFile", __base__=SessionFile, __doc__=SessionFile.__doc__,
+                           **tasks)
+    namespace = {"CheckGroup": group, "CheckNode": node}
+    for model in (group, task, session):
+        model.model_rebuild(_types_namespace=namespace)
+    return group, task, session
+
+
 class SessionHeader(ScenarioFile):
     """What loading checks of the whole file (the tasks are checked one by one)."""
 
@@ -93,14 +131,14 @@ class SessionFile(SessionHeader):
     description: str = ""
     seed: int | None = Field(None, description="the generator's seed (null: imported)")
     map_size_m: tuple[Number, Number] | None = Field(None, description="[width, height]")
-    tasks: list[TaskFile]  # the tasks' shape, for the schema
+    tasks: list[TaskFile]  # the tasks' shape (the published schema types their checks)
     link_faults: dict[str, Any] | None = Field(
         None, description="the session's link faults (emulator.link_faults)")
 
 
 def json_schema() -> dict[str, Any]:
     """The JSON Schema of a session file."""
-    schema = SessionFile.model_json_schema(by_alias=True)
+    schema = _schema_models()[-1].model_json_schema(by_alias=True)
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["$id"] = "https://mavswarm.dev/schemas/session-1.json"
     return schema

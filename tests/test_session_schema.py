@@ -192,3 +192,21 @@ def test_an_origin_error_names_the_file_once() -> None:
         scenario_from_dict(data, source="ref.json")
     assert str(caught.value).startswith("ref.json: origin: origin latitude 95")
     assert str(caught.value).count("ref.json") == 1
+
+
+@pytest.mark.parametrize(("checks", "valid"), [
+    ({"logic": "and", "checks": [{"endpoint": "drone_hovering",
+                                  "parameters": {"drone_id": "d1", "tolerance": 0.5}}]}, True),
+    ([{"endpoint": "drone_hovering", "parameters": {"drone_id": "d1"}, "expect": False}], True),
+    ({"logic": "xor", "checks": []}, False),
+    ({"endpoint": "drone_teleported", "parameters": {}}, False),
+    ({"endpoint": "drone_hovering", "parameters": {"drone_id": "d1", "tolerance": -1}}, False),
+    ({"endpoint": "drone_hovering", "parameters": {}}, False),
+    ({"endpoint": "drone_group_distance", "parameters": {"drone_ids": ["d1"]}}, False),
+])
+def test_the_published_check_tree_types_each_endpoints_parameters(
+        session_data: dict[str, Any], checks: Any, valid: bool) -> None:
+    data = copy.deepcopy(session_data)
+    data["tasks"][0]["checks"] = checks
+    assert SESSION.is_valid(data) == valid
+    assert (session_from_dict(data, source="s.json").tasks[0].error is None) == valid
