@@ -210,3 +210,14 @@ def test_the_published_check_tree_types_each_endpoints_parameters(
     data["tasks"][0]["checks"] = checks
     assert SESSION.is_valid(data) == valid
     assert (session_from_dict(data, source="s.json").tasks[0].error is None) == valid
+
+
+def test_an_exported_scenario_meets_the_scenario_schema_and_reads_back() -> None:
+    from emulator.scenario import default_scenario
+    from emulator.scenario_export import scenario_to_dict
+    exported = scenario_to_dict(default_scenario(12))
+    errors = [e.message for e in SCENARIO.iter_errors(exported)]
+    assert errors == []
+    again = scenario_from_dict(exported)
+    assert [v.id for v in again.vehicles] == [f"d{k}" for k in range(1, 13)]
+    assert {o.kind for o in again.world.obstacles} == set(OBSTACLE_KINDS)
