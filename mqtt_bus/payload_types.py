@@ -16,7 +16,9 @@ from agent_contract.tools import RESULT_STATUSES
 
 __all__ = [
     "REQUEST_ID_PATTERN",
+    "BenchLast",
     "BenchProgressPayload",
+    "BenchStatusPayload",
     "BenchTaskPayload",
     "EventPayload",
     "FailsafeEvent",
@@ -237,14 +239,34 @@ class BenchTaskPayload(TypedDict):
     passed: Any
 
 
+@with_config(ConfigDict(extra="forbid"))
+class BenchLast(TypedDict):
+    """The task a progress payload follows: from its record."""
+
+    key: Any
+    session: Any
+    task: Any
+    passed: Any
+
+
 @with_config(ConfigDict(
-    extra="allow", title="{prefix}/bench/{run}/progress (retained)"))
+    extra="forbid", title="{prefix}/bench/{run}/progress (retained)"))
 class BenchProgressPayload(TypedDict):
-    """A run's counts so far (retained)."""
+    """A run's counts so far (retained): after each task, then once at the end."""
 
     run: str
     tasks: int
     passed: int
     failed: int
+    last: NotRequired[BenchLast]
     finished: NotRequired[bool]
     records_in_results: NotRequired[int]
+
+
+@with_config(ConfigDict(
+    extra="forbid", title="{prefix}/bench/{run}/status (retained; offline is the Last Will)"))
+class BenchStatusPayload(TypedDict):
+    """A benchmark run's presence."""
+
+    status: Literal["online", "offline"]
+    run: str

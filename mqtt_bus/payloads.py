@@ -12,6 +12,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from mqtt_bus.payload_types import (
+    BenchProgressPayload,
+    BenchStatusPayload,
     EventPayload,
     FailsafeEvent,
     Home,
@@ -26,6 +28,8 @@ from mqtt_bus.payload_types import (
 
 __all__ = [
     "DroneSample",
+    "bench_progress_payload",
+    "bench_status_payload",
     "encode",
     "osd_payload",
     "photo_event",
@@ -149,6 +153,26 @@ def status_payload(online: bool, session: str, drones: list[str] | None = None,
         payload["drones"] = drones
     payload.update(extra)  # type: ignore[typeddict-item]
     return payload
+
+
+def bench_status_payload(online: bool, run: str) -> BenchStatusPayload:
+    return {"status": "online" if online else "offline", "run": run}
+
+
+def bench_progress_payload(run: str, counts: Mapping[str, int], *,
+                           last: Mapping[str, Any] | None = None,
+                           records_in_results: int | None = None) -> BenchProgressPayload:
+    """A run's counts after a task (`last`: its record) or at the end (`records_in_results`:
+    how many records the results file holds)."""
+    progress: BenchProgressPayload = {"run": run, "tasks": counts["tasks"],
+                                      "passed": counts["passed"], "failed": counts["failed"]}
+    if last is not None:
+        progress["last"] = {"key": last.get("key"), "session": last.get("session"),
+                            "task": last.get("task"), "passed": last.get("passed")}
+    if records_in_results is not None:
+        progress["finished"] = True
+        progress["records_in_results"] = records_in_results
+    return progress
 
 
 def encode(payload: Mapping[str, Any]) -> bytes:

@@ -14,6 +14,7 @@ from pydantic import TypeAdapter
 
 from mqtt_bus.payload_types import (
     BenchProgressPayload,
+    BenchStatusPayload,
     BenchTaskPayload,
     EventPayload,
     OsdPayload,
@@ -29,6 +30,7 @@ PAYLOAD_TYPES: dict[str, Any] = {
     "osd": OsdPayload, "state": StatePayload, "events": EventPayload, "status": StatusPayload,
     "services": ServicesRequest, "services_reply": ServicesReply,
     "bench_tasks": BenchTaskPayload, "bench_progress": BenchProgressPayload,
+    "bench_status": BenchStatusPayload,
 }
 """The type of each topic kind's payload."""
 

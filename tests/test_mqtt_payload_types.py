@@ -15,6 +15,8 @@ from agent_contract.tools import RESULT_STATUSES
 from mqtt_bus import payload_types
 from mqtt_bus.payloads import (
     DroneSample,
+    bench_progress_payload,
+    bench_status_payload,
     osd_payload,
     photo_event,
     radio_event,
@@ -43,6 +45,12 @@ BUILT: list[tuple[str, Any]] = [
     ("events", radio_event("d1", 3.0, "hello", "d2")),
     ("status", status_payload(True, "s1", ["d1", "d2"], commands=True)),
     ("status", status_payload(False, "s1")),
+    ("bench_status", bench_status_payload(True, "run-1")),
+    ("bench_progress", bench_progress_payload(
+        "run-1", {"tasks": 2, "passed": 1, "failed": 1},
+        last={"key": "s1/t02", "session": "s1", "task": "t02", "passed": False, "x": 1})),
+    ("bench_progress", bench_progress_payload("run-1", {"tasks": 2, "passed": 1, "failed": 1},
+                                              records_in_results=2)),
 ]
 
 
@@ -54,7 +62,7 @@ def test_every_builder_output_meets_its_type_and_its_published_schema(kind: str,
     jsonschema.validate(payload, SCHEMAS[kind])
 
 
-@pytest.mark.parametrize("kind", ["osd", "state", "events"])
+@pytest.mark.parametrize("kind", ["osd", "state", "events", "bench_progress", "bench_status"])
 def test_the_closed_schemas_refuse_a_key_no_builder_writes(kind: str) -> None:
     payload = dict(next(p for k, p in BUILT if k == kind), surprise=1)
     with pytest.raises(jsonschema.ValidationError):
@@ -83,3 +91,14 @@ def test_the_reply_status_is_the_tools_status_and_the_request_id_one_pattern() -
     jsonschema.validate({"id": "r-1", "tool": "land", "args": {}}, SCHEMAS["services"])
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({"id": "with space", "tool": "land"}, SCHEMAS["services"])
+
+
+def test_bench_progress_says_the_last_task_then_the_end() -> None:
+    counts = {"tasks": 3, "passed": 2, "failed": 1}
+    after = bench_progress_payload("r", counts, last={"key": "k", "session": "s", "task": "t",
+                                                      "passed": True, "checks": {}})
+    assert after == {"run": "r", "tasks": 3, "passed": 2, "failed": 1,
+                     "last": {"key": "k", "session": "s", "task": "t", "passed": True}}
+    end = bench_progress_payload("r", counts, records_in_results=3)
+    assert end == {"run": "r", "tasks": 3, "passed": 2, "failed": 1, "finished": True,
+                   "records_in_results": 3}
