@@ -86,8 +86,8 @@ class Commander:
         if tool == "hold":
             return ({}, None) if not args else ({}, "hold takes no arguments")
         spec = self._registry.get(tool)
-        assert spec is not None, tool
-        values, problems = validate({**args, "drone_id": "-"}, spec.input_schema)
+        assert spec is not None and spec.arguments is not None, tool
+        values, problems = validate({**args, "drone_id": "-"}, spec.arguments)
         if problems:
             return {}, f"{tool}: " + "; ".join(problems)
         values.pop("drone_id", None)

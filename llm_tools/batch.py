@@ -14,7 +14,9 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Awaitable, Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, Strict
 
 from agent_contract import AgentTools, BudgetExhausted
 from llm_tools.input_limits import preview
@@ -23,7 +25,8 @@ from mavlink_gateway import Outcome
 if TYPE_CHECKING:
     from llm_tools.registry import ToolSpec
 
-__all__ = ["BATCH", "MAX_BATCH_CALLS", "batch_input_schema", "batch_output_schema", "run_batch"]
+__all__ = ["BATCH", "MAX_BATCH_CALLS", "BatchArguments", "batch_input_schema",
+           "batch_output_schema", "run_batch"]
 
 BATCH = "batch"
 MAX_BATCH_CALLS = 16
@@ -33,6 +36,14 @@ DESCRIPTION = (f"Run up to {MAX_BATCH_CALLS} tool calls side by side, e.g. one p
                "batch ends when the last one does. A batch cannot contain a batch.")
 
 Call = Callable[[str, Mapping[str, Any] | None], Awaitable[dict[str, Any]]]
+
+
+class BatchArguments(BaseModel):
+    """The batch tool's arguments: 1 to MAX_BATCH_CALLS calls (each checked by `run_batch`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    calls: Annotated[list[Any], Strict(), Field(min_length=1, max_length=MAX_BATCH_CALLS)]
 
 
 def batch_input_schema(specs: Sequence[ToolSpec]) -> dict[str, Any]:

@@ -15,17 +15,20 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from pydantic import BaseModel
+
 from agent_contract import AgentTools, BudgetExhausted, tool_names
 from agent_contract.tools import ERROR_STATUS, RESULT_STATUSES
 from llm_tools.batch import (
     BATCH,
     DESCRIPTION,
+    BatchArguments,
     batch_input_schema,
     batch_output_schema,
     run_batch,
 )
 from llm_tools.input_limits import InputError, check_bounds, parse_json, preview
-from llm_tools.schema import describe, schema_for, validate
+from llm_tools.schema import arguments_model, describe, model_schema, validate
 from mavlink_vocabulary import FlightState
 
 __all__ = ["OUTPUT_SCHEMA", "ToolRegistry", "ToolSpec", "default_registry", "served_registry"]
@@ -51,6 +54,8 @@ class ToolSpec:
     description: str
     input_schema: dict[str, Any]
     output_schema: dict[str, Any] = field(default_factory=lambda: OUTPUT_SCHEMA)
+    arguments: type[BaseModel] | None = None
+    """What validates the arguments (`input_schema` is generated from it, but for batch)."""
 
 
 def _error(message: str) -> dict[str, Any]:
@@ -72,11 +77,12 @@ class ToolRegistry:
                 raise ValueError(f"two tools named {name!r}")
             method = getattr(AgentTools, name)
             summary, _ = describe(method)
-            self._specs[name] = ToolSpec(name, summary, schema_for(method, skip=1))
+            model = arguments_model(method, skip=1)
+            self._specs[name] = ToolSpec(name, summary, model_schema(model), arguments=model)
         if batch:
             singles = list(self._specs.values())
             self._specs[BATCH] = ToolSpec(BATCH, DESCRIPTION, batch_input_schema(singles),
-                                          batch_output_schema(OUTPUT_SCHEMA))
+                                          batch_output_schema(OUTPUT_SCHEMA), BatchArguments)
 
     def specs(self) -> list[ToolSpec]:
         return list(self._specs.values())
@@ -100,7 +106,8 @@ class ToolRegistry:
         except InputError as error:
             hint = "; send a JSON object" if "JSON" in error.problem else ""
             return _error(f"{name}: {error}{hint}")
-        values, problems = validate(arguments, spec.input_schema)
+        assert spec.arguments is not None, name
+        values, problems = validate(arguments, spec.arguments)
         if problems:
             return _error(f"{name}: " + "; ".join(problems))
         if name == BATCH:

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from mqtt_bus.connection import BusConnection, BusStats
-from mqtt_bus.payloads import encode
+from mqtt_bus.payloads import bench_progress_payload, bench_status_payload, encode
 from mqtt_bus.topics import BenchTopics
 from mqtt_bus.url import BrokerUrl
 
@@ -62,8 +62,8 @@ class BenchBus:
         self._connection = BusConnection(
             self.url, client_id=f"mavswarm-bench-{run}-{os.getpid()}",
             status_topic=self.topics.status,
-            online_payload=encode({"status": "online", "run": run}),
-            offline_payload=encode({"status": "offline", "run": run}),
+            online_payload=encode(bench_status_payload(True, run)),
+            offline_payload=encode(bench_status_payload(False, run)),
             queue_size=self._queue_size)
         await self._connection.__aenter__()
         await self._connection.wait_connected(2.0)
@@ -77,8 +77,7 @@ class BenchBus:
         """One task's record, as it was appended to results.jsonl."""
         self.counts["tasks"] += 1
         self.counts["passed" if record.get("passed") else "failed"] += 1
-        progress = {"run": self.topics.run, **self.counts,
-                    "last": {k: record.get(k) for k in ("key", "session", "task", "passed")}}
+        progress = bench_progress_payload(self.topics.run, self.counts, last=record)
         self._loop.call_soon_threadsafe(self._publish, encode(public_record(record)),
                                         encode(progress))
 
@@ -89,8 +88,8 @@ class BenchBus:
 
     def finish(self, total_records: int) -> None:
         """The run ended with `total_records` in results.jsonl."""
-        progress = {"run": self.topics.run, **self.counts, "finished": True,
-                    "records_in_results": total_records}
+        progress = bench_progress_payload(self.topics.run, self.counts,
+                                          records_in_results=total_records)
         self._loop.call_soon_threadsafe(self._publish_progress, encode(progress))
 
     def _publish_progress(self, progress: bytes) -> None:

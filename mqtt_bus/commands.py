@@ -21,6 +21,7 @@ from agent_contract import AgentTools, BudgetExhausted, TaskBudget, tool_names
 from llm_tools.input_limits import InputError, parse_json
 from llm_tools.registry import ToolRegistry
 from mqtt_bus.connection import BusConnection
+from mqtt_bus.payload_types import REQUEST_ID_PATTERN, ServicesRequest
 from mqtt_bus.payloads import encode
 from mqtt_bus.topics import SessionTopics
 
@@ -32,8 +33,8 @@ log = logging.getLogger("mavswarm.mqtt")
 MAX_REQUEST_BYTES = 64 * 1024
 OPERATOR_BUDGET = TaskBudget(tool_calls=1_000_000_000, sim_time_s=365 * 86_400.0)
 """Operators commanding over MQTT spend no agent's budget: theirs is never reached."""
-_REQUEST_ID = re.compile(r"^[\x21-\x7e]{1,64}$")
-_KEYS = ("id", "tool", "args")
+_REQUEST_ID = re.compile(REQUEST_ID_PATTERN)
+_KEYS = tuple(ServicesRequest.__annotations__)  # id, tool, args
 LINK_TOOLS = ("get_link", "set_link")
 """Operator commands on a drone's link faults (not agent tools)."""
 

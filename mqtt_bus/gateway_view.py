@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
-from typing import Any
 
 from mavlink_gateway import DroneLink
+from mqtt_bus.payload_types import EventPayload
 from mqtt_bus.payloads import DroneSample, photo_event, statustext_event
 
 __all__ = ["GatewayView"]
@@ -30,7 +30,7 @@ class GatewayView:
         self._primitive_of = primitive_of
         self._texts_seen = {d: len(link.status_texts) for d, link in drones.items()}
         self._captures_seen = {d: len(link.captures) for d, link in drones.items()}
-        self._events: list[dict[str, Any]] = []
+        self._events: list[EventPayload] = []
 
     @property
     def drone_ids(self) -> list[str]:
@@ -39,13 +39,13 @@ class GatewayView:
     def clock_s(self) -> float:
         return self._clock()
 
-    def add_event(self, event: dict[str, Any]) -> None:
+    def add_event(self, event: EventPayload) -> None:
         self._events.append(event)
 
     def close(self) -> None:
         pass
 
-    def drain_events(self) -> list[dict[str, Any]]:
+    def drain_events(self) -> list[EventPayload]:
         now = self._clock()
         events, self._events = self._events, []
         for drone, link in self._drones.items():

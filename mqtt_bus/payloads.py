@@ -1,11 +1,14 @@
 """What the bus publishes, as plain JSON-ready data: a drone's sample (what its own telemetry
-reports) becomes an `osd` payload and a `state` payload; events are built here too."""
+reports) becomes an `osd` payload and a `state` payload; events are built here too. Each
+builder returns the typed dict of its payload (`mqtt_bus.payload_types`), from which the
+published JSON Schemas are generated."""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 from mavlink_vocabulary import (
     BatteryFailsafe,
@@ -17,13 +20,28 @@ from mavlink_vocabulary import (
     StatusMessage,
     parse_statustext,
 )
+from mqtt_bus.payload_types import (
+    BenchProgressPayload,
+    BenchStatusPayload,
+    EventPayload,
+    FailsafeEvent,
+    Home,
+    ObstacleHoldEvent,
+    OsdPayload,
+    PhotoEvent,
+    RadioEvent,
+    StatePayload,
+    StatusPayload,
+    StatustextEvent,
+)
 
 __all__ = [
     "FAILSAFE_ACTIONS",
     "FAILSAFE_REASONS",
     "DroneSample",
+    "bench_progress_payload",
+    "bench_status_payload",
     "encode",
-    "event_payload",
     "osd_payload",
     "photo_event",
     "radio_event",
@@ -79,7 +97,7 @@ class DroneSample:
     primitive: str | None = None  # the gateway primitive running for it, if any
 
 
-def osd_payload(s: DroneSample) -> dict[str, Any]:
+def osd_payload(s: DroneSample) -> OsdPayload:
     x, y, z = s.position_m
     home_z = s.home_m[2] if s.home_m is not None else 0.0
     lat, lon, alt = s.geodetic
@@ -95,62 +113,84 @@ def osd_payload(s: DroneSample) -> dict[str, Any]:
     }
 
 
-def state_payload(s: DroneSample) -> dict[str, Any]:
+def state_payload(s: DroneSample) -> StatePayload:
     """The change-driven part (compare with `time_s` left out)."""
-    home = None
+    home: Home | None = None
     if s.home_m is not None and s.home_geodetic is not None:
         hx, hy, hz = s.home_m
         lat, lon, alt = s.home_geodetic
         home = {"x_m": _r(hx), "y_m": _r(hy), "z_m": _r(hz), "latitude_deg": _r(lat, 8),
                 "longitude_deg": _r(lon, 8), "altitude_amsl_m": _r(alt)}
-    return {"drone": s.drone, "time_s": round(s.time_s, 3), "flight_state": s.flight_state,
+    return {"drone": s.drone, "time_s": round(s.time_s, 3),
+            "flight_state": s.flight_state,  # type: ignore[typeddict-item]  # a str here
             "mode": s.mode, "armed": s.armed, "home": home, "primitive": s.primitive}
 
 
-def event_payload(drone: str, time_s: float, kind: str, **data: Any) -> dict[str, Any]:
-    return {"drone": drone, "time_s": round(time_s, 3), "kind": kind, **data}
-
-
 def statustext_event(drone: str, time_s: float, severity: int | None, text: str
-                     ) -> dict[str, Any]:
+                     ) -> EventPayload:
     """A STATUSTEXT, classified: obstacle holds and failsafes get their own kind (the text
     is kept)."""
+    time_s = round(time_s, 3)
     message = parse_statustext(text)
     if isinstance(message, ObstacleHold):
-        return event_payload(drone, time_s, "obstacle_hold", severity=severity, text=text,
-                             obstacle=message.obstacle)
+        hold: ObstacleHoldEvent = {"drone": drone, "time_s": time_s, "kind": "obstacle_hold",
+                                   "severity": severity, "text": text,
+                                   "obstacle": message.obstacle}
+        return hold
     failsafe = _failsafe(message)
     if failsafe is not None:
         reason, action = failsafe
-        return event_payload(drone, time_s, "failsafe", severity=severity, text=text,
-                             reason=reason, action=action)
-    return event_payload(drone, time_s, "statustext", severity=severity, text=text)
+        event = {"drone": drone, "time_s": time_s, "kind": "failsafe", "severity": severity,
+                 "text": text, "reason": reason, "action": action}
+        return cast(FailsafeEvent, event)  # reason and action: FAILSAFE_REASONS / _ACTIONS
+    plain: StatustextEvent = {"drone": drone, "time_s": time_s, "kind": "statustext",
+                              "severity": severity, "text": text}
+    return plain
 
 
 def photo_event(drone: str, time_s: float, index: int, position_m: tuple[float, float, float],
-                targets: list[str] | None) -> dict[str, Any]:
+                targets: list[str] | None) -> PhotoEvent:
     """A photo and what it captured as far as the drone perceived it (None: unknown, e.g. a
     vehicle behind a bridge)."""
     x, y, z = position_m
-    return event_payload(drone, time_s, "photo", index=index,
-                         position={"x_m": _r(x), "y_m": _r(y), "z_m": _r(z)},
-                         targets=targets)
+    return {"drone": drone, "time_s": round(time_s, 3), "kind": "photo", "index": index,
+            "position": {"x_m": _r(x), "y_m": _r(y), "z_m": _r(z)}, "targets": targets}
 
 
-def radio_event(sender: str, time_s: float, text: str, to: str | None) -> dict[str, Any]:
+def radio_event(sender: str, time_s: float, text: str, to: str | None) -> RadioEvent:
     """A radio message a drone sent (`to` None: a broadcast)."""
-    return event_payload(sender, time_s, "radio", to=to, broadcast=to is None, text=text)
+    return {"drone": sender, "time_s": round(time_s, 3), "kind": "radio", "to": to,
+            "broadcast": to is None, "text": text}
 
 
 def status_payload(online: bool, session: str, drones: list[str] | None = None,
-                   **extra: Any) -> dict[str, Any]:
-    payload: dict[str, Any] = {"status": "online" if online else "offline",
-                               "session": session}
+                   **extra: Any) -> StatusPayload:
+    payload: StatusPayload = {"status": "online" if online else "offline", "session": session}
     if drones is not None:
         payload["drones"] = drones
-    payload.update(extra)
+    payload.update(extra)  # type: ignore[typeddict-item]
     return payload
 
 
-def encode(payload: dict[str, Any]) -> bytes:
+def bench_status_payload(online: bool, run: str) -> BenchStatusPayload:
+    return {"status": "online" if online else "offline", "run": run}
+
+
+def bench_progress_payload(run: str, counts: Mapping[str, int], *,
+                           last: Mapping[str, Any] | None = None,
+                           records_in_results: int | None = None) -> BenchProgressPayload:
+    """A run's counts after a task (`last`: its record) or at the end (`records_in_results`:
+    how many records the results file holds)."""
+    progress: BenchProgressPayload = {"run": run, "tasks": counts["tasks"],
+                                      "passed": counts["passed"], "failed": counts["failed"]}
+    if last is not None:
+        progress["last"] = {"key": last.get("key"), "session": last.get("session"),
+                            "task": last.get("task"), "passed": last.get("passed")}
+    if records_in_results is not None:
+        progress["finished"] = True
+        progress["records_in_results"] = records_in_results
+    return progress
+
+
+def encode(payload: Mapping[str, Any]) -> bytes:
     return json.dumps(payload, separators=(",", ":"), allow_nan=False).encode()

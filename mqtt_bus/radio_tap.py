@@ -10,6 +10,7 @@ from typing import Any
 
 from mavlink_gateway import Services
 from mavlink_gateway.interfaces import SensedWorld, WorldWatch
+from mqtt_bus.payload_types import EventPayload
 from mqtt_bus.payloads import radio_event
 
 __all__ = ["RadioTap"]
@@ -19,7 +20,7 @@ class RadioTap:
     """Delegates every service to `inner`; a message sent or broadcast successfully is
     passed to `on_event` as an event payload."""
 
-    def __init__(self, inner: Services, on_event: Callable[[dict[str, Any]], None]) -> None:
+    def __init__(self, inner: Services, on_event: Callable[[EventPayload], None]) -> None:
         self.inner = inner
         self._on_event = on_event
 

@@ -11,13 +11,13 @@ from __future__ import annotations
 import asyncio
 import contextlib
 from collections.abc import AsyncIterator, Callable
-from typing import Any
 
 from agent_contract import AgentTask, AgentTools
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
 from mavlink_gateway import FleetConnection, FleetError, Gateway, profiles_from_scenario
 from mqtt_bus.commands import OPERATOR_BUDGET, CommandUnavailable
+from mqtt_bus.payload_types import EventPayload
 from mqtt_bus.radio_tap import RadioTap
 from mqtt_bus.session_bus import SessionBus
 from mqtt_bus.swarm_view import SwarmView
@@ -38,7 +38,7 @@ class LinkOnCommand:
     `udpout` to the swarm's socket) the first time each is commanded."""
 
     def __init__(self, swarm: Swarm, services: SwarmServices, session: str,
-                 on_event: Callable[[dict[str, Any]], None]) -> None:
+                 on_event: Callable[[EventPayload], None]) -> None:
         if swarm.ports.per_vehicle:
             raise ValueError("commands over MQTT need the shared-socket topology "
                              "(not --per-vehicle-ports)")

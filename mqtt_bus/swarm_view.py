@@ -20,6 +20,7 @@ from emulator.flight.listener import AutopilotListener
 from emulator.flight.mission import MissionItem
 from emulator.swarm import Swarm
 from mavlink_vocabulary import derive_flight_state
+from mqtt_bus.payload_types import EventPayload
 from mqtt_bus.payloads import DroneSample, photo_event, statustext_event
 
 __all__ = ["SwarmView"]
@@ -72,7 +73,7 @@ class SwarmView:
         self._fleet = swarm.fleet
         self._origin = swarm.fleet.world.origin
         self.primitive_of = primitive_of
-        self._events: list[dict[str, Any]] = []
+        self._events: list[EventPayload] = []
         self._tees: list[tuple[Any, _Tee]] = []
         self._homes: dict[tuple[float, float, float], tuple[float, float, float]] = {}
         for ap in self._fleet.autopilots:
@@ -101,11 +102,11 @@ class SwarmView:
         self._events.append(photo_event(drone, capture.t_s, capture.index, capture.position_m,
                                         sorted(capture.targets)))
 
-    def add_event(self, event: dict[str, Any]) -> None:
+    def add_event(self, event: EventPayload) -> None:
         """An event heard elsewhere (the radio), published with the others."""
         self._events.append(event)
 
-    def drain_events(self) -> list[dict[str, Any]]:
+    def drain_events(self) -> list[EventPayload]:
         events, self._events = self._events, []
         return events
 

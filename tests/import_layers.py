@@ -36,6 +36,7 @@ _AGENT_SIDE = _BOTTOM | {"mavlink_gateway", "agent_contract", "llm_tools"}
 _SESSIONS_AND_CHECKS = frozenset({"benchmark.authoring.session_file",
                                   "benchmark.authoring.task_faults",
                                   "benchmark.authoring.plan_steps",
+                                  "benchmark.authoring.session_model",
                                   "benchmark.scoring.validators"})
 _AGENTS = frozenset({"swarm_agents", "swarm_agents.llm", "swarm_agents.baselines",
                      "swarm_agents.teams", "swarm_agents.oracle", "swarm_agents.plugins"})
@@ -54,9 +55,13 @@ LAYERS: dict[str, frozenset[str]] = {
     "benchmark.authoring.task_faults": _AGENT_SIDE | {"emulator"},
     "benchmark.scoring.validators": _AGENT_SIDE | {"emulator"},
     "benchmark.authoring.plan_steps": _BOTTOM,
+    "benchmark.authoring.session_model": _AGENT_SIDE | {"emulator",
+                                                        "benchmark.scoring.validators"},
     "benchmark.authoring.session_file": _AGENT_SIDE | {"emulator",
                                                        "benchmark.authoring.task_faults",
                                                        "benchmark.authoring.plan_steps",
+                                                       "benchmark.authoring.session_model",
+                                  "benchmark.authoring.session_model",
                                                        "benchmark.scoring.validators"},
     "swarm_agents.oracle": _AGENT_SIDE | {"emulator"} | _SESSIONS_AND_CHECKS,
     "swarm_agents.plugins": (_AGENT_SIDE | _SESSIONS_AND_CHECKS

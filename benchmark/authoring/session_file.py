@@ -17,6 +17,8 @@ A session file is one JSON object:
   (benchmark.authoring.task_faults).
 - ``link_faults`` (optional): the session's link faults (emulator.link_faults).
 
+The format's models and JSON Schema are in `benchmark.authoring.session_model`
+(`session.schema.json`).
 Loading never lets one bad task stop the others: a task whose fields or check tree are invalid
 is kept with its `error` set, and is recorded as a task error when run.
 """
@@ -29,11 +31,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pydantic import ValidationError
+
 from agent_contract.protocol import TaskBudget
 from benchmark.authoring.plan_steps import parse_plan
+from benchmark.authoring.session_model import SCHEMA, SessionHeader, TaskFile
 from benchmark.authoring.task_faults import TaskFaults, task_faults
 from benchmark.scoring.validators import CheckDefinitionError, Node, parse_tree
-from emulator.scenario import Scenario, ScenarioError, scenario_from_dict
+from emulator.scenario import Scenario, ScenarioError, scenario_from_model
+from emulator.scenario_errors import describe_error
 
 __all__ = [
     "SCHEMA",
@@ -46,10 +52,6 @@ __all__ = [
     "session_from_dict",
     "task_from_dict",
 ]
-
-SCHEMA = "mavswarm.session/1"
-DIFFICULTIES = ("easy", "medium", "hard")
-
 
 class SessionFileError(ValueError):
     """Raised when a session file cannot be used at all; names the file and the field."""
@@ -86,76 +88,29 @@ class Session:
     data: Mapping[str, Any]
 
 
-def _field(where: str, data: Mapping[str, Any], key: str, kind: type | tuple[type, ...],
-           default: Any = ...) -> Any:
-    if key not in data:
-        if default is ...:
-            raise ValueError(f"{where}: missing field {key!r}")
-        return default
-    value = data[key]
-    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
-        shown = json.dumps(value)[:60]
-        raise ValueError(f"{where}.{key}: expected {_kind_name(kind)}, got {shown}")
-    return value
-
-
-def _kind_name(kind: type | tuple[type, ...]) -> str:
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    return " or ".join(k.__name__ for k in kinds)
-
-
-def _budget(where: str, raw: Any) -> TaskBudget:
-    if not isinstance(raw, Mapping):
-        raise ValueError(f"{where}: expected an object {{tool_calls, sim_time_s}}")
-    calls = _field(where, raw, "tool_calls", int)
-    sim_s = _field(where, raw, "sim_time_s", (int, float))
-    try:
-        return TaskBudget(calls, float(sim_s))
-    except ValueError as error:
-        raise ValueError(f"{where}: {error}") from None
-
-
-def _oracle(where: str, raw: Any) -> tuple[tuple[Mapping[str, Any], ...], ...] | None:
-    """The plan as the file writes it, once every step reads as its type."""
-    if raw is None:
-        return None
-    if not isinstance(raw, list) or not all(isinstance(p, list) for p in raw):
-        raise ValueError(f"{where}: expected a list of phases (lists of operations)")
-    parse_plan(raw, where)
-    return tuple(tuple(phase) for phase in raw)
-
-
 def task_from_dict(k: int, raw: Any, scenario: Scenario) -> TaskSpec:
     """Task k of a session; an invalid task comes back with `error` set."""
-    where = f"tasks[{k}]"
     ident = raw.get("id") if isinstance(raw, Mapping) else None
     ident = ident if isinstance(ident, str) and ident else f"#{k + 1}"
     where = f"tasks[{k}] ({ident})"
     try:
-        if not isinstance(raw, Mapping):
-            raise ValueError(f"{where}: expected an object")
-        text = _field(where, raw, "text", str)
-        if not text.strip():
-            raise ValueError(f"{where}.text: empty")
-        aliases = _field(where, raw, "aliases", list, [])
-        if not all(isinstance(a, str) for a in aliases):
-            raise ValueError(f"{where}.aliases: expected a list of strings")
-        difficulty = _field(where, raw, "difficulty", str, "medium")
-        if difficulty not in DIFFICULTIES:
-            raise ValueError(f"{where}.difficulty: expected one of {DIFFICULTIES}, "
-                             f"got {difficulty!r}")
-        budget = _budget(f"{where}.budget", _field(where, raw, "budget", Mapping))
-        if "checks" not in raw:
-            raise ValueError(f"{where}: missing field 'checks'")
         try:
-            checks = parse_tree(raw["checks"], scenario, path=f"{where}.checks")
+            task = TaskFile.model_validate(raw)
+        except ValidationError as error:
+            first = error.errors(include_url=False)[0]
+            raise ValueError(describe_error(first, raw, top=where)) from None
+        try:
+            checks = parse_tree(task.checks, scenario, path=f"{where}.checks")
         except CheckDefinitionError as error:
             raise ValueError(str(error)) from None
-        oracle = _oracle(f"{where}.oracle", raw.get("oracle"))
+        oracle = None
+        if task.oracle is not None:
+            parse_plan(raw["oracle"], f"{where}.oracle")  # every step reads as its type
+            oracle = tuple(tuple(phase) for phase in raw["oracle"])
         faults = task_faults(raw, [v.id for v in scenario.vehicles], where)
-        return TaskSpec(ident, _field(where, raw, "template", str, "custom"),
-                        _field(where, raw, "category", str, "uncategorised"), difficulty,
-                        text, tuple(aliases), budget, checks, oracle, faults=faults)
+        budget = TaskBudget(task.budget.tool_calls, task.budget.sim_time_s)
+        return TaskSpec(ident, task.template, task.category, task.difficulty, task.text,
+                        tuple(task.aliases), budget, checks, oracle, faults=faults)
     except ValueError as error:
         text = raw.get("text") if isinstance(raw, Mapping) else None
         return TaskSpec(ident, str(raw.get("template", "custom")) if isinstance(raw, Mapping)
@@ -175,25 +130,22 @@ def session_from_dict(data: Any, *, source: str = "<dict>") -> Session:
         raise SessionFileError(f"{source}: schema: expected {SCHEMA!r}, got "
                                f"{json.dumps(schema)}{hint}")
     try:
-        ident = _field("session", data, "id", str)
-        family = _field("session", data, "family", str)
-        level = _field("session", data, "level", str)
-        index = _field("session", data, "index", int, 0)
-        tasks_raw = _field("session", data, "tasks", list)
-    except ValueError as error:
-        raise SessionFileError(f"{source}: {error}") from None
+        header = SessionHeader.model_validate(data)
+    except ValidationError as error:
+        first = error.errors(include_url=False)[0]
+        raise SessionFileError(f"{source}: {describe_error(first, data)}") from None
     try:
-        scenario = scenario_from_dict(data, source=source)
+        scenario = scenario_from_model(header, data, source=source)
     except ScenarioError as error:
         raise SessionFileError(str(error)) from None
-    tasks = tuple(task_from_dict(k, raw, scenario) for k, raw in enumerate(tasks_raw))
+    tasks = tuple(task_from_dict(k, raw, scenario) for k, raw in enumerate(header.tasks))
     seen: set[str] = set()
     for task in tasks:
         if task.id in seen:
             raise SessionFileError(f"{source}: tasks: duplicate task id {task.id!r}")
         seen.add(task.id)
-    return Session(source, ident, str(data.get("name", ident)), family, level, index,
-                   scenario.task_type, scenario, tasks, data)
+    return Session(source, header.id, str(data.get("name", header.id)), header.family,
+                   header.level, header.index, scenario.task_type, scenario, tasks, data)
 
 
 def read_session_json(path: str | Path) -> Any:

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
+from pydantic import BaseModel, ConfigDict, ValidationError, create_model
+
 from benchmark.scoring.validators._errors import CheckDefinitionError
 from benchmark.scoring.validators.context import CheckContext
 from benchmark.scoring.validators.params import ENTITY_KINDS, ParamSpec, show
@@ -24,6 +26,7 @@ __all__ = [
     "check_entities",
     "different",
     "ordered",
+    "params_model",
     "target_kind",
 ]
 
@@ -76,28 +79,49 @@ class Endpoint:
             if not isinstance(key, str):
                 raise CheckDefinitionError(f"{path}: parameter names must be strings, got "
                                            f"{show(key)}")
-            if key not in names and key not in IGNORED_PARAMETERS | self.ignored:
+            if key not in names and key not in IGNORED_PARAMETERS and key not in self.ignored:
                 known = ", ".join(sorted(names)) or "none"
                 raise CheckDefinitionError(
                     f"{path}.{key}: unknown parameter for {self.name} (parameters: {known})")
-        values: dict[str, Any] = {}
-        for spec in self.params:
-            value = raw.get(spec.name)
-            where = f"{path}.{spec.name}"
-            if value is None:
-                if spec.required:
-                    raise CheckDefinitionError(f"{where}: is required by {self.name}")
-                values[spec.name] = spec.default
-            else:
-                values[spec.name] = spec.coerce(value, where)
-        params = MappingProxyType(values)
+        given = {k: v for k, v in raw.items() if k in names and v is not None}
+        try:
+            model = params_model(self).model_validate(given)
+        except ValidationError as error:
+            first = error.errors(include_url=False)[0]
+            name = str(first["loc"][0])
+            if first["type"] == "missing" and len(first["loc"]) == 1:
+                raise CheckDefinitionError(f"{path}.{name}: is required by {self.name}") from None
+            spec = next(p for p in self.params if p.name == name)
+            problem = spec.problem(first, given.get(name))
+            raise CheckDefinitionError(f"{path}.{name}{problem}") from None
+        params = MappingProxyType(model.__dict__)  # every parameter, in the specs' order
         check_entities(self, params, scenario, path)
         return params
+
+    def params_schema(self) -> dict[str, Any]:
+        """The JSON Schema of the endpoint's parameters (what `normalise` accepts)."""
+        return params_model(self).model_json_schema()
 
     def to_json(self) -> dict[str, Any]:
         """A description of the endpoint for listings."""
         return {"name": self.name, "kind": self.kind, "description": self.description,
                 "parameters": [p.to_json() for p in self.params]}
+
+
+_MODELS: dict[int, tuple[Endpoint, type[BaseModel]]] = {}
+
+
+def params_model(endpoint: Endpoint) -> type[BaseModel]:
+    """The pydantic model of an endpoint's parameters, built from its specs on first use
+    (cached by identity: the cache holds the endpoint, so its id is not reused)."""
+    cached = _MODELS.get(id(endpoint))
+    if cached is not None and cached[0] is endpoint:
+        return cached[1]
+    model: type[BaseModel] = create_model(  # type: ignore[call-overload]
+        f"{endpoint.name}_parameters", __config__=ConfigDict(extra="ignore"),
+        __doc__=endpoint.description, **{p.name: p.field() for p in endpoint.params})
+    _MODELS[id(endpoint)] = (endpoint, model)
+    return model
 
 
 def check_entities(endpoint: Endpoint, params: Params, scenario: Scenario | None,
