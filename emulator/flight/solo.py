@@ -31,6 +31,7 @@ __all__ = ["ARRIVED", "OBSTACLE_STOP", "STEADY", "TOUCHED_DOWN", "YAW_REACHED", 
 # What happened to a solo vehicle in its step (bits of `SoloVehicle.step`'s result).
 ARRIVED, YAW_REACHED, TOUCHED_DOWN, OBSTACLE_STOP = 1, 2, 4, 8
 STEADY = 16  # no acceleration and no yaw change: it may cruise from here
+_EVENTS = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
 
 ACCEL_STEADY_M_S2 = 1e-6  # emulator.flight.cruise's bounds
 YAW_STEADY_DEG = 1e-9
@@ -222,6 +223,167 @@ class SoloVehicle:
                 and -YAW_STEADY_DEG <= step <= YAW_STEADY_DEG and not self.yaw_tracking):
             events |= STEADY
         return events
+
+    @property
+    def rows(self) -> list[float]:
+        """x, y, z, yaw and moving (1.0 or 0.0) of every step taken, one after the other."""
+        return self._rows
+
+    def snapshot(self) -> tuple:
+        """The state `run` changes, for `restore` (the rows keep their own length)."""
+        return (self.px, self.py, self.pz, self.vx, self.vy, self.vz, self.ax, self.ay,
+                self.az, self.yaw, self.yaw_step, self.tracking, self.yaw_tracking, self.moving,
+                self._check_at, len(self._rows))
+
+    def restore(self, state: tuple) -> None:
+        (self.px, self.py, self.pz, self.vx, self.vy, self.vz, self.ax, self.ay, self.az,
+         self.yaw, self.yaw_step, self.tracking, self.yaw_tracking, self.moving,
+         self._check_at, rows) = state
+        del self._rows[rows:]
+
+    def run(self, base_step: int, count: int, bits: list[int]) -> None:
+        """Up to `count` steps after step number base_step (the i-th of them ends at
+        `(base_step + i) * dt + dt`, as the fleet's plain step works it out), each what
+        `step` does (the same operations in the same order), appending each step's bits to
+        `bits`. Stops after a step in which something other than STEADY happened, and before
+        a step (not the first) at which the guard may measure the clearance, so that a caller
+        may `restore` a snapshot and run fewer steps again without the guard having looked
+        ahead."""
+        px, py, pz = self.px, self.py, self.pz
+        vx, vy, vz = self.vx, self.vy, self.vz
+        ax, ay, az = self.ax, self.ay, self.az
+        yaw, step = self.yaw, self.yaw_step
+        tracking, yaw_tracking, moving = self.tracking, self.yaw_tracking, self.moving
+        gx, gy, gz = self._goal
+        dt, inv_dt = self._dt, self._inv_dt
+        active, position, landing = self._active, self._position, self._landing
+        speed_xy, accel_xy, accel_z = self._speed_xy, self._accel_xy, self._accel_z
+        climb, descent, airspeed = self._climb, self._descent, self._airspeed
+        dv_xy_max, lim_z, yaw_step_max = self._dv_xy_max, self._dv_z_max, self._yaw_step_max
+        acceptance2, goal_yaw, wind = self._acceptance2, self._goal_yaw, self._wind
+        check_at, k = self._check_at, self.k
+        rows = self._rows
+        push = bits.append
+        done = 0
+        while done < count:
+            t_s = (base_step + done) * dt + dt
+            if done and t_s >= check_at:
+                break  # the guard looks at this step: the caller runs it as a first step
+            done += 1
+            ex, ey, ez = gx - px, gy - py, gz - pz
+            d_xy = _hypot(ex, ey)
+            if active:
+                dist = _sqrt(d_xy * d_xy + ez * ez)
+                inv = 1.0 / (dist if dist > 1e-9 else 1e-9)
+                h = d_xy * inv
+                w = abs(ez) * inv
+                vz_lim = climb if ez >= 0.0 else descent
+                if h > 0.0:
+                    speed_h, accel_h = speed_xy / h, accel_xy / h
+                else:
+                    speed_h = accel_h = _INF
+                if w > 0.0:
+                    speed_v, accel_v = vz_lim / w, accel_z / w
+                else:
+                    speed_v = accel_v = _INF
+                s_max = speed_v if speed_v < speed_h else speed_h
+                if s_max == _INF:
+                    s_max = vz_lim if vz_lim < speed_xy else speed_xy
+                a_eff = accel_v if accel_v < accel_h else accel_h
+                if a_eff == _INF:
+                    a_eff = accel_z if accel_z < accel_xy else accel_xy
+                speed = _sqrt(2.0 * BRAKING_SHARE * a_eff * dist)
+                if s_max < speed:
+                    speed = s_max
+                reach = dist * inv_dt
+                if reach < speed:
+                    speed = reach
+                f = speed * inv
+                dvx, dvy, dvz = ex * f - vx, ey * f - vy, ez * f - vz
+                dv_xy = _hypot(dvx, dvy)
+                scale = dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
+                if scale < 1.0:
+                    nvx, nvy = vx + dvx * scale, vy + dvy * scale
+                else:
+                    nvx, nvy = vx + dvx, vy + dvy
+                nvz = vz + (-lim_z if dvz < -lim_z else lim_z if dvz > lim_z else dvz)
+                if wind is None:
+                    air = _hypot(nvx, nvy)
+                    if air > airspeed:
+                        ratio = airspeed / air
+                        nvx, nvy = nvx * ratio, nvy * ratio
+                else:
+                    airx, airy = nvx - wind[0], nvy - wind[1]
+                    air = _hypot(airx, airy)
+                    if air > airspeed:
+                        ratio = airspeed / air
+                        nvx, nvy = airx * ratio + wind[0], airy * ratio + wind[1]
+            else:
+                nvx = nvy = nvz = 0.0
+            npx, npy, npz = px + nvx * dt, py + nvy * dt, pz + nvz * dt
+            events = 0
+            if npz < 0.0:
+                npz = 0.0
+                if nvz < 0.0:
+                    nvz = 0.0
+                if landing:
+                    events = TOUCHED_DOWN
+            if t_s >= check_at and active and abs(nvx) + abs(nvy) + abs(nvz) > 0.0:
+                guard = self._guard
+                assert guard is not None
+                if guard(k, t_s, npx, npy, npz):
+                    npx, npy, npz = px, py, pz
+                    nvx = nvy = nvz = 0.0
+                    events |= OBSTACLE_STOP
+                check_at = guard.check_at_s(k)
+            ax = (nvx - vx) * inv_dt
+            ay = (nvy - vy) * inv_dt
+            az = (nvz - vz) * inv_dt
+            vx, vy, vz = nvx, nvy, nvz
+            px, py, pz = npx, npy, npz
+            if goal_yaw == goal_yaw:
+                desired = goal_yaw
+            elif position and d_xy > 2.0:
+                desired = _degrees(_atan2(ex, ey))
+            else:
+                desired = yaw
+            if desired == yaw:
+                diff = step = 0.0
+            else:
+                diff = (desired - yaw + 540.0) % 360.0 - 180.0
+                if active:
+                    step = -yaw_step_max if diff < -yaw_step_max else (
+                        yaw_step_max if diff > yaw_step_max else diff)
+                    yaw = (yaw + step) % 360.0
+                else:
+                    step = 0.0
+            if yaw_tracking and abs(diff - step) < YAW_REACHED_DEG:
+                yaw_tracking = False
+                events |= YAW_REACHED
+            if tracking != TRACK_NONE:
+                ex, ey, ez = gx - npx, gy - npy, gz - npz
+                dist2 = ex * ex + ey * ey + ez * ez
+                if dist2 <= acceptance2 and (tracking == TRACK_PASS or (
+                        tracking == TRACK_SETTLE and dist2 <= _SETTLED_GOAL2
+                        and nvx * nvx + nvy * nvy + nvz * nvz <= _SETTLED_SPEED2)):
+                    tracking = TRACK_NONE
+                    events |= ARRIVED
+            moving = active and bool(nvx or nvy or nvz or yaw_tracking)
+            rows += (npx, npy, npz, yaw, 1.0 if moving else 0.0)
+            if (-ACCEL_STEADY_M_S2 <= ax <= ACCEL_STEADY_M_S2
+                    and -ACCEL_STEADY_M_S2 <= ay <= ACCEL_STEADY_M_S2
+                    and -ACCEL_STEADY_M_S2 <= az <= ACCEL_STEADY_M_S2
+                    and -YAW_STEADY_DEG <= step <= YAW_STEADY_DEG and not yaw_tracking):
+                events |= STEADY
+            push(events)
+            if events & _EVENTS:
+                break
+        self.px, self.py, self.pz = px, py, pz
+        self.vx, self.vy, self.vz = vx, vy, vz
+        self.ax, self.ay, self.az = ax, ay, az
+        self.yaw, self.yaw_step = yaw, step
+        self.tracking, self.yaw_tracking, self.moving = tracking, yaw_tracking, moving
+        self._check_at = check_at
 
     def store(self, dyn: FleetDynamics) -> None:
         """Write the vehicle's state back into its row of dyn (positions excepted: the fleet
