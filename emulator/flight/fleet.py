@@ -255,7 +255,9 @@ class Fleet:
         up, braking or turning; returns the steps run."""
         dyn, dt, bat, n = self.dyn, self.dt_s, self.bat, self.n
         guard = _SoloGuard(self) if self.guard.enabled else None
-        solos = [SoloVehicle(dyn, k, dt, guard) for k in plan.solo.tolist()]
+        rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
+        solos = [SoloVehicle(dyn, k, dt, guard, rows) for k in plan.solo.tolist()]
+        stepping = [solo.step for solo in solos]
         moving = self._moving_mask()
         start = self.step_count
         charging = bat.charge_rate_pct_s > 0.0
@@ -270,45 +272,15 @@ class Fleet:
         levels = _NO_LEVELS
         battery_step = False
         battery_j = BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS  # the first battery step
-        total = plan.steps
         j = 0
-        # Stretches up to the next battery step: each solo vehicle runs the stretch on its
-        # own (SoloVehicle.run), which it cuts short after something happens to it; where the
-        # stretch ends earlier (another vehicle's event, every solo vehicle steady again) the
-        # vehicles that ran further are put back and run again as far as that step.
-        while j < total:
-            count = (battery_j if battery_j < total else total) - j
-            snaps = [solo.snapshot() for solo in solos]
-            runs: list[list[int]] = []
-            for solo in solos:
-                run_bits: list[int] = []
-                solo.run(start + j, count, run_bits)
-                runs.append(run_bits)
-                if len(run_bits) < count:
-                    count = len(run_bits)
-            stop, last = count, False
-            for i in range(count):
-                happened, steady = 0, STEADY
-                for run_bits in runs:
-                    b = run_bits[i]
-                    happened |= b
-                    steady &= b
-                if happened & _SOLO_EVENTS:
-                    stop, last = i + 1, True
-                    break
-                if not steady:
-                    settling = True
-                elif settling and j + i + 1 >= LEAP_RETRY_STEPS:
-                    stop, last = i + 1, True
-                    break
-            for solo, snap, run_bits in zip(solos, snaps, runs, strict=True):
-                if len(run_bits) > stop:
-                    solo.restore(snap)
-                    run_bits.clear()
-                    solo.run(start + j, stop, run_bits)
-            j += stop
-            bits = [run_bits[-1] for run_bits in runs]
-            charge.extend([bat.pct] * (stop - 1))
+        while j < plan.steps:
+            t_guard = (start + j) * dt + dt  # the plain step's now_s + dt_s
+            j += 1
+            happened, steady = 0, STEADY
+            for i, step in enumerate(stepping):
+                bits[i] = b = step(t_guard)
+                happened |= b
+                steady &= b
             battery_step = j == battery_j
             if battery_step:
                 battery_j += BATTERY_EVERY_STEPS
@@ -322,14 +294,17 @@ class Fleet:
                         solo.vx - wind_x, solo.vy - wind_y), solo.vz)
                 levels = bat.apply(deltas)
                 if levels.size or (any_charging and _any(charging & (bat.pct >= 100.0))):
-                    last = True  # not an event: just stop here for the autopilots
+                    happened |= ARRIVED  # not an arrival: just stop here for the autopilots
             charge.append(bat.pct)
-            if last:
+            if happened & _SOLO_EVENTS:
                 break
+            if not steady:
+                settling = True
+            elif settling and j >= LEAP_RETRY_STEPS:
+                break  # every solo vehicle cruises now: the whole fleet may leap
         steps = np.arange(start + 1, start + j + 1)
         positions = dyn.position_m + dyn.velocity_m_s * ((steps - start)[:, None, None] * dt)
-        solo_rows = np.array([solo.rows for solo in solos]).reshape(len(solos), j, 5)
-        solo_rows = solo_rows.transpose(1, 0, 2)
+        solo_rows = np.array(rows).reshape(j, len(solos), 5)
         index = plan.solo
         positions[:, index] = solo_rows[:, :, :3]
         yaw = np.empty((j, n))
