@@ -36,6 +36,8 @@ PHOTO_COST_PCT = 0.05
 MESSAGE_COST_PCT = 0.01  # per message sent (a broadcast counts once)
 
 BATTERY_OK, BATTERY_LOW, BATTERY_CRITICAL, BATTERY_EMERGENCY = 0, 1, 2, 3
+_NO_CHANGE = np.empty(0, dtype=np.intp)
+_min, _max = np.minimum.reduce, np.maximum.reduce
 
 
 class FleetBattery:
@@ -119,6 +121,8 @@ class FleetBattery:
 
     def _update_levels(self) -> np.ndarray:
         pct = self.pct
+        if not _count(self.level) and _min(pct) > _max(self.levels_pct, axis=None):
+            return _NO_CHANGE  # every charge above every level, and every level already OK
         level = (pct <= self.low_pct).view(np.int8) + (pct <= self.critical_pct).view(np.int8)
         level += (pct <= self.emergency_pct).view(np.int8)
         changed = _indices(level != self.level)

@@ -194,25 +194,40 @@ def _vehicle_steps(k: int, control: int, tracking: int, v: list[float], p: list[
     """The steps one vehicle with no acceleration and no yaw change can cruise (-inf: none)."""
     vx, vy, vz = v
     ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - p[2]
-    s = math.sqrt(vx * vx + vy * vy + vz * vz)
-    d = math.sqrt(ex * ex + ey * ey + ez * ez)
+    s = _sqrt(vx * vx + vy * vy + vz * vz)
+    d = _sqrt(ex * ex + ey * ey + ez * ez)
     if control == CONTROL_NONE or not s > 1e-9:
         at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
-        return battery.steps(k, vx, vy, vz) if at_rest else -math.inf
+        return battery.steps(k, vx, vy, vz) if at_rest else _NEG_INF
     if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
-        return -math.inf  # not heading straight for the goal
-    d_min = max(d, 1e-9)
-    d_xy = math.hypot(ex, ey)
+        return _NEG_INF  # not heading straight for the goal
+    d_min = d if d > 1e-9 else 1e-9
+    d_xy = _hypot(ex, ey)
     h, w = d_xy / d_min, abs(ez) / d_min
-    if abs(s - _along_line_limit(speed_xy, vz_lim, h, w)) > ACCEL_STEADY_M_S2 * dt:
-        return -math.inf  # not at the speed its commands ask for now
+    # _along_line_limit of the speed and of the acceleration, written out
+    if h > 0.0:
+        speed_h, accel_h = speed_xy / h, accel_xy / h
+    else:
+        speed_h = accel_h = _INF
+    if w > 0.0:
+        speed_v, accel_v = vz_lim / w, accel_z / w
+    else:
+        speed_v = accel_v = _INF
+    along = speed_h if speed_h <= speed_v else speed_v
+    if along == _INF:
+        along = speed_xy if speed_xy <= vz_lim else vz_lim
+    if abs(s - along) > ACCEL_STEADY_M_S2 * dt:
+        return _NEG_INF  # not at the speed its commands ask for now
     if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
-        desired = math.degrees(math.atan2(ex, ey)) if d_xy > 2.0 else yaw
+        desired = _degrees(_atan2(ex, ey)) if d_xy > 2.0 else yaw
     else:
         desired = goal_yaw
     if abs((desired - yaw + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
-        return -math.inf  # about to turn
-    free_m = d - s * s / (2.0 * BRAKING_SHARE * _along_line_limit(accel_xy, accel_z, h, w))
+        return _NEG_INF  # about to turn
+    a_eff = accel_h if accel_h <= accel_v else accel_v
+    if a_eff == _INF:
+        a_eff = accel_xy if accel_xy <= accel_z else accel_z
+    free_m = d - s * s / (2.0 * BRAKING_SHARE * a_eff)
     if tracking != TRACK_NONE:
         free_m = min(free_m, d - acceptance)
     if vz < 0.0:
@@ -257,6 +272,8 @@ def _along_line_limit(limit_h: float, limit_v: float, h: float, w: float) -> flo
 
 
 _NO_SOLO = np.empty(0, dtype=np.intp)
+_INF, _NEG_INF = math.inf, -math.inf
+_sqrt, _hypot, _atan2, _degrees = math.sqrt, math.hypot, math.atan2, math.degrees
 
 
 def _battery_horizon_steps(fleet: FleetView) -> np.ndarray:
