@@ -96,6 +96,12 @@ class FleetBattery:
         self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
 
+    def set_pct(self, pct: np.ndarray) -> np.ndarray:
+        """Replace every charge (already within 0-100 %); returns indices whose level
+        changed."""
+        self.pct = pct
+        return self._update_levels()
+
     def steps(self, count: int, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
               airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
         """`count` calls of `step` with the same inputs (steady flight), at once; returns the
