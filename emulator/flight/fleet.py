@@ -10,7 +10,12 @@ from emulator.flight.arrays import any_true as _any
 from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 from emulator.flight.autopilot import Autopilot
-from emulator.flight.battery import FleetBattery
+from emulator.flight.battery import (
+    CLIMB_POWER_PER_M_S,
+    GROUND_IDLE_POWER,
+    SPEED_POWER_PER_M2_S2,
+    FleetBattery,
+)
 from emulator.flight.collision import ClearanceGuard
 from emulator.flight.cruise import CruisePlan, cruise_plan
 from emulator.flight.dynamics import (
@@ -270,7 +275,8 @@ class Fleet:
         deltas: list[float] | None = None  # per battery step (the same for the cruising ones)
         pct = bat.pct.tolist()
         floor_pct = float(bat.levels_pct.max())
-        flags: list[tuple[bool, bool]] = []  # airborne, armed of each solo vehicle
+        # airborne, armed, full charge per s of hover (%/s) and charge rate of each solo vehicle
+        flags: list[tuple[bool, bool, float, float]] = []
         bat_dt = dt * BATTERY_EVERY_STEPS
         wind_x, wind_y = dyn.wind_m_s.tolist()
         charge: list[list[float]] = []
@@ -296,11 +302,22 @@ class Fleet:
                     deltas = bat.deltas(bat_dt, self.airborne, self.armed, dyn.airspeed_m_s(),
                                         dyn.velocity_m_s[:, 2]).tolist()
                     flags = list(zip(self.airborne[plan.solo].tolist(),
-                                     self.armed[plan.solo].tolist(), strict=True))
-                for solo, (airborne, armed) in zip(solos, flags, strict=True):
-                    deltas[solo.k] = bat.delta(solo.k, bat_dt, airborne, armed, math.hypot(
-                        solo.vx - wind_x, solo.vy - wind_y), solo.vz)
-                pct = [_clip_pct(p + d) for p, d in zip(pct, deltas, strict=True)]
+                                     self.armed[plan.solo].tolist(),
+                                     (100.0 / bat.hover_endurance_s[plan.solo]).tolist(),
+                                     bat.charge_rate_pct_s[plan.solo].tolist(), strict=True))
+                for solo, (airborne, armed, full_pct_s, charge_pct_s) in zip(
+                        solos, flags, strict=True):
+                    # FleetBattery.delta, written out
+                    if airborne:
+                        air = _hypot(solo.vx - wind_x, solo.vy - wind_y)
+                        power = (1.0 + SPEED_POWER_PER_M2_S2 * (air * air)
+                                 + CLIMB_POWER_PER_M_S * max(solo.vz, 0.0))
+                    else:
+                        power = GROUND_IDLE_POWER if armed else 0.0
+                    deltas[solo.k] = (charge_pct_s - full_pct_s * power) * bat_dt
+                pct = [p + d for p, d in zip(pct, deltas, strict=True)]
+                if min(pct) < 0.0 or max(pct) > 100.0:
+                    pct = [_clip_pct(p) for p in pct]
                 if min(pct) > floor_pct and not _count(bat.level):
                     levels = _NO_LEVELS
                 else:
@@ -360,6 +377,9 @@ def _clip_pct(pct: float) -> float:
     """np.minimum(np.maximum(pct, 0.0), 100.0) for one float (FleetBattery.apply)."""
     pct = 0.0 if pct < 0.0 else pct
     return 100.0 if pct > 100.0 else pct
+
+
+_hypot = math.hypot
 
 
 class _SoloGuard:
