@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from emulator.flight.battery import FleetBattery
 from emulator.flight.cruise import _cruise_steps_arrays, _cruise_steps_floats
 from emulator.flight.dynamics import (
     CONTROL_NONE,
@@ -174,3 +175,42 @@ def test_a_solo_vehicle_stops_at_an_obstacle_like_the_fleet_step() -> None:
     stops = [solo.step(fleet.dt_s * (i + 1)) & OBSTACLE_STOP for i in range(200)]
     assert any(stops)
     assert solo.px < 25.0  # never inside the tower (radius 5 m around x = 30)
+
+
+def test_battery_levels_crossed_while_solo_vehicles_are_stepped_act_as_in_plain_steps(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The cruise keeps the charges in floats: a level crossed during it must stop it at the
+    same step, with the same failsafe, as plain steps."""
+    crossings = []  # levels worked out by the battery during a cruise (FleetBattery.set_pct)
+    set_pct = FleetBattery.set_pct
+    monkeypatch.setattr(FleetBattery, "set_pct",
+                        lambda bat, pct: crossings.append(set_pct(bat, pct)) or crossings[-1])
+    results = []
+    for fast in (False, True):
+        fleet = _mission_fleet(4)
+        fleet.bat.pct[:] = [8.2 + 0.3 * k for k in range(4)]  # critical (7 %) on the way
+        for k, ap in enumerate(fleet.autopilots):
+            while fleet.now_s < 0.7 * k:
+                fleet.run(1, fast_forward=fast)
+            ap.arm()
+            ap.takeoff(10.0 + k)
+        while fleet.any_busy:
+            fleet.run(50, fast_forward=fast)
+        for k, ap in enumerate(fleet.autopilots):
+            ap.reposition((200.0 + 30.0 * k, 150.0 - 20.0 * k, 15.0))
+            fleet.run(13 * k + 1, fast_forward=fast)
+        while fleet.any_busy:  # until the battery failsafes' returns have landed
+            fleet.run(50, fast_forward=fast)
+        rows, events = _truth(fleet)
+        results.append((fleet.now_s, rows, events, fleet.bat.pct.copy()))
+    (t_plain, rows_plain, events_plain, pct_plain), (t_fast, rows_fast, events_fast,
+                                                     pct_fast) = results
+    assert t_plain == t_fast
+    assert events_plain == events_fast
+    assert sum(kind == "failsafe" for _, _, kind in events_fast) >= 4
+    assert any(changed.size for changed in crossings)
+    np.testing.assert_allclose(pct_fast, pct_plain, rtol=0, atol=1e-9)
+    for plain, fast in zip(rows_plain, rows_fast, strict=True):
+        assert plain.shape == fast.shape
+        assert np.abs(plain[:, 1:4] - fast[:, 1:4]).max() < 1e-6
+        assert np.abs(plain[:, 5] - fast[:, 5]).max() < 1e-9  # the charge, step by step

@@ -36,6 +36,8 @@ PHOTO_COST_PCT = 0.05
 MESSAGE_COST_PCT = 0.01  # per message sent (a broadcast counts once)
 
 BATTERY_OK, BATTERY_LOW, BATTERY_CRITICAL, BATTERY_EMERGENCY = 0, 1, 2, 3
+_NO_CHANGE = np.empty(0, dtype=np.intp)
+_min, _max = np.minimum.reduce, np.maximum.reduce
 
 
 class FleetBattery:
@@ -94,6 +96,12 @@ class FleetBattery:
         self.pct = np.minimum(np.maximum(self.pct + delta, 0.0), 100.0)
         return self._update_levels()
 
+    def set_pct(self, pct: np.ndarray) -> np.ndarray:
+        """Replace every charge (already within 0-100 %); returns indices whose level
+        changed."""
+        self.pct = pct
+        return self._update_levels()
+
     def steps(self, count: int, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
               airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
         """`count` calls of `step` with the same inputs (steady flight), at once; returns the
@@ -119,6 +127,8 @@ class FleetBattery:
 
     def _update_levels(self) -> np.ndarray:
         pct = self.pct
+        if not _count(self.level) and _min(pct) > _max(self.levels_pct, axis=None):
+            return _NO_CHANGE  # every charge above every level, and every level already OK
         level = (pct <= self.low_pct).view(np.int8) + (pct <= self.critical_pct).view(np.int8)
         level += (pct <= self.emergency_pct).view(np.int8)
         changed = _indices(level != self.level)

@@ -13,6 +13,7 @@ step of the trajectory is recorded, and no step runs past a timer.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -154,31 +155,33 @@ def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[
     """`_cruise_steps_arrays` vehicle by vehicle in Python floats (cheaper for a few); None
     as soon as more than max_solo vehicles cannot cruise for MIN_CRUISE_STEPS."""
     dyn, dt, now = fleet.dyn, fleet.dt_s, fleet.now_s
-    short_left = dyn.n if max_solo is None else max_solo
+    n = dyn.n
+    short_left = n if max_solo is None else max_solo
     yaw_step = dyn.yaw_step_deg
-    yaw_steps = [0.0] * dyn.n if yaw_step is None else yaw_step.tolist()
-    check_at = (fleet.guard.check_at_s.tolist() if fleet.guard.enabled
-                else [math.inf] * dyn.n)
+    yaw_steps = [0.0] * n if yaw_step is None else yaw_step.tolist()
+    check_at = fleet.guard.check_at_s.tolist() if fleet.guard.enabled else [_INF] * n
     accel_xy, accel_z = dyn.accel_xy_m_s2.tolist(), dyn.accel_z_m_s2.tolist()
     acceptance = dyn.acceptance_m.tolist()
     speed_xy, climb, descent = (dyn.speed_xy_m_s.tolist(), dyn.climb_m_s.tolist(),
                                 dyn.descent_m_s.tolist())
     goal_yaws, yaws = dyn.goal_yaw_deg.tolist(), dyn.yaw_deg.tolist()
     battery = _BatteryFloats(fleet)
+    battery_steps = battery.steps
+    speed_tol = ACCEL_STEADY_M_S2 * dt
     steps = []
-    for k, (control, tracking, yaw_tracking, (ax, ay, az), v, p, g) in enumerate(zip(
+    for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), p, g) in enumerate(zip(
             dyn.control.tolist(), dyn.tracking.tolist(), dyn.yaw_tracking.tolist(),
             dyn.accel_m_s2.tolist(), dyn.velocity_m_s.tolist(), dyn.position_m.tolist(),
             dyn.goal_m.tolist(), strict=True)):
         if (yaw_tracking or abs(ax) > ACCEL_STEADY_M_S2 or abs(ay) > ACCEL_STEADY_M_S2
                 or abs(az) > ACCEL_STEADY_M_S2 or abs(yaw_steps[k]) > YAW_STEADY_DEG):
-            value = -math.inf  # speeding up, braking or turning
+            value = _NEG_INF  # speeding up, braking or turning
         else:
-            value = _vehicle_steps(
-                k, control, tracking, v, p, g, speed_xy[k],
-                climb[k] if g[2] - p[2] >= 0.0 else descent[k], accel_xy[k], accel_z[k],
-                acceptance[k], goal_yaws[k], yaws[k], (check_at[k] - now) / dt - 1.0, dt,
-                battery)
+            value = _vehicle_steps(k, control, tracking, vx, vy, vz, p, g, speed_xy[k],
+                                   climb[k], descent[k], accel_xy[k], accel_z[k],
+                                   acceptance[k], goal_yaws[k], yaws[k],
+                                   (check_at[k] - now) / dt - 1.0, dt, speed_tol,
+                                   battery_steps)
         if not value >= MIN_CRUISE_STEPS:
             short_left -= 1
             if short_left < 0:
@@ -187,37 +190,54 @@ def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[
     return steps
 
 
-def _vehicle_steps(k: int, control: int, tracking: int, v: list[float], p: list[float],
-                   g: list[float], speed_xy: float, vz_lim: float, accel_xy: float,
-                   accel_z: float, acceptance: float, goal_yaw: float, yaw: float,
-                   guard_steps: float, dt: float, battery: _BatteryFloats) -> float:
+def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz: float,
+                   p: list[float], g: list[float], speed_xy: float, climb: float,
+                   descent: float, accel_xy: float, accel_z: float, acceptance: float,
+                   goal_yaw: float, yaw: float, guard_steps: float, dt: float,
+                   speed_tol: float, battery_steps: Callable[..., float]) -> float:
     """The steps one vehicle with no acceleration and no yaw change can cruise (-inf: none)."""
-    vx, vy, vz = v
-    ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - p[2]
-    s = math.sqrt(vx * vx + vy * vy + vz * vz)
-    d = math.sqrt(ex * ex + ey * ey + ez * ez)
+    pz = p[2]
+    ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - pz
+    s = _sqrt(vx * vx + vy * vy + vz * vz)
+    d = _sqrt(ex * ex + ey * ey + ez * ez)
     if control == CONTROL_NONE or not s > 1e-9:
         at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
-        return battery.steps(k, vx, vy, vz) if at_rest else -math.inf
+        return battery_steps(k, vx, vy, vz) if at_rest else _NEG_INF
     if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
-        return -math.inf  # not heading straight for the goal
-    d_min = max(d, 1e-9)
-    d_xy = math.hypot(ex, ey)
+        return _NEG_INF  # not heading straight for the goal
+    d_min = d if d > 1e-9 else 1e-9
+    d_xy = _hypot(ex, ey)
     h, w = d_xy / d_min, abs(ez) / d_min
-    if abs(s - _along_line_limit(speed_xy, vz_lim, h, w)) > ACCEL_STEADY_M_S2 * dt:
-        return -math.inf  # not at the speed its commands ask for now
+    vz_lim = climb if ez >= 0.0 else descent
+    # the along-line limits (dynamics.along_line_limit) of the speed and the acceleration
+    if h > 0.0:
+        speed_h, accel_h = speed_xy / h, accel_xy / h
+    else:
+        speed_h = accel_h = _INF
+    if w > 0.0:
+        speed_v, accel_v = vz_lim / w, accel_z / w
+    else:
+        speed_v = accel_v = _INF
+    along = speed_h if speed_h <= speed_v else speed_v
+    if along == _INF:
+        along = speed_xy if speed_xy <= vz_lim else vz_lim
+    if abs(s - along) > speed_tol:
+        return _NEG_INF  # not at the speed its commands ask for now
     if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
-        desired = math.degrees(math.atan2(ex, ey)) if d_xy > 2.0 else yaw
+        desired = _degrees(_atan2(ex, ey)) if d_xy > 2.0 else yaw
     else:
         desired = goal_yaw
     if abs((desired - yaw + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
-        return -math.inf  # about to turn
-    free_m = d - s * s / (2.0 * BRAKING_SHARE * _along_line_limit(accel_xy, accel_z, h, w))
+        return _NEG_INF  # about to turn
+    a_eff = accel_h if accel_h <= accel_v else accel_v
+    if a_eff == _INF:
+        a_eff = accel_xy if accel_xy <= accel_z else accel_z
+    free_m = d - s * s / (2.0 * BRAKING_SHARE * a_eff)
     if tracking != TRACK_NONE:
         free_m = min(free_m, d - acceptance)
     if vz < 0.0:
-        free_m = min(free_m, p[2] / max(-vz, 1e-9) * s)
-    return min(free_m / (s * dt) - 2.0, guard_steps, battery.steps(k, vx, vy, vz))
+        free_m = min(free_m, pz / max(-vz, 1e-9) * s)
+    return min(free_m / (s * dt) - 2.0, guard_steps, battery_steps(k, vx, vy, vz))
 
 
 class _BatteryFloats:
@@ -230,33 +250,32 @@ class _BatteryFloats:
         self._full_pct_s = (100.0 / bat.hover_endurance_s).tolist()
         self._charge = bat.charge_rate_pct_s.tolist()
         self._airborne, self._armed = fleet.airborne.tolist(), fleet.armed.tolist()
-        self._wind = fleet.dyn.wind_m_s.tolist()
+        self._wind_x, self._wind_y = fleet.dyn.wind_m_s.tolist()
         self._dt = fleet.dt_s
         self._slack = 2.0 * fleet.battery_every_steps
 
     def steps(self, k: int, vx: float, vy: float, vz: float) -> float:
         if self._airborne[k]:
-            air = math.hypot(vx - self._wind[0], vy - self._wind[1])
+            air = _hypot(vx - self._wind_x, vy - self._wind_y)
             power = 1.0 + SPEED_POWER_PER_M2_S2 * (air * air) + CLIMB_POWER_PER_M_S * max(vz, 0.0)
         else:
             power = GROUND_IDLE_POWER if self._armed[k] else 0.0
         rate = self._full_pct_s[k] * power - self._charge[k]
         pct = self._pct[k]
         if rate > 0.0:
-            gap = min([pct - level for level in self._levels[k] if level < pct], default=math.inf)
-            return gap / rate / self._dt - self._slack
+            # the nearest level below: pct less the highest one (subtraction keeps the order)
+            below = [level for level in self._levels[k] if level < pct]
+            if not below:
+                return _INF
+            return (pct - max(below)) / rate / self._dt - self._slack
         if rate < 0.0:
             return (100.0 - pct) / -rate / self._dt - self._slack
-        return math.inf
-
-
-def _along_line_limit(limit_h: float, limit_v: float, h: float, w: float) -> float:
-    """emulator.flight.dynamics.along_line_limit for one line."""
-    along = min(limit_h / h if h > 0.0 else math.inf, limit_v / w if w > 0.0 else math.inf)
-    return along if math.isfinite(along) else min(limit_h, limit_v)
+        return _INF
 
 
 _NO_SOLO = np.empty(0, dtype=np.intp)
+_INF, _NEG_INF = math.inf, -math.inf
+_sqrt, _hypot, _atan2, _degrees = math.sqrt, math.hypot, math.atan2, math.degrees
 
 
 def _battery_horizon_steps(fleet: FleetView) -> np.ndarray:
