@@ -61,7 +61,7 @@ LAYERS: dict[str, frozenset[str]] = {
                                                        "benchmark.authoring.task_faults",
                                                        "benchmark.authoring.plan_steps",
                                                        "benchmark.authoring.session_model",
-                                  "benchmark.scoring.validators"},
+                                                       "benchmark.scoring.validators"},
     "swarm_agents.oracle": _AGENT_SIDE | {"emulator"} | _SESSIONS_AND_CHECKS,
     "swarm_agents.plugins": (_AGENT_SIDE | _SESSIONS_AND_CHECKS
                              | (_AGENTS - {"swarm_agents.plugins"})),
