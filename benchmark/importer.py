@@ -29,7 +29,8 @@ from benchmark.validators import ENDPOINTS
 from benchmark.validators.endpoint import IGNORED_PARAMETERS
 from emulator.scenario import ScenarioError, scenario_from_dict
 
-__all__ = ["SessionImportError", "import_session", "import_session_file", "load_any_session"]
+__all__ = ["SessionImportError", "import_session", "import_session_file", "load_any_session",
+           "reference_tree"]
 
 DEFAULT_BUDGET = {"tool_calls": 120, "sim_time_s": 1800.0}
 ENTITY_KEYS = ("drones", "targets", "obstacles", "environment")
@@ -66,6 +67,12 @@ def _convert_tree(node: Any, where: str, notes: list[str]) -> Any:
         return dict(node, checks=[_convert_tree(c, f"{where}.checks[{k}]", notes)
                                   for k, c in enumerate(checks)])
     return dict(node)
+
+
+def reference_tree(node: Any, where: str, notes: list[str]) -> Any:
+    """A reference check tree in mavswarm's form: endpoint names without ``/check/``,
+    parameters no endpoint declares dropped (each with a note in `notes`)."""
+    return _convert_tree(node, where, notes)
 
 
 def _convert_task(k: int, raw: Any, source: str, notes: list[str]) -> dict[str, Any]:
