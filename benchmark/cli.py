@@ -12,7 +12,7 @@
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench compare RUN [RUN ...] [--baseline RUN] [--intersect] [--out DIR]
                          [--seed N] [--resamples N] [--inspector-url URL]
-  mavswarm bench import FILE [FILE ...] --out DIR
+  mavswarm bench import FILE [FILE ...] --out DIR [--no-prove]
 """
 
 from __future__ import annotations
@@ -134,6 +134,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+    imp.add_argument("--no-prove", action="store_true",
+                     help="skip flying every task with the oracle (by default each task's "
+                          "proof is written into it and a task not proved makes the exit "
+                          "status 1)")
 
 
 def _at_least_one(text: str) -> int:
@@ -364,14 +368,8 @@ def _agents(args: argparse.Namespace) -> int:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from benchmark.importer import import_session_file
-    taken: set[str] = set()
-    for path in args.files:
-        written, notes = import_session_file(path, args.out, taken=taken)
-        print(f"{path} -> {written}")
-        for note in notes:
-            print(f"  note: {note}")
-    return 0
+    from benchmark.importer import import_files
+    return 1 if import_files(args.files, args.out, prove=not args.no_prove) else 0
 
 
 def run_bench(args: argparse.Namespace) -> int:

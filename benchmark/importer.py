@@ -7,15 +7,18 @@ tree (`execution_check_apis`) with endpoint names stripped of ``/check/``. Param
 reference ignores (names no endpoint declares) are dropped, each with a note. A task whose tree
 names an unknown endpoint or holds an invalid value is written unchanged: loading the file
 reports it (file, task, field) and a run records it as a task error without stopping.
-Imported tasks carry no oracle plan.
+Imported tasks carry no oracle plan: `bench import` proves each with the oracle's plan derived
+from its checks (`benchmark.proof`) and writes the verdict into the task's ``proof`` field
+(``proved``, and for a task not proved the ``leaf``, its ``endpoint`` and the ``reason``), so
+that no task is taken for solvable without being flown.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from benchmark.session_file import (
     SCHEMA,
@@ -29,8 +32,11 @@ from benchmark.validators import ENDPOINTS
 from benchmark.validators.endpoint import IGNORED_PARAMETERS
 from emulator.scenario import ScenarioError, scenario_from_dict
 
-__all__ = ["SessionImportError", "import_session", "import_session_file", "load_any_session",
-           "reference_tree"]
+if TYPE_CHECKING:
+    from benchmark.proof import TaskProof
+
+__all__ = ["SessionImportError", "import_files", "import_session", "import_session_file",
+           "load_any_session", "reference_tree"]
 
 DEFAULT_BUDGET = {"tool_calls": 120, "sim_time_s": 1800.0}
 ENTITY_KEYS = ("drones", "targets", "obstacles", "environment")
@@ -144,10 +150,14 @@ def _convert(data: Any, source: str) -> tuple[dict[str, Any], Session, list[str]
 
 
 def import_session_file(path: str | Path, out_dir: str | Path, *,
-                        taken: set[str] | None = None) -> tuple[Path, list[str]]:
+                        taken: set[str] | None = None, prove: bool = False,
+                        on_proof: Callable[[TaskProof], None] = lambda p: None
+                        ) -> tuple[Path, list[str]]:
     """Convert one file into out_dir/<id>.json; returns its path and the notes. An id already
     in `taken` (the files converted before it in the same import) gets a numbered suffix, so
-    no file overwrites another; the id written is added to `taken`."""
+    no file overwrites another; the id written is added to `taken`. With prove, the oracle
+    flies every task first and each task's ``proof`` field says how it went (`on_proof` is
+    told each proof as it comes)."""
     source = str(path)
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -164,11 +174,40 @@ def import_session_file(path: str | Path, out_dir: str | Path, *,
             notes.append(f"id {ident!r} was taken by an earlier file of this import; written "
                          f"as {session['id']!r}")
         taken.add(session["id"])
+    if prove:
+        from benchmark.proof import prove_session
+        loaded = session_from_dict(session, source=source)
+        proofs = prove_session(loaded, progress=on_proof)
+        for task, proof in zip(session["tasks"], proofs, strict=True):
+            task["proof"] = proof.to_json()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     target = out / f"{session['id']}.json"
     target.write_text(dump_session(session), encoding="utf-8")
     return target, notes
+
+
+def import_files(paths: Sequence[Path], out_dir: Path, *, prove: bool = True,
+                 echo: Callable[[str], None] = print) -> int:
+    """`bench import`: convert (and prove) each file, telling `echo` what was written, the
+    notes, and every task not proved with its leaf and reason; the number not proved."""
+    taken: set[str] = set()
+    unproved = 0
+    for path in paths:
+        proofs: list[TaskProof] = []
+        written, notes = import_session_file(path, out_dir, taken=taken, prove=prove,
+                                             on_proof=proofs.append)
+        echo(f"{path} -> {written}")
+        for note in notes:
+            echo(f"  note: {note}")
+        if not prove:
+            continue
+        failed = [p for p in proofs if not p.proved]
+        unproved += len(failed)
+        for proof in failed:
+            echo(f"  {proof.line()}")
+        echo(f"  oracle: {len(proofs) - len(failed)} of {len(proofs)} tasks proved")
+    return unproved
 
 
 def load_any_session(path: str | Path) -> tuple[Session, list[str]]:
