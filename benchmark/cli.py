@@ -192,6 +192,11 @@ def _add_draw_arguments(gen: argparse.ArgumentParser) -> None:
                      help="draw from the --templates folders only")
     gen.add_argument("--world", type=Path, default=None, metavar="FILE",
                      help="draw tasks for this session file's world instead of the suite's")
+    gen.add_argument("--drones", type=_at_least_one, default=0, metavar="N",
+                     help="drones in every drawn world (1-100; default: the level's)")
+    gen.add_argument("--map-size-m", type=float, default=0.0, metavar="M",
+                     help="every drawn world on an M x M m map (200-10000; default: the "
+                          "level's)")
 
 
 def _generate(args: argparse.Namespace) -> int:
@@ -199,8 +204,12 @@ def _generate(args: argparse.Namespace) -> int:
     from benchmark.suite import Draw, generate_suite
     draw = Draw(secret=args.seed, families=tuple(args.families), levels=tuple(args.levels),
                 sessions_per_cell=args.sessions_per_cell, tasks=args.tasks_per_session,
-                templates=tuple(args.templates), replace=args.replace_templates)
+                templates=tuple(args.templates), replace=args.replace_templates,
+                drones=args.drones, map_size_m=args.map_size_m)
     if args.world is not None:
+        if args.drones or args.map_size_m:
+            raise ValueError("--drones and --map-size-m shape the worlds bench generate draws; "
+                             "a --world file keeps its own drones and map")
         from benchmark.world_tasks import generate_world_file
         print(f"wrote {generate_world_file(args.world, args.out, draw, not args.no_verify)}")
         return 0

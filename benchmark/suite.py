@@ -55,6 +55,8 @@ class Draw:
     tasks: int = 0
     templates: tuple[Path, ...] = ()
     replace: bool = False
+    drones: int = 0
+    map_size_m: float = 0.0
 
     @property
     def is_default(self) -> bool:
@@ -72,6 +74,8 @@ def suite_keys(draw: Draw) -> list[tuple[str, str, int]]:
             raise ValueError(f"--levels: unknown level {name!r} (levels: {', '.join(LEVELS)})")
     if draw.sessions_per_cell < 0 or draw.tasks < 0:
         raise ValueError("--sessions-per-cell and --tasks-per-session must be >= 1")
+    from benchmark.scenarios.levels import LEVEL_SPECS, sized_spec
+    sized_spec(LEVEL_SPECS["easy"], draw.drones, draw.map_size_m)  # a bad size: said first
     per_cell = draw.sessions_per_cell or len(SESSION_INDICES)
     families = [f for f in FAMILIES if not draw.families or f in draw.families]
     levels = [lv for lv in LEVELS if not draw.levels or lv in draw.levels]
@@ -90,9 +94,17 @@ def _generate_one(key: tuple[str, str, int], out_dir: Path, verify: bool,
     from mavlink_gateway import set_mavsdk_log
     set_mavsdk_log(mavsdk_log)
     catalogue = catalogue_with(draw.templates, replace=draw.replace)
-    session = generate_session(*key, verify=verify, progress=progress, secret=draw.secret,
-                               tasks=draw.tasks or TASKS_PER_SESSION, catalogue=catalogue,
-                               max_index=max(key[2], SESSION_INDICES[-1]))
+    from benchmark.scenarios.placement import PlacementError
+    try:
+        session = generate_session(*key, verify=verify, progress=progress, secret=draw.secret,
+                                   tasks=draw.tasks or TASKS_PER_SESSION, catalogue=catalogue,
+                                   max_index=max(key[2], SESSION_INDICES[-1]),
+                                   drones=draw.drones, map_size_m=draw.map_size_m)
+    except PlacementError as error:
+        if not (draw.drones or draw.map_size_m):
+            raise
+        raise ValueError(f"{error}: the level's entities do not fit; choose a larger "
+                         f"--map-size-m or fewer --drones") from None
     return write_session(session, out_dir)
 
 
