@@ -21,6 +21,7 @@ from typing import Any
 from agent_contract import Agent
 from benchmark.episode import EpisodeOptions, run_task, swarm_gateway
 from benchmark.oracle import OracleAgent
+from benchmark.proof import proof_of
 from benchmark.scenarios import SESSION_INDICES, generate_world
 from benchmark.session_file import (
     Session,
@@ -163,6 +164,7 @@ async def _verified_tasks(world: dict[str, Any], session: Session, drawer: _Draw
     async with swarm_gateway(session) as (swarm, services, gateway):
         for slot in range(count):
             start = services.operator_snapshot()
+            unproved: list[str] = []
             for attempt in range(MAX_ATTEMPTS):
                 try:
                     raw = drawer.draw(slot, attempt)
@@ -180,13 +182,13 @@ async def _verified_tasks(world: dict[str, Any], session: Session, drawer: _Draw
                     drawer.accept(raw)
                     tasks.append(raw)
                     break
-                failed = [c["endpoint"] for c in record["checks"] if not c["passed"]]
-                why = f": {record['error']}" if record.get("error") else ""
-                progress(f"{world['id']} {raw['id']} {raw['template']}: oracle failed "
-                         f"{failed} ({record['finish']}{why}); redrawing")
+                proof = proof_of(str(world["id"]), spec, record)
+                unproved.append(proof.line())
+                progress(f"{proof.line()}; redrawing")
             else:
-                raise GenerationError(f"{world['id']}: slot {slot + 1}: no passable task in "
-                                      f"{MAX_ATTEMPTS} attempts")
+                raise GenerationError(f"{world['id']}: slot {slot + 1}: no task the oracle can "
+                                      f"prove in {MAX_ATTEMPTS} attempts: "
+                                      + " | ".join(unproved[-3:]))
     return tasks
 
 

@@ -156,13 +156,12 @@ def _convert(key: str, template: Mapping[str, Any], where: str) -> dict[str, Any
     from benchmark.importer import reference_tree
 
     phrasings = _strings(template, where)
-    tree = template.get("execution_check_apis")
-    if tree in (None, {}, []):
+    notes: list[str] = []
+    checks = reference_tree(template.get("execution_check_apis"), "execution_check_apis", notes)
+    leaves = _leaves(checks)
+    if not leaves:
         raise ReferenceTemplateError(f"{where}: execution_check_apis: the template has no "
                                      f"checks (a task without checks cannot be scored)")
-    notes: list[str] = []
-    checks = reference_tree(tree, "execution_check_apis", notes)
-    leaves = _leaves(checks)
     texts = phrasings + [str(leaf.get("parameters")) for leaf in leaves]
     difficulty = template.get("difficulty")
     values = [{"name": "name", "kind": "choice",
