@@ -217,7 +217,7 @@ def test_import_proves_each_task_and_names_the_leaf_it_could_not_prove(tmp_path:
                                                                         ) -> None:
     data = reference_session()
     drone = data["drones"][0]["id"]
-    good = {"id": "aa11bb22", "name": "Climb", "content": "Climb to 12 m.",
+    good: dict[str, Any] = {"id": "aa11bb22", "name": "Climb", "content": "Climb to 12 m.",
             "execution_check_apis": {"logic": "and", "checks": [
                 {"endpoint": "/check/drone_altitude", "parameters": {
                     "drone_id": drone, "expected_altitude": 12.0, "tolerance": 2.0}}]}}
