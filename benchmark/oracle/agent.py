@@ -37,6 +37,11 @@ HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
 TRANSFER_RETRIES = 2
 TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+# A directed leg blocked where the drone is starts from the nearest clear spot of these rings.
+LEG_RING_M = 15.0
+LEG_RINGS = 20
+LEG_RING_SPOTS = 16
+LEG_SLACK_M = 15.0
 
 
 async def _retried(call: Callable[[], Awaitable[Outcome]]) -> Outcome:
@@ -223,8 +228,7 @@ class OracleAgent:
         elif kind == "altitude":
             self._check(d, kind, await tools.change_altitude(d, float(op["altitude_m"])))
         elif kind == "towards":
-            self._check(d, kind, await tools.move_towards(d, float(op["heading_deg"]),
-                                                         float(op["distance_m"])))
+            await self._towards(tools, d, float(op["heading_deg"]), float(op["distance_m"]))
         elif kind == "photo":
             self._check(d, kind, await tools.take_photo(d))
         elif kind == "set_home":
@@ -239,6 +243,7 @@ class OracleAgent:
             await self._goto(tools, d, (x, y, CHARGE_ALTITUDE_M))
             self._check(d, "land on the station", await tools.land(d))
             self._check(d, kind, await tools.charge(d))
+            self._state[d]["flight_state"] = "on_ground"  # a charge is only given there
         elif kind == "message":
             self._check(d, kind, tools.send_message(d, op["to"], op["text"]))
         elif kind == "broadcast":
@@ -323,6 +328,47 @@ class OracleAgent:
     def _position(self, d: str) -> tuple[float, float, float]:
         s = self._state[d]
         return float(s["x_m"]), float(s["y_m"]), float(s["altitude_m"])
+
+    def _leg_start(self, here: tuple[float, float, float], heading_deg: float,
+                   distance_m: float) -> tuple[float, float]:
+        """Where a straight leg of distance_m on heading_deg can start: here when nothing
+        blocks it, else the nearest spot (rings of LEG_RING_M) whose leg, with some slack,
+        collision prevention lets through."""
+        h = math.radians(heading_deg)
+        step = (math.sin(h), math.cos(h))
+        x, y, z = here
+
+        def clear(sx: float, sy: float, length_m: float) -> bool:
+            return self._planner.leg_clear((sx, sy, z), (sx + length_m * step[0],
+                                                          sy + length_m * step[1], z))
+
+        if clear(x, y, distance_m):
+            return x, y
+        for ring in range(1, LEG_RINGS + 1):
+            r = ring * LEG_RING_M
+            for k in range(LEG_RING_SPOTS):
+                a = 2.0 * math.pi * k / LEG_RING_SPOTS
+                sx, sy = x + r * math.cos(a), y + r * math.sin(a)
+                if clear(sx, sy, distance_m + LEG_SLACK_M) and self._reachable(here, (sx, sy, z)):
+                    return sx, sy
+        return x, y
+
+    def _reachable(self, here: tuple[float, float, float], goal: tuple[float, float, float]
+                   ) -> bool:
+        try:
+            self._planner.plan(here, goal)
+        except NoPath:
+            return False
+        return True
+
+    async def _towards(self, tools: AgentTools, d: str, heading_deg: float,
+                       distance_m: float) -> None:
+        if self._airborne(d):
+            here = self._position(d)
+            start = self._leg_start(here, heading_deg, distance_m)
+            if start != here[:2]:
+                await self._goto(tools, d, (start[0], start[1], here[2]))
+        self._check(d, "towards", await tools.move_towards(d, heading_deg, distance_m))
 
     async def _ensure_airborne(self, tools: AgentTools, d: str, altitude_m: float) -> None:
         if not self._airborne(d):
