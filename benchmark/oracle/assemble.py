@@ -21,11 +21,11 @@ __all__ = ["assemble"]
 
 Op = dict[str, Any]
 HOME_TOLERANCE_M = 2.0
-# A drone whose plan flies further than a battery surely carries it (one lasts 5-7 km at cruise
-# speed, less with climbs and detours) charges on the way, before its flight since the last
+# A drone whose plan flies further than a battery surely carries it (one lasts 4-7 km at cruise
+# speed, less with wind, climbs and detours) charges on the way, before its flight since the last
 # charge plus the way on to a station would pass RANGE_M.
-LONG_FLIGHT_M = 5000.0
-RANGE_M = 3800.0
+LONG_FLIGHT_M = 4500.0
+RANGE_M = 2500.0
 SPACING_DIRECTIONS = 16
 
 
