@@ -1,6 +1,7 @@
 """The derived oracle's long and blocked legs: a directed leg that a wall blocks where the drone
 stands starts from an open spot nearby; a route longer than a battery lasts gets a charging
-stop on the way (the reference's marathon and fleet-formation templates need both)."""
+stop on the way, and a waypoint nearer an obstacle than the planner's clearance is closed in on
+(the reference's marathon and fleet-formation templates need these)."""
 
 from __future__ import annotations
 
@@ -40,3 +41,12 @@ def test_a_route_longer_than_a_battery_charges_on_the_way() -> None:
     record = _fly(copy.deepcopy(WORLD), checks, sim_time_s=4800.0)
     _passed(record)
     assert any(c["name"] == "charge" for c in record["replay"]["calls"]), "no charging stop"
+
+
+def test_a_waypoint_nearer_an_obstacle_than_the_planner_keeps_is_closed_in_on() -> None:
+    world = copy.deepcopy(WORLD)  # the reference's placeholders keep only 1 m off obstacles
+    world["obstacles"] = [{"id": "o1", "name": "Tower", "type": "circle",
+                           "position": _xy(200, 120), "radius": 20, "height": 0.0}]
+    checks = [_leaf("drone_has_visited_position", drone_id="d1", x=200.0, y=141.3, z=20.0,
+                    tolerance=3.0)]
+    _passed(_fly(world, checks))

@@ -10,6 +10,7 @@ from functools import partial
 from typing import Any
 
 from agent_contract import AgentTask, AgentTools
+from benchmark.oracle.approach import approach_point, leg_start
 from benchmark.oracle.coverage import lawnmower, order_visits, split_lanes
 from benchmark.oracle.derive import Unplannable, derive_plan
 from benchmark.oracle.planner import NoPath, PathPlanner
@@ -37,6 +38,7 @@ HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
 TRANSFER_RETRIES = 2
 TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+CLOSE_IN_TRIES = 4
 # A directed leg blocked where the drone is starts from the nearest clear spot of these rings.
 LEG_RING_M = 15.0
 LEG_RINGS = 20
@@ -329,43 +331,11 @@ class OracleAgent:
         s = self._state[d]
         return float(s["x_m"]), float(s["y_m"]), float(s["altitude_m"])
 
-    def _leg_start(self, here: tuple[float, float, float], heading_deg: float,
-                   distance_m: float) -> tuple[float, float]:
-        """Where a straight leg of distance_m on heading_deg can start: here when nothing
-        blocks it, else the nearest spot (rings of LEG_RING_M) whose leg, with some slack,
-        collision prevention lets through."""
-        h = math.radians(heading_deg)
-        step = (math.sin(h), math.cos(h))
-        x, y, z = here
-
-        def clear(sx: float, sy: float, length_m: float) -> bool:
-            return self._planner.leg_clear((sx, sy, z), (sx + length_m * step[0],
-                                                          sy + length_m * step[1], z))
-
-        if clear(x, y, distance_m):
-            return x, y
-        for ring in range(1, LEG_RINGS + 1):
-            r = ring * LEG_RING_M
-            for k in range(LEG_RING_SPOTS):
-                a = 2.0 * math.pi * k / LEG_RING_SPOTS
-                sx, sy = x + r * math.cos(a), y + r * math.sin(a)
-                if clear(sx, sy, distance_m + LEG_SLACK_M) and self._reachable(here, (sx, sy, z)):
-                    return sx, sy
-        return x, y
-
-    def _reachable(self, here: tuple[float, float, float], goal: tuple[float, float, float]
-                   ) -> bool:
-        try:
-            self._planner.plan(here, goal)
-        except NoPath:
-            return False
-        return True
-
     async def _towards(self, tools: AgentTools, d: str, heading_deg: float,
                        distance_m: float) -> None:
         if self._airborne(d):
             here = self._position(d)
-            start = self._leg_start(here, heading_deg, distance_m)
+            start = leg_start(self._planner, here, heading_deg, distance_m)
             if start != here[:2]:
                 await self._goto(tools, d, (start[0], start[1], here[2]))
         self._check(d, "towards", await tools.move_towards(d, heading_deg, distance_m))
@@ -373,6 +343,23 @@ class OracleAgent:
     async def _ensure_airborne(self, tools: AgentTools, d: str, altitude_m: float) -> None:
         if not self._airborne(d):
             self._check(d, "take-off", await tools.take_off(d, max(altitude_m, 5.0)))
+
+    async def _close_in(self, tools: AgentTools, d: str, goal: tuple[float, float, float],
+                        error: NoPath) -> None:
+        """A goal the planner cannot reach (nearer an obstacle than its clearance): fly to
+        a spot near it, then straight at it; collision prevention stops the drone where it
+        must, and the checks judge how close that is."""
+        spot = approach_point(self._planner, self._position(d), goal)
+        if spot is None:
+            raise OracleError(f"no path from {self._position(d)} to {goal}: {error}")
+        await self._goto(tools, d, spot)
+        for _ in range(CLOSE_IN_TRIES):  # each stop is nearer: the drone starts slower
+            outcome = await _retried(partial(tools.move_to, d, *goal))
+            if outcome.state is not None:
+                self._state[d] = outcome.state.to_dict()
+            if outcome.status is not Status.BLOCKED:
+                self._check(d, "move", outcome)
+                return
 
     def _legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
               ) -> list[tuple[float, float, float]]:
@@ -383,7 +370,11 @@ class OracleAgent:
 
     async def _goto(self, tools: AgentTools, d: str, goal: tuple[float, float, float]) -> None:
         await self._ensure_airborne(tools, d, goal[2])
-        waypoints = self._legs(self._position(d), goal)
+        try:
+            waypoints = self._planner.plan(self._position(d), goal)
+        except NoPath as error:
+            await self._close_in(tools, d, goal, error)
+            return
         if len(waypoints) == 1:
             self._check(d, "move", await _retried(partial(tools.move_to, d, *goal)))
         else:
