@@ -23,19 +23,21 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from benchmark.generate import generate_session  # noqa: E402
-from benchmark.scenarios import all_session_keys  # noqa: E402
+from benchmark.scenarios import FAMILIES, LEVELS, all_session_keys  # noqa: E402
 from benchmark.session_file import dump_session  # noqa: E402
 from benchmark.suite import SESSIONS_DIR  # noqa: E402
 from mavlink_gateway import set_mavsdk_log  # noqa: E402
 
 
 def _sample(count: int) -> list[tuple[str, str, int]]:
-    """count keys spread over families, levels and indices (every k-th key)."""
+    """count keys spread over families, levels and indices: the k-th takes family k mod 5,
+    level (k + k div 5) mod 5 and index 1 + k div 25 (so 5 keys cover every family and
+    every level, 25 every cell)."""
     keys = list(all_session_keys())
     if count >= len(keys):
         return keys
-    step = len(keys) / count
-    return [keys[int(k * step + step / 2)] for k in range(count)]
+    return [(FAMILIES[k % 5], LEVELS[(k + k // 5) % 5], 1 + (k // 25) % 5)
+            for k in range(count)]
 
 
 def main() -> None:
