@@ -12,7 +12,7 @@
   mavswarm bench report RESULTS [RESULTS ...] [--out DIR] [--inspector-url URL]
   mavswarm bench compare RUN [RUN ...] [--baseline RUN] [--intersect] [--out DIR]
                          [--seed N] [--resamples N] [--inspector-url URL]
-  mavswarm bench import FILE [FILE ...] --out DIR
+  mavswarm bench import FILE [FILE ...] --out DIR [--no-prove]
 """
 
 from __future__ import annotations
@@ -134,6 +134,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     imp = bsub.add_parser("import", help="convert MultiUAV-Plat session files (with their tasks)")
     imp.add_argument("files", type=Path, nargs="+")
     imp.add_argument("--out", type=Path, required=True)
+    imp.add_argument("--no-prove", action="store_true",
+                     help="skip flying every task with the oracle (by default each task's "
+                          "proof is written into it and a task not proved makes the exit "
+                          "status 1)")
 
 
 def _at_least_one(text: str) -> int:
@@ -188,6 +192,11 @@ def _add_draw_arguments(gen: argparse.ArgumentParser) -> None:
                      help="draw from the --templates folders only")
     gen.add_argument("--world", type=Path, default=None, metavar="FILE",
                      help="draw tasks for this session file's world instead of the suite's")
+    gen.add_argument("--drones", type=_at_least_one, default=0, metavar="N",
+                     help="drones in every drawn world (1-100; default: the level's)")
+    gen.add_argument("--map-size-m", type=float, default=0.0, metavar="M",
+                     help="every drawn world on an M x M m map (200-10000; default: the "
+                          "level's)")
 
 
 def _generate(args: argparse.Namespace) -> int:
@@ -196,8 +205,12 @@ def _generate(args: argparse.Namespace) -> int:
     from benchmark.running.progress import ProgressBar
     draw = Draw(secret=args.seed, families=tuple(args.families), levels=tuple(args.levels),
                 sessions_per_cell=args.sessions_per_cell, tasks=args.tasks_per_session,
-                templates=tuple(args.templates), replace=args.replace_templates)
+                templates=tuple(args.templates), replace=args.replace_templates,
+                drones=args.drones, map_size_m=args.map_size_m)
     if args.world is not None:
+        if args.drones or args.map_size_m:
+            raise ValueError("--drones and --map-size-m shape the worlds bench generate draws; "
+                             "a --world file keeps its own drones and map")
         from benchmark.running.generation import generate_world_file
         print(f"wrote {generate_world_file(args.world, args.out, draw, not args.no_verify)}")
         return 0
@@ -366,14 +379,8 @@ def _agents(args: argparse.Namespace) -> int:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from benchmark.authoring.importer import import_session_file
-    taken: set[str] = set()
-    for path in args.files:
-        written, notes = import_session_file(path, args.out, taken=taken)
-        print(f"{path} -> {written}")
-        for note in notes:
-            print(f"  note: {note}")
-    return 0
+    from benchmark.running.proof import import_files
+    return 1 if import_files(args.files, args.out, prove=not args.no_prove) else 0
 
 
 def run_bench(args: argparse.Namespace) -> int:

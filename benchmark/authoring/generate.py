@@ -161,11 +161,14 @@ def generate_session(family: str, level: str, index: int, *, prove: ProveTasks |
                      tasks: int = TASKS_PER_SESSION,
                      progress: Callable[[str], None] = print, secret: str = "",
                      catalogue: Sequence[Template] = CATALOGUE,
-                     max_index: int = SESSION_INDICES[-1]) -> dict[str, Any]:
+                     max_index: int = SESSION_INDICES[-1], drones: int = 0,
+                     map_size_m: float = 0.0) -> dict[str, Any]:
     """The full session object for (family, level, index), drawn from the secret's seeds
-    when one is given (a private split); its tasks proved by `prove` when one is given
-    (benchmark.running.generation proves them with the oracle)."""
-    world = generate_world(family, level, index, secret=secret, max_index=max_index)
+    when one is given (a private split), with another drone count or square map side when
+    given; its tasks proved by `prove` when one is given (benchmark.running.generation proves
+    them with the oracle)."""
+    world = generate_world(family, level, index, secret=secret, max_index=max_index,
+                           drones=drones, map_size_m=map_size_m)
     return _with_tasks(world, int(world["seed"]), prove, tasks, progress, catalogue)
 
 

@@ -7,13 +7,16 @@ tree (`execution_check_apis`) with endpoint names stripped of ``/check/``. Param
 reference ignores (names no endpoint declares) are dropped, each with a note. A task whose tree
 names an unknown endpoint or holds an invalid value is written unchanged: loading the file
 reports it (file, task, field) and a run records it as a task error without stopping.
-Imported tasks carry no oracle plan.
+Imported tasks carry no oracle plan: `bench import` proves each with the oracle's plan derived
+from its checks (`benchmark.running.proof`) and writes the verdict into the task's ``proof`` field
+(``proved``, and for a task not proved the ``leaf``, its ``endpoint`` and the ``reason``), so
+that no task is taken for solvable without being flown.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +32,11 @@ from benchmark.scoring.validators import ENDPOINTS
 from benchmark.scoring.validators.endpoint import IGNORED_PARAMETERS
 from emulator.scenario import ScenarioError, scenario_from_dict
 
-__all__ = ["SessionImportError", "import_session", "import_session_file", "load_any_session"]
+ProveTasks = Callable[[Session], Sequence[Mapping[str, Any]]]
+"""Flies every task of a session and gives each task's proof as JSON, in task order."""
+
+__all__ = ["ProveTasks", "SessionImportError", "import_session", "import_session_file",
+           "load_any_session", "reference_tree"]
 
 DEFAULT_BUDGET = {"tool_calls": 120, "sim_time_s": 1800.0}
 ENTITY_KEYS = ("drones", "targets", "obstacles", "environment")
@@ -66,6 +73,12 @@ def _convert_tree(node: Any, where: str, notes: list[str]) -> Any:
         return dict(node, checks=[_convert_tree(c, f"{where}.checks[{k}]", notes)
                                   for k, c in enumerate(checks)])
     return dict(node)
+
+
+def reference_tree(node: Any, where: str, notes: list[str]) -> Any:
+    """A reference check tree in mavswarm's form: endpoint names without ``/check/``,
+    parameters no endpoint declares dropped (each with a note in `notes`)."""
+    return _convert_tree(node, where, notes)
 
 
 def _convert_task(k: int, raw: Any, source: str, notes: list[str]) -> dict[str, Any]:
@@ -137,10 +150,13 @@ def _convert(data: Any, source: str) -> tuple[dict[str, Any], Session, list[str]
 
 
 def import_session_file(path: str | Path, out_dir: str | Path, *,
-                        taken: set[str] | None = None) -> tuple[Path, list[str]]:
+                        taken: set[str] | None = None, prove: ProveTasks | None = None
+                        ) -> tuple[Path, list[str]]:
     """Convert one file into out_dir/<id>.json; returns its path and the notes. An id already
     in `taken` (the files converted before it in the same import) gets a numbered suffix, so
-    no file overwrites another; the id written is added to `taken`."""
+    no file overwrites another; the id written is added to `taken`. With `prove` (the oracle
+    flying every task: benchmark.running.proof), each task's ``proof`` field says how it
+    went."""
     source = str(path)
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -157,6 +173,10 @@ def import_session_file(path: str | Path, out_dir: str | Path, *,
             notes.append(f"id {ident!r} was taken by an earlier file of this import; written "
                          f"as {session['id']!r}")
         taken.add(session["id"])
+    if prove is not None:
+        proofs = prove(session_from_dict(session, source=source))
+        for task, proof in zip(session["tasks"], proofs, strict=True):
+            task["proof"] = dict(proof)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     target = out / f"{session['id']}.json"

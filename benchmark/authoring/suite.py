@@ -14,6 +14,7 @@ from benchmark.authoring.scenarios import (
     all_session_keys,
     session_id,
 )
+from benchmark.authoring.scenarios.levels import LEVEL_SPECS, sized_spec
 
 __all__ = ["SESSIONS_DIR", "SMOKE_TASKS", "SUITES", "Draw", "suite_keys", "suite_paths"]
 
@@ -58,6 +59,8 @@ class Draw:
     tasks: int = 0
     templates: tuple[Path, ...] = ()
     replace: bool = False
+    drones: int = 0
+    map_size_m: float = 0.0
 
     @property
     def is_default(self) -> bool:
@@ -75,6 +78,7 @@ def suite_keys(draw: Draw) -> list[tuple[str, str, int]]:
             raise ValueError(f"--levels: unknown level {name!r} (levels: {', '.join(LEVELS)})")
     if draw.sessions_per_cell < 0 or draw.tasks < 0:
         raise ValueError("--sessions-per-cell and --tasks-per-session must be >= 1")
+    sized_spec(LEVEL_SPECS["easy"], draw.drones, draw.map_size_m)  # a bad size: said first
     per_cell = draw.sessions_per_cell or len(SESSION_INDICES)
     families = [f for f in FAMILIES if not draw.families or f in draw.families]
     levels = [lv for lv in LEVELS if not draw.levels or lv in draw.levels]

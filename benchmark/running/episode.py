@@ -30,6 +30,7 @@ from benchmark.running.tool_log import LoggedTools
 from benchmark.scoring.validators import CheckContext, evaluate, leaf_count, tree_to_json
 from emulator.clock import ClockConfig
 from emulator.link_faults import LinkFaults
+from emulator.networks import VEHICLES_PER_NETWORK
 from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, profiles_from_scenario
@@ -106,8 +107,12 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
                         link_faults: LinkFaults | None = None,
                         ) -> AsyncIterator[tuple[Swarm, SwarmServices, Gateway]]:
     """A stepped (`lockstep`: lockstep) swarm for the session on 127.0.0.1 and a gateway
-    connected over MAVLink (through `link_faults`, if any)."""
+    connected over MAVLink (through `link_faults`, if any). The gateway speaks to one MAVLink
+    network, so a session's swarm holds 1 to 250 vehicles (system ids 1-250)."""
     scenario = session.scenario
+    if len(scenario.vehicles) > VEHICLES_PER_NETWORK:
+        raise ValueError(f"a session's swarm holds 1 to {VEHICLES_PER_NETWORK} vehicles (one "
+                         f"MAVLink network), got {len(scenario.vehicles)}")
     port = _free_udp_port()
     ports = PortPlan(bind_host="127.0.0.1", api_port=port, gcs_port=0)
     clock = ClockConfig(physics_hz=physics_hz, stepped=True, lockstep=lockstep)

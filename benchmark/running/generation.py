@@ -11,11 +11,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from agent_contract import Agent
 from benchmark.authoring import generate as draw_tasks
 from benchmark.authoring.generate import (
     MAX_ATTEMPTS,
-    ORACLE_TRIES,
     TASKS_PER_SESSION,
     Drawer,
     GenerationError,
@@ -23,13 +21,12 @@ from benchmark.authoring.generate import (
     write_session,
 )
 from benchmark.authoring.scenarios import SESSION_INDICES, all_session_keys
-from benchmark.authoring.session_file import Session, TaskSpec, read_session_json, task_from_dict
+from benchmark.authoring.scenarios.placement import PlacementError
+from benchmark.authoring.session_file import Session, read_session_json, task_from_dict
 from benchmark.authoring.suite import Draw, suite_keys
 from benchmark.authoring.templates import TemplateUnfit
-from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
-from emulator.services import SwarmServices
-from emulator.swarm import Swarm
-from mavlink_gateway import Gateway
+from benchmark.running.episode import swarm_gateway
+from benchmark.running.proof import fly_task, proof_of
 from swarm_agents.oracle import OracleAgent
 
 __all__ = ["generate_for_world", "generate_session", "generate_suite", "generate_world_file",
@@ -59,22 +56,6 @@ def generate_for_world(world: dict[str, Any], *, verify: bool = True,
                                          **options)
 
 
-async def _prove(session: Session, spec: TaskSpec, agent: Agent, swarm: Swarm,
-                 services: SwarmServices, gateway: Gateway, start: dict[str, Any]
-                 ) -> dict[str, Any]:
-    """Fly a task with the oracle, up to ORACLE_TRIES times from the same start: a task is
-    kept if the oracle can pass it, so a rare slow telemetry hiccup does not change the
-    suite. After a failure the drones are put back where the task started."""
-    record: dict[str, Any] = {}
-    for _ in range(ORACLE_TRIES):
-        record = await run_task(session, spec, agent, swarm, services, gateway,
-                                EpisodeOptions())
-        if record["passed"]:
-            return record
-        services.operator_restore(start)
-    return record
-
-
 async def _proved_tasks(world: dict[str, Any], session: Session, drawer: Drawer,
                           count: int, progress: Callable[[str], None]) -> list[dict[str, Any]]:
     agent = OracleAgent(session.scenario, {})
@@ -82,6 +63,7 @@ async def _proved_tasks(world: dict[str, Any], session: Session, drawer: Drawer,
     async with swarm_gateway(session) as (swarm, services, gateway):
         for slot in range(count):
             start = services.operator_snapshot()
+            unproved: list[str] = []
             for attempt in range(MAX_ATTEMPTS):
                 try:
                     raw = drawer.draw(slot, attempt)
@@ -94,18 +76,18 @@ async def _proved_tasks(world: dict[str, Any], session: Session, drawer: Drawer,
                 if spec.checks is not None:  # no hand plan: one derived from the checks
                     agent.set_checks(spec.id, spec.checks, sorted(
                         {f.drone for f in spec.faults.failures} if spec.faults else ()))
-                record = await _prove(session, spec, agent, swarm, services, gateway, start)
+                record = await fly_task(session, spec, agent, swarm, services, gateway, start)
                 if record["passed"]:
                     drawer.accept(raw)
                     tasks.append(raw)
                     break
-                failed = [c["endpoint"] for c in record["checks"] if not c["passed"]]
-                why = f": {record['error']}" if record.get("error") else ""
-                progress(f"{world['id']} {raw['id']} {raw['template']}: oracle failed "
-                         f"{failed} ({record['finish']}{why}); redrawing")
+                proof = proof_of(str(world["id"]), spec, record)
+                unproved.append(proof.line())
+                progress(f"{proof.line()}; redrawing")
             else:
-                raise GenerationError(f"{world['id']}: slot {slot + 1}: no passable task in "
-                                      f"{MAX_ATTEMPTS} attempts")
+                raise GenerationError(f"{world['id']}: slot {slot + 1}: no task the oracle can "
+                                      f"prove in {MAX_ATTEMPTS} attempts: "
+                                      + " | ".join(unproved[-3:]))
     return tasks
 
 
@@ -116,9 +98,16 @@ def _generate_one(key: tuple[str, str, int], out_dir: Path, verify: bool,
     from mavlink_gateway import set_mavsdk_log
     set_mavsdk_log(mavsdk_log)
     catalogue = catalogue_with(draw.templates, replace=draw.replace)
-    session = generate_session(*key, verify=verify, progress=progress, secret=draw.secret,
-                               tasks=draw.tasks or TASKS_PER_SESSION, catalogue=catalogue,
-                               max_index=max(key[2], SESSION_INDICES[-1]))
+    try:
+        session = generate_session(*key, verify=verify, progress=progress, secret=draw.secret,
+                                   tasks=draw.tasks or TASKS_PER_SESSION, catalogue=catalogue,
+                                   max_index=max(key[2], SESSION_INDICES[-1]),
+                                   drones=draw.drones, map_size_m=draw.map_size_m)
+    except PlacementError as error:
+        if not (draw.drones or draw.map_size_m):
+            raise
+        raise ValueError(f"{error}: the level's entities do not fit; choose a larger "
+                         f"--map-size-m or fewer --drones") from None
     return write_session(session, out_dir)
 
 

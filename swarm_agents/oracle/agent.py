@@ -42,6 +42,7 @@ from benchmark.scoring.validators.tree import Node
 from emulator.scenario import Scenario
 from mavlink_gateway import Outcome, Status
 from mavlink_vocabulary import FlightState
+from swarm_agents.oracle.approach import approach_point, leg_start
 from swarm_agents.oracle.coverage import lawnmower, order_visits, split_lanes
 from swarm_agents.oracle.derive import Unplannable, derive_plan
 from swarm_agents.oracle.planner import NoPath, PathPlanner
@@ -65,6 +66,12 @@ HOP_S = 4.0  # following: aim this far ahead of the target
 FOLLOW_EXTRA_S = 2.0
 TRANSFER_RETRIES = 2
 TRANSFER_LOST = ("TIMEOUT", "upload restarted")
+CLOSE_IN_TRIES = 4
+# A directed leg blocked where the drone is starts from the nearest clear spot of these rings.
+LEG_RING_M = 15.0
+LEG_RINGS = 20
+LEG_RING_SPOTS = 16
+LEG_SLACK_M = 15.0
 
 
 def _point(p: Sequence[float]) -> tuple[float, float, float]:
@@ -262,7 +269,7 @@ class OracleAgent:
             case Altitude(altitude_m=alt):
                 self._check(d, kind, await tools.change_altitude(d, alt))
             case Towards(heading_deg=heading_deg, distance_m=distance_m):
-                self._check(d, kind, await tools.move_towards(d, heading_deg, distance_m))
+                await self._towards(tools, d, heading_deg, distance_m)
             case Photo():
                 self._check(d, kind, await tools.take_photo(d))
             case SetHome():
@@ -276,6 +283,7 @@ class OracleAgent:
                 await self._goto(tools, d, (x, y, CHARGE_ALTITUDE_M))
                 self._check(d, "land on the station", await tools.land(d))
                 self._check(d, kind, await tools.charge(d))
+                self._state[d]["flight_state"] = FlightState.ON_GROUND  # charged only there
             case Message(to=to, text=text):
                 self._check(d, kind, tools.send_message(d, to, text))
             case Broadcast(text=text):
@@ -359,9 +367,35 @@ class OracleAgent:
         s = self._state[d]
         return float(s["x_m"]), float(s["y_m"]), float(s["altitude_m"])
 
+    async def _towards(self, tools: AgentTools, d: str, heading_deg: float,
+                       distance_m: float) -> None:
+        if self._airborne(d):
+            here = self._position(d)
+            start = leg_start(self._planner, here, heading_deg, distance_m)
+            if start != here[:2]:
+                await self._goto(tools, d, (start[0], start[1], here[2]))
+        self._check(d, "towards", await tools.move_towards(d, heading_deg, distance_m))
+
     async def _ensure_airborne(self, tools: AgentTools, d: str, altitude_m: float) -> None:
         if not self._airborne(d):
             self._check(d, "take-off", await tools.take_off(d, max(altitude_m, 5.0)))
+
+    async def _close_in(self, tools: AgentTools, d: str, goal: tuple[float, float, float],
+                        error: NoPath) -> None:
+        """A goal the planner cannot reach (nearer an obstacle than its clearance): fly to
+        a spot near it, then straight at it; collision prevention stops the drone where it
+        must, and the checks judge how close that is."""
+        spot = approach_point(self._planner, self._position(d), goal)
+        if spot is None:
+            raise OracleError(f"no path from {self._position(d)} to {goal}: {error}")
+        await self._goto(tools, d, spot)
+        for _ in range(CLOSE_IN_TRIES):  # each stop is nearer: the drone starts slower
+            outcome = await _retried(partial(tools.move_to, d, *goal))
+            if outcome.state is not None:
+                self._state[d] = outcome.state.to_dict()
+            if outcome.status is not Status.BLOCKED:
+                self._check(d, "move", outcome)
+                return
 
     def _legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
               ) -> list[tuple[float, float, float]]:
@@ -372,7 +406,11 @@ class OracleAgent:
 
     async def _goto(self, tools: AgentTools, d: str, goal: tuple[float, float, float]) -> None:
         await self._ensure_airborne(tools, d, goal[2])
-        waypoints = self._legs(self._position(d), goal)
+        try:
+            waypoints = self._planner.plan(self._position(d), goal)
+        except NoPath as error:
+            await self._close_in(tools, d, goal, error)
+            return
         if len(waypoints) == 1:
             self._check(d, "move", await _retried(partial(tools.move_to, d, *goal)))
         else:

@@ -21,14 +21,22 @@ __all__ = ["assemble"]
 
 Op = dict[str, Any]
 HOME_TOLERANCE_M = 2.0
+# A drone whose plan flies further than a battery surely carries it (one lasts 4-7 km at cruise
+# speed, less with wind, climbs and detours) charges on the way, before its flight since the last
+# charge plus the way on to a station would pass RANGE_M.
+LONG_FLIGHT_M = 4500.0
+RANGE_M = 2500.0
 SPACING_DIRECTIONS = 16
 
 
 class _Flight:
     """A drone's simulated plan: airborne or not, where it is, how far it flew, landings."""
 
-    def __init__(self, it: Intentions, d: DroneIntent, cruise_m: float) -> None:
+    def __init__(self, it: Intentions, d: DroneIntent, cruise_m: float,
+                 range_m: float | None = None) -> None:
         self.it, self.d, self.cruise_m = it, d, cruise_m
+        self.range_m = range_m
+        self.since_charge_m = 0.0
         self.air = False
         self.xy = d.xy
         self.z = 0.0
@@ -43,6 +51,8 @@ class _Flight:
         if kind in NEEDS_AIR and not self.air:
             self.emit({"op": "takeoff", "altitude_m": self.cruise_m})
         op = {**{k: v for k, v in op.items() if k != "of"}, "drone": self.d.id}
+        if self.range_m is not None and kind in ("goto", "reach", "photo_target"):
+            self._charge_before(op)
         if kind == "goto":
             op["z"] = self.cruise_m if op["z"] is None else float(op["z"])
             self._move((float(op["x"]), float(op["y"])), op["z"])
@@ -77,7 +87,27 @@ class _Flight:
 
     def _move(self, xy: tuple[float, float], z: float) -> None:
         self.flown_m += math.dist(self.xy, xy)
+        self.since_charge_m += math.dist(self.xy, xy)
         self.xy, self.z = xy, z
+
+    def _charge_before(self, op: Op) -> None:
+        """A charge first when this leg and the way on to a station would pass range_m."""
+        assert self.range_m is not None
+        if op["op"] == "goto":
+            goal = (float(op["x"]), float(op["y"]))
+        else:
+            target = self.it.world.target(op["target"])
+            if target.is_moving:
+                return
+            goal = target_point(target)
+        stations = [t for t in self.it.world.targets if t.is_charging_station]
+        if not stations:
+            return
+        onward = min(math.dist(goal, target_point(t)) for t in stations)
+        if self.since_charge_m + math.dist(self.xy, goal) + onward > self.range_m:
+            here = min(stations, key=lambda t: math.dist(target_point(t), self.xy))
+            self.emit({"op": "charge", "station": here.id})
+            self.since_charge_m = 0.0
 
 
 def _takeoff_m(d: DroneIntent, cruise_m: float) -> float | None:
@@ -287,10 +317,13 @@ def _land_enough(f: _Flight) -> None:
             f.emit({"op": "rotate", "heading_deg": f.d.final_heading})
 
 
-def assemble(it: Intentions) -> list[list[Op]]:
+def assemble(it: Intentions, ranged: frozenset[str] = frozenset()) -> list[list[Op]]:
+    """The phases of the plan; drones in `ranged` stop to charge on long flights (a plan in
+    which some drone flies further than LONG_FLIGHT_M is made again with them ranged)."""
     task_m = _task_altitude(it)
     team_ops = _share_team_jobs(it)
-    flights = {d.id: _Flight(it, d, d.cruise_m(task_m)) for d in it.all_drones()}
+    flights = {d.id: _Flight(it, d, d.cruise_m(task_m), RANGE_M if d.id in ranged else None)
+               for d in it.all_drones()}
     for op in team_ops:  # sweeps fly at the first swept drone's cruise altitude
         op["altitude_m"] = flights[op["drones"][0]].cruise_m
     first: list[Op] = []
@@ -319,4 +352,7 @@ def assemble(it: Intentions) -> list[list[Op]]:
         f = flights[d.id]
         _finish(it, f)
         last.extend(f.ops)
+    long = frozenset(k for k, f in flights.items() if f.flown_m > LONG_FLIGHT_M)
+    if long and not ranged and any(t.is_charging_station for t in it.world.targets):
+        return assemble(it, long)
     return [phase for phase in (first, team_ops, last) if phase]

@@ -23,7 +23,7 @@ from benchmark.authoring.scenarios.families import (
     family_spec,
     moving_count,
 )
-from benchmark.authoring.scenarios.levels import LEVELS, LevelSpec, level_spec
+from benchmark.authoring.scenarios.levels import LEVELS, LevelSpec, level_spec, sized_spec
 from benchmark.authoring.scenarios.placement import (
     MAP_MARGIN_M,
     Footprint,
@@ -317,23 +317,26 @@ def _description(fam: FamilySpec, spec: LevelSpec, corner: str, main: int, stati
 
 
 def generate_world(family: str, level: str, index: int, *, secret: str = "",
-                   max_index: int = SESSION_INDICES[-1]) -> Session:
+                   max_index: int = SESSION_INDICES[-1], drones: int = 0,
+                   map_size_m: float = 0.0) -> Session:
     """The session dict (without tasks) of one benchmark key (drawn from the secret's seeds
-    when one is given); raises ValueError on a bad key and PlacementError if the level's
-    counts cannot be placed."""
+    when one is given), with the level's drone count and map size unless `drones` or
+    `map_size_m` (a square map's side) say otherwise; raises ValueError on a bad key or size
+    and PlacementError if the counts cannot be placed."""
     fam, spec = _check_key(family, level, index, max_index)
+    spec = sized_spec(spec, drones, map_size_m)
     seed = session_seed(family, level, index, secret=secret, max_index=max_index)
     rng = random.Random(seed)
     layout = Layout(spec.map_width_m, spec.map_height_m, margin_m=MAP_MARGIN_M)
     environment = _environment(rng)
     corner, base = _base(rng, spec)
-    drones = _drones(rng, spec, layout, base)
+    placed = _drones(rng, spec, layout, base)
     stations = spec.charging_station_count
     if fam.family == "target_tracking":
-        return _tracking_world(family, level, index, seed, rng, layout, drones, environment,
+        return _tracking_world(family, spec, index, seed, rng, layout, placed, environment,
                                corner)
     if fam.family == "resilience":
-        return _resilience_world(family, level, index, seed, rng, layout, drones,
+        return _resilience_world(family, spec, index, seed, rng, layout, placed,
                                  environment, corner)
     main = spec.target_count(fam.area_targets) - stations
     names = [f"{fam.target_name} {k}" for k in range(1, main + 1)]
@@ -343,15 +346,15 @@ def generate_world(family: str, level: str, index: int, *, secret: str = "",
         targets = [_disc_target(rng, layout, n, "fixed") for n in names]
     targets = _with_stations(rng, layout, targets, stations)
     return _session(fam, spec, index, seed, _description(fam, spec, corner, main, stations),
-                    environment, drones, targets, obstacles)
+                    environment, placed, targets, obstacles)
 
 
-def _tracking_world(family: str, level: str, index: int, seed: int, rng: random.Random,
+def _tracking_world(family: str, spec: LevelSpec, index: int, seed: int, rng: random.Random,
                     layout: Layout, drones: list[dict[str, Any]], environment: dict[str, Any],
                     corner: str) -> Session:
     """target_tracking: moving targets' tracks placed before the obstacles, fixed targets and
     charging stations after them."""
-    fam, spec = family_spec(family), level_spec(level)
+    fam, level = family_spec(family), spec.level
     movers = moving_count(family, level)
     fixed = TRACKING_TARGETS[level] - movers
     targets = [_moving_target(rng, layout, f"Moving Target {k}", k % PATH_MODE_EVERY == 0)
@@ -370,12 +373,12 @@ def _tracking_world(family: str, level: str, index: int, seed: int, rng: random.
                     obstacles)
 
 
-def _resilience_world(family: str, level: str, index: int, seed: int, rng: random.Random,
-                      layout: Layout, drones: list[dict[str, Any]],
+def _resilience_world(family: str, spec: LevelSpec, index: int, seed: int,
+                      rng: random.Random, layout: Layout, drones: list[dict[str, Any]],
                       environment: dict[str, Any], corner: str) -> Session:
     """resilience: the area families' area targets placed before the obstacles, then
     RESILIENCE_FIXED_TARGETS fixed targets and the charging stations."""
-    fam, spec = family_spec(family), level_spec(level)
+    fam, level = family_spec(family), spec.level
     stations = spec.charging_station_count
     areas = spec.area_target_count - stations
     targets = [_area_target(rng, spec, layout, f"Search Area {k}") for k in range(1, areas + 1)]

@@ -30,6 +30,8 @@ radius; at hard and extreme each drone draws integers in 40-60 m and 15-25 m.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 
 __all__ = [
@@ -39,6 +41,7 @@ __all__ = [
     "LEVEL_SPECS",
     "LevelSpec",
     "level_spec",
+    "sized_spec",
 ]
 
 LEVELS: tuple[str, ...] = ("easy", "intermediate", "moderate", "hard", "extreme")
@@ -94,3 +97,29 @@ def level_spec(level: str) -> LevelSpec:
     if not isinstance(level, str) or level not in LEVEL_SPECS:
         raise ValueError(f"level must be one of {', '.join(LEVELS)}; got {level!r}")
     return LEVEL_SPECS[level]
+
+
+MAX_DRONES = 100
+MAP_SIZE_RANGE_M = (200.0, 10000.0)
+
+
+def sized_spec(spec: LevelSpec, drones: int = 0, map_size_m: float = 0.0) -> LevelSpec:
+    """A level's row with another drone count and/or a square map of another side (0: the
+    level's own); the base grows with the square root of the drone count. Raises ValueError
+    naming the option."""
+    if drones:
+        if isinstance(drones, bool) or not isinstance(drones, int) or not (
+                1 <= drones <= MAX_DRONES):
+            raise ValueError(f"--drones must be a whole number from 1 to {MAX_DRONES}; "
+                             f"got {drones!r}")
+        grow = max(1.0, math.sqrt(drones / spec.drone_count))
+        spec = dataclasses.replace(spec, drone_count=drones,
+                                   base_radius_m=round(spec.base_radius_m * grow, 1))
+    if map_size_m:
+        low, high = MAP_SIZE_RANGE_M
+        if not (isinstance(map_size_m, int | float) and low <= map_size_m <= high):
+            raise ValueError(f"--map-size-m must be from {low:g} to {high:g} m; "
+                             f"got {map_size_m!r}")
+        side = int(map_size_m) if float(map_size_m).is_integer() else map_size_m
+        spec = dataclasses.replace(spec, map_width_m=side, map_height_m=side)  # type: ignore[arg-type]
+    return spec

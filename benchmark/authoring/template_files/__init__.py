@@ -11,12 +11,14 @@ from benchmark.authoring.template_files.loader import (
     load_template,
     load_templates,
     read_template,
+    read_templates,
     template_of,
 )
 from benchmark.authoring.template_files.model import FORMAT, TemplateFile, json_schema
 
 __all__ = ["FORMAT", "SCHEMA_PATH", "TemplateFile", "TemplateFileError", "dump_template",
-           "json_schema", "load_template", "load_templates", "read_template", "schema_text",
+           "json_schema", "load_template", "load_templates", "read_template", "read_templates",
+           "schema_text",
            "template_of"]
 
 SCHEMA_PATH = Path(__file__).resolve().parent / "template.schema.json"

@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # benchmark.authoring.templates loads its file templates thro
     from benchmark.authoring.templates.base import SessionView, TaskDraft, Template
 
 __all__ = ["TemplateFileError", "dump_template", "load_template", "load_templates",
-           "parse_template", "read_template", "template_of"]
+           "parse_template", "read_template", "read_templates", "template_of"]
 
 
 class TemplateFileError(ValueError):
@@ -38,22 +38,26 @@ def _where(loc: Sequence[int | str]) -> str:
     return out or "(file)"
 
 
-def read_template(path: str | Path) -> TemplateFile:
-    """The validated model of one template file."""
-    path = Path(path)
+def _read_json(path: Path) -> Any:
     try:
-        raw = json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(path.read_text(encoding="utf-8"))
     except OSError as error:
         raise TemplateFileError(f"{path}: cannot be read: {error.strerror}") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise TemplateFileError(f"{path}: not JSON: {error}") from None
+
+
+def _validated(raw: Any, where: str) -> TemplateFile:
+    for loc, value in _numbers(raw, ()):
+        if not math.isfinite(value):
+            raise TemplateFileError(f"{where}: {_where(loc)}: {value} is not a finite number")
     try:
         model = TemplateFile.model_validate(raw)
     except ValidationError as error:
         first = error.errors()[0]
         reason = str(first["msg"]).removeprefix("Value error, ")
-        raise TemplateFileError(f"{path}: {_where(first['loc'])}: {reason}") from None
-    _check_tree(path, model)
+        raise TemplateFileError(f"{where}: {_where(first['loc'])}: {reason}") from None
+    _check_tree(where, model)
     return model
 
 
@@ -79,7 +83,7 @@ def parse_template(text: str, source: str = "<text>") -> TemplateFile:
         raise refused(_where(first["loc"]),
                       str(first["msg"]).removeprefix("Value error, ")) from None
     try:
-        _check_tree(Path(source), model)
+        _check_tree(source, model)
     except TemplateFileError as error:
         reason = str(error).removeprefix(f"{source}: ")
         field, _, why = reason.partition(": ")
@@ -100,7 +104,34 @@ def _numbers(data: Any, loc: tuple[int | str, ...]
             yield from _numbers(value, (*loc, k))
 
 
-def _check_tree(path: Path, model: TemplateFile) -> None:
+def read_template(path: str | Path) -> TemplateFile:
+    """The validated model of one template file (``mavswarm.template/1``)."""
+    path = Path(path)
+    return _validated(_read_json(path), str(path))
+
+
+def read_templates(path: str | Path) -> list[TemplateFile]:
+    """The validated models of one file: a ``mavswarm.template/1`` file, or a template or a
+    catalogue of templates in MultiUAV-Plat's layout
+    (`benchmark.authoring.template_files.reference`; templates it excludes from random
+    generation are left out)."""
+    from benchmark.authoring.template_files.reference import (
+        ReferenceTemplateError,
+        is_reference_layout,
+        reference_templates,
+    )
+    path = Path(path)
+    raw = _read_json(path)
+    if not is_reference_layout(raw):
+        return [_validated(raw, str(path))]
+    try:
+        converted = reference_templates(raw, path)
+    except ReferenceTemplateError as error:
+        raise TemplateFileError(str(error)) from None
+    return [_validated(data, where) for where, data in converted]
+
+
+def _check_tree(path: str, model: TemplateFile) -> None:
     """The check tree's shape and endpoints (placeholders are filled per task)."""
     from benchmark.scoring.validators import CheckDefinitionError, parse_tree
     from benchmark.scoring.validators.tree import endpoints_used
@@ -141,21 +172,25 @@ def _sample(key: str, value: Any) -> Any:
     return 1.0
 
 
-def load_template(path: str | Path) -> Template:
-    """The `Template` of one file (raises TemplateFileError; a hook that cannot be loaded is
-    named with the file)."""
-    model = read_template(path)
+def _with_hooks(model: TemplateFile, where: str) -> Template:
     for k, spec in enumerate(model.values):
         if spec.call is not None:
             try:
                 _hook(spec.call)
             except TemplateFileError as error:
-                raise TemplateFileError(f"{path}: values[{k}].call: {error}") from None
+                raise TemplateFileError(f"{where}: values[{k}].call: {error}") from None
     return template_of(model)
 
 
+def load_template(path: str | Path) -> Template:
+    """The `Template` of one ``mavswarm.template/1`` file (raises TemplateFileError; a hook
+    that cannot be loaded is named with the file)."""
+    return _with_hooks(read_template(path), str(path))
+
+
 def load_templates(folder: str | Path) -> list[Template]:
-    """Every ``*.json`` template of a folder, in file-name order; two files of one id are
+    """Every template of a folder's ``*.json`` files (ours, or the reference's layout: one
+    template or a catalogue per file), in file-name order; two templates of one id are
     refused."""
     folder = Path(folder)
     if not folder.is_dir():
@@ -163,12 +198,13 @@ def load_templates(folder: str | Path) -> list[Template]:
     out: list[Template] = []
     seen: dict[str, Path] = {}
     for path in sorted(folder.glob("*.json")):
-        template = load_template(path)
-        if template.key in seen:
-            raise TemplateFileError(f"{path}: id: {template.key!r} is also the id of "
-                                    f"{seen[template.key]}")
-        seen[template.key] = path
-        out.append(template)
+        for model in read_templates(path):
+            template = _with_hooks(model, str(path))
+            if template.key in seen:
+                raise TemplateFileError(f"{path}: id: {template.key!r} is also the id of "
+                                        f"{seen[template.key]}")
+            seen[template.key] = path
+            out.append(template)
     return out
 
 
@@ -212,7 +248,7 @@ def _entities(model: TemplateFile, view: SessionView, rng: random.Random
             raise TemplateUnfit(f"the session has no {_WORDS[kind]}")
         if model.distinct and len(pool) >= len(groups):
             chosen = rng.sample(pool, len(groups))
-        elif model.distinct:
+        elif model.distinct is True:
             raise TemplateUnfit(f"{len(groups)} distinct {_WORDS[kind]}s wanted, "
                                 f"{len(pool)} here")
         else:
@@ -284,7 +320,7 @@ def template_of(model: TemplateFile) -> Template:
         return sum(1 for g in model.entities if g.kind == kind)
 
     return Template(model.id, model.category, model.difficulty, build,
-                    drones=count("drone") if model.distinct else min(count("drone"), 1),
+                    drones=count("drone") if model.distinct is True else min(count("drone"), 1),
                     area_targets=count("area_target"), point_targets=count("point_target"),
                     stations=count("station"), families=tuple(model.families),
                     moving_targets=count("moving_target"), levels=tuple(model.levels))

@@ -117,8 +117,11 @@ class TemplateFile(_Strict):
     levels: list[str] = Field(default_factory=list,
                               description="levels it suits (empty: every level)")
     entities: list[EntityGroup] = Field(default_factory=list)
-    distinct: bool = Field(default=True,
-                           description="groups of one kind get distinct entities")
+    distinct: bool | Literal["when_enough"] = Field(
+        default=True,
+        description="groups of one kind get distinct entities (when_enough: distinct when the "
+                    "session has enough of that kind, else each group draws any, as the "
+                    "reference does)")
     values: list[ValueSpec] = Field(default_factory=list)
     phrasings: list[str] = Field(min_length=1,
                                  description="the first is given to agents, others are aliases")
