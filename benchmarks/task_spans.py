@@ -123,7 +123,7 @@ def main() -> None:
         print("  ", rows[-1], flush=True)
     print("\n" + table(["session", "tasks", "wall s", "s/task", *PHASES, "CPU s", "idle"],
                        rows))
-    print(f"load average after: {open('/proc/loadavg').read().strip()}")
+    print(f"load average after: {Path('/proc/loadavg').read_text().strip()}")
 
 
 if __name__ == "__main__":
