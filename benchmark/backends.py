@@ -90,6 +90,7 @@ class LocalBackend:
     hosted (see UnitWork)."""
 
     workers: int = 1
+    cores: int | None = None  # processes at most (default: this machine's cores)
 
     def run(self, work: UnitWork, units: Sequence[Unit], handle: Handle) -> None:
         from benchmark.worker_count import hosting_for
@@ -97,7 +98,7 @@ class LocalBackend:
             for unit in units:
                 work(unit, handle)
             return
-        hosting = hosting_for(min(self.workers, max(1, len(units))))
+        hosting = hosting_for(min(self.workers, max(1, len(units))), self.cores)
         hosted: HostedWork | None = getattr(work, "hosted", None)
         if hosted is None or hosting.per_process == 1:
             _run_processes(work, list(units), handle, self.workers, 1)
