@@ -21,7 +21,8 @@ import os
 from dataclasses import dataclass
 
 __all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", "SESSION_MB",
-           "Hosting", "auto_workers", "available_memory_mb", "hosting_for", "parse_workers"]
+           "Hosting", "auto_workers", "available_memory_mb", "hosting_for", "parse_workers",
+           "usable_cores"]
 
 AUTO = "auto"
 INSTANT_AGENTS = frozenset({"oracle", "noop"})
@@ -33,6 +34,14 @@ MEMORY_SHARE = 0.5  # of the memory available when the run starts
 # Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
 # of its wall time (benchmarks/task_spans.py), so three keep a core busy.
 INSTANT_SESSIONS_PER_CORE = 3
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the OS tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
 
 
 def available_memory_mb() -> float:
@@ -67,7 +76,7 @@ def parse_workers(text: str) -> int | str:
 def auto_workers(agent: str, units: int, *, cores: int | None = None,
                  memory_mb: float | None = None) -> int:
     """Sessions to host at once for `agent` over `units` units (see the module docstring)."""
-    cores = max(1, cores if cores is not None else (os.cpu_count() or 1))
+    cores = max(1, cores if cores is not None else usable_cores())
     units = max(1, units)
     if agent in INSTANT_AGENTS:
         return max(1, min(units, INSTANT_SESSIONS_PER_CORE * cores))
@@ -92,5 +101,5 @@ def hosting_for(sessions: int, cores: int | None = None) -> Hosting:
     """`sessions` at once over at most one process per core."""
     if sessions < 1:
         raise ValueError("workers must be >= 1")
-    cores = max(1, cores if cores is not None else (os.cpu_count() or 1))
+    cores = max(1, cores if cores is not None else usable_cores())
     return Hosting(sessions, min(sessions, cores))
