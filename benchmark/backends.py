@@ -6,8 +6,9 @@ driver's `handle` in the driver's process: ``("record", record)``, ``("error", t
 ``("note", text)``. The driver alone writes the results file, whatever the backend.
 
 - ``local`` (the default): in this process with one worker, else in spawned worker processes
-  on this machine, at most one per core, each hosting its share of the sessions side by side
-  in one event loop (`benchmark/worker_count.py`). Needs nothing beyond mavswarm itself.
+  on this machine: one per unit, or (`shared`, for agents that think) at most one per core,
+  each hosting its share of the units side by side in one event loop
+  (`benchmark/worker_count.py`). Needs nothing beyond mavswarm itself.
 - ``ray``: as Ray tasks on a Ray cluster (`benchmark/ray_backend.py`), for the optional
   ``ray`` extra; Ray is imported only when this backend is asked for.
 """
@@ -68,14 +69,16 @@ def require_ray() -> None:
                                  f"({error}): pip install 'mavswarm[ray]'") from None
 
 
-def make_backend(name: str, *, workers: int, ray_address: str = "") -> Backend:
-    """The named backend, running at most `workers` units at once."""
+def make_backend(name: str, *, workers: int, ray_address: str = "",
+                 shared: bool = False) -> Backend:
+    """The named backend, running at most `workers` units at once (local, `shared`: several
+    in one process, see LocalBackend)."""
     if workers < 1:
         raise ValueError("workers must be >= 1")
     if name == "local":
         if ray_address:
             raise ValueError("--ray-address is for --backend ray")
-        return LocalBackend(workers)
+        return LocalBackend(workers, shared=shared)
     if name == "ray":
         require_ray()
         from benchmark.ray_backend import RayBackend
@@ -85,12 +88,13 @@ def make_backend(name: str, *, workers: int, ray_address: str = "") -> Backend:
 
 @dataclass(frozen=True)
 class LocalBackend:
-    """Units in this process (one worker) or in spawned worker processes on this machine: at
-    most one per core, each hosting up to `per_process` units at once when the work can be
-    hosted (see UnitWork)."""
+    """Units in this process (one worker) or in spawned worker processes on this machine: a
+    process per unit, or with `shared` at most one per core, each hosting several units at
+    once when the work can be hosted (see UnitWork)."""
 
     workers: int = 1
     cores: int | None = None  # processes at most (default: this machine's cores)
+    shared: bool = False  # several units per process (benchmark.worker_count.hosting_for)
 
     def run(self, work: UnitWork, units: Sequence[Unit], handle: Handle) -> None:
         from benchmark.worker_count import hosting_for
@@ -98,7 +102,8 @@ class LocalBackend:
             for unit in units:
                 work(unit, handle)
             return
-        hosting = hosting_for(min(self.workers, max(1, len(units))), self.cores)
+        hosting = hosting_for(min(self.workers, max(1, len(units))), self.cores,
+                              shared=self.shared)
         hosted: HostedWork | None = getattr(work, "hosted", None)
         if hosted is None or hosting.per_process == 1:
             _run_processes(work, list(units), handle, self.workers, 1)

@@ -31,7 +31,7 @@ from benchmark.progress import LineProgress, ProgressSink, task_line
 from benchmark.replay_data import session_world, write_task_replay
 from benchmark.results import ResultsLog, read_task_records
 from benchmark.session_file import Session, SessionFileError, read_session_json
-from benchmark.worker_count import AUTO, auto_workers
+from benchmark.worker_count import AUTO, auto_workers, shares_processes
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 
@@ -309,7 +309,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         raise ValueError(f"workers must be >= 1 or {AUTO!r}, trials >= 1 (got "
                          f"{plan.workers!r}, {plan.trials!r})")
     out = sink if sink is not None else LineProgress(progress)
-    backend = make_backend(plan.backend, workers=workers, ray_address=plan.ray_address)
+    backend = make_backend(plan.backend, workers=workers, ray_address=plan.ray_address,
+                           shared=shares_processes(plan.agent))
     started = time.perf_counter()
     outcome = RunOutcome()
     log = ResultsLog(plan.results_path)

@@ -1,9 +1,11 @@
 """How many sessions a benchmark run hosts at once, and in how many processes.
 
-`--workers N` is the number of sessions run at once. The local backend spreads them over at
-most one worker process per core, each process hosting its share of the sessions side by
-side in one event loop (a session mostly waits: on MAVLink round trips, and on the model when
-the agent thinks). `--workers auto` picks N from the machine:
+`--workers N` is the number of sessions run at once. An agent that answers at once (the
+oracle, noop) gets a worker process per session: its sessions compute most of the time, and
+a session never waits on a neighbour's computation. Any other agent mostly thinks, so the
+local backend spreads its sessions over at most one worker process per core, each process
+hosting its share side by side in one event loop (a session then costs memory for its swarm
+and gateway only, not a process). `--workers auto` picks N from the machine:
 
 - an agent that answers at once (the oracle, noop) keeps a core busy with a few sessions, so
   N = INSTANT_SESSIONS_PER_CORE per core;
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 
 __all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", "SESSION_MB",
            "Hosting", "auto_workers", "available_memory_mb", "hosting_for", "parse_workers",
-           "usable_cores"]
+           "shares_processes", "usable_cores"]
 
 AUTO = "auto"
 INSTANT_AGENTS = frozenset({"oracle", "noop"})
@@ -97,9 +99,17 @@ class Hosting:
         return math.ceil(self.sessions / self.processes)
 
 
-def hosting_for(sessions: int, cores: int | None = None) -> Hosting:
-    """`sessions` at once over at most one process per core."""
+def hosting_for(sessions: int, cores: int | None = None, *, shared: bool = True) -> Hosting:
+    """`sessions` at once: over at most one process per core when processes are `shared`,
+    else a process each."""
     if sessions < 1:
         raise ValueError("workers must be >= 1")
+    if not shared:
+        return Hosting(sessions, sessions)
     cores = max(1, cores if cores is not None else usable_cores())
     return Hosting(sessions, min(sessions, cores))
+
+
+def shares_processes(agent: str) -> bool:
+    """Whether a run of `agent` hosts several sessions per worker process (see above)."""
+    return agent not in INSTANT_AGENTS

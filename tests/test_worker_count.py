@@ -21,6 +21,7 @@ from benchmark.worker_count import (
     auto_workers,
     hosting_for,
     parse_workers,
+    shares_processes,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,6 +44,7 @@ def test_hosting_spreads_sessions_over_at_most_one_process_per_core() -> None:
     assert (hosting_for(6, cores=2).processes, hosting_for(6, cores=2).per_process) == (2, 3)
     assert (hosting_for(5, cores=2).processes, hosting_for(5, cores=2).per_process) == (2, 3)
     assert (hosting_for(2, cores=4).processes, hosting_for(2, cores=4).per_process) == (2, 1)
+    assert hosting_for(6, cores=2, shared=False).processes == 6  # a process per session
     with pytest.raises(ValueError):
         hosting_for(0)
 
@@ -71,25 +73,34 @@ class SleepyWork:
     async def hosted(self, unit: Unit, send: Handle) -> None:
         send(("note", (os.getpid(), unit.path, "start", time.monotonic())))
         await asyncio.sleep(0.5)
+        send(("note", (os.getpid(), unit.path, "end", time.monotonic())))
         if unit.path == "boom":
             raise RuntimeError("this unit fails")
-        send(("note", (os.getpid(), unit.path, "end", time.monotonic())))
 
 
 def test_a_worker_process_hosts_several_units_at_once_and_survives_a_failing_one() -> None:
     messages: list[tuple[str, Any]] = []
     units = [Unit(p, 0) for p in ("a", "b", "boom", "c", "d", "e")]
-    LocalBackend(4, cores=2).run(SleepyWork(), units, messages.append)
+    LocalBackend(4, cores=2, shared=True).run(SleepyWork(), units, messages.append)
     notes = [m[1] for m in messages if m[0] == "note"]
     errors = [m[1] for m in messages if m[0] == "error"]
     assert errors == ["boom (trial 0): RuntimeError: this unit fails"]
-    assert sorted(n[1] for n in notes if n[2] == "end") == ["a", "b", "c", "d", "e"]
+    assert sorted(n[1] for n in notes if n[2] == "end") == ["a", "b", "boom", "c", "d", "e"]
     pids = {n[0] for n in notes}
     assert len(pids) == 2  # at most one process per core
-    for pid in pids:  # two lanes per process: some unit starts before another one ends
-        events = sorted((n[3], n[2]) for n in notes if n[0] == pid and n[1] != "boom")
-        running = most = 0
+    overlap = {}
+    for pid in pids:  # two lanes per process: units run side by side, never three
+        events = sorted((n[3], n[2]) for n in notes if n[0] == pid)
+        running = overlap[pid] = 0
         for _, kind in events:
             running += 1 if kind == "start" else -1
-            most = max(most, running)
-        assert most == 2, events
+            overlap[pid] = max(overlap[pid], running)
+    assert max(overlap.values()) == 2, overlap  # 6 units, 2 processes: one ran 3 or more
+
+
+def test_an_instant_agent_gets_a_process_per_session_a_thinking_one_shares() -> None:
+    assert not shares_processes("oracle") and not shares_processes("noop")
+    assert shares_processes("react") and shares_processes("external")
+    messages: list[tuple[str, Any]] = []
+    LocalBackend(3, cores=1).run(SleepyWork(), [Unit(p, 0) for p in "abc"], messages.append)
+    assert len({m[1][0] for m in messages if m[0] == "note"}) == 3
