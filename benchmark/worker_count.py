@@ -28,10 +28,11 @@ __all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", 
 
 AUTO = "auto"
 INSTANT_AGENTS = frozenset({"oracle", "noop"})
-# Measured (benchmarks/hosted_sessions.py, docs/performance.md): the memory one more lockstep
-# session adds to a process that hosts several, and a worker process before any session.
-SESSION_MB = 40.0
-PROCESS_MB = 200.0
+# Measured (benchmarks/think_latency.py, docs/performance.md): the memory one more lockstep
+# session adds to a process that hosts several (its peak, one session of every family and
+# level, 3 to 30 drones), and a worker process before any session.
+SESSION_MB = 55.0
+PROCESS_MB = 100.0
 MEMORY_SHARE = 0.5  # of the memory available when the run starts
 # Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
 # of its wall time (benchmarks/task_spans.py), so three keep a core busy.
