@@ -29,6 +29,7 @@ from benchmark.running.backends import BACKENDS
 from benchmark.running.episode import CLOCKS
 from benchmark.running.hosted import EXTERNAL
 from benchmark.running.hosted.options import add_hosted_arguments
+from benchmark.running.worker_count import AUTO, auto_workers
 from emulator.link_faults import add_link_arguments, link_faults_from_args
 from mqtt_bus.cli import add_mqtt_arguments, mqtt_options
 from swarm_agents.plugins import ENTRY_POINT_GROUP
@@ -80,7 +81,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        help="smoke: 3 easy sessions, 6 tasks each; full: 125 sessions, 2500 tasks")
     group.add_argument("--sessions", type=Path, nargs="+", metavar="FILE",
                        help="session files to run instead of a suite")
-    run.add_argument("--workers", type=_at_least_one, default=1, help="sessions run at once")
+    run.add_argument("--workers", type=_workers, default=1,
+                     help="sessions run at once, spread over at most one process per core; "
+                          "auto: chosen from the cores (an agent that answers at once) or the "
+                          "memory (one that thinks); see docs/performance.md")
     run.add_argument("--trials", type=_at_least_one, default=1,
                      help="repeats of every task (pass^k)")
     run.add_argument("--clock", choices=CLOCKS, default="lockstep",
@@ -148,6 +152,14 @@ def _at_least_one(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
     return value
+
+
+def _workers(text: str) -> int | str:
+    from benchmark.running.worker_count import parse_workers
+    try:
+        return parse_workers(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def add_verbose_argument(parser: argparse.ArgumentParser) -> None:
@@ -244,6 +256,9 @@ def _run(args: argparse.Namespace) -> int:
     else:
         paths, limit = suite_paths(args.suite)
         label = args.suite
+    if args.workers == AUTO:
+        args.workers = auto_workers(args.agent, args.trials * len(paths))
+        print(f"--workers auto: {args.workers} sessions at once")
     agent_label = re.sub(r"[^A-Za-z0-9_.:-]+", "-", args.agent).strip("-.")
     out = args.out or Path(f"runs/bench-{agent_label}-{label}")
     check_inspector_url(args.inspector_url)
@@ -305,6 +320,8 @@ def _run_hosted(args: argparse.Namespace) -> int:
     (benchmark/running/hosted)."""
     from benchmark.running.hosted.run import hosting
     sessions = args.sessions or suite_paths(args.suite)[0]
+    if args.workers == AUTO:
+        args.workers = auto_workers(EXTERNAL, args.trials * len(sessions))
     with hosting(workers=args.workers, units=args.trials * len(sessions), host=args.host,
                  port=args.port) as on_message:
         args.on_message = on_message

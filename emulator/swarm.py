@@ -40,6 +40,12 @@ STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the 
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
 MAX_STEPS_PER_RUN = 2000
+# Vehicles whose whole telemetry goes out in one loop turn (a burst: a lockstep halt, an
+# operator reset); the others follow on the next turns. A ground station's MAVSDK hands every
+# message to its subscribers through one bounded queue and drops callbacks once a burst
+# overflows it (every vehicle of a large swarm at once does), so the client would wait for
+# telemetry asked again.
+BURST_VEHICLES_PER_TURN = 3
 log = logging.getLogger("mavswarm.swarm")
 
 
@@ -379,16 +385,22 @@ class Swarm:
     def _request_burst(self, k: int) -> None:
         """Lockstep halt of vehicle k: its whole telemetry now and once more on the next loop
         turn, every other vehicle's once, so a client sees the stopped state within
-        milliseconds whatever the stream rates."""
+        milliseconds whatever the stream rates (k first: its client waits on it)."""
+        self._burst_first(k, 2)
         for other in range(self.fleet.n):
             self._bursts.setdefault(other, 1)
-        self._bursts[k] = 2
         self._wake.set()
 
     def send_telemetry_of(self, drone_id: str) -> None:
         """One vehicle's whole telemetry now and once more on the next loop turn."""
-        self._bursts[self.fleet.index_by_id[drone_id]] = 2
+        self._burst_first(self.fleet.index_by_id[drone_id], 2)
         self._wake.set()
+
+    def _burst_first(self, k: int, count: int) -> None:
+        """Vehicle k's burst before every other one pending."""
+        pending = self._bursts
+        self._bursts = {k: max(count, pending.pop(k, 0))}
+        self._bursts.update(pending)
 
     def wake(self) -> None:
         """Have the scheduler look at the fleet again now (it changed between steps)."""
@@ -401,7 +413,12 @@ class Swarm:
         self._wake.set()
 
     def _send_bursts(self) -> None:
-        bursts, self._bursts = self._bursts, {}
+        bursts = self._bursts
+        if len(bursts) <= BURST_VEHICLES_PER_TURN:
+            self._bursts = {}
+        else:  # the first few now, the others on the next turns (see BURST_VEHICLES_PER_TURN)
+            now = list(bursts)[:BURST_VEHICLES_PER_TURN]
+            bursts = {k: self._bursts.pop(k) for k in now}
         for k in self.left:  # a vehicle that left says nothing more
             bursts.pop(k, None)
         if not bursts:
@@ -418,9 +435,10 @@ class Swarm:
         on = np.isfinite(schedule.period_s[ks])
         self._send_streams((spec.msg_id, ks[on[:, col]])
                            for col, spec in enumerate(schedule.streams))
-        for k, count in bursts.items():
-            if count > 1:
-                self._bursts[k] = count - 1
+        again = {k: count - 1 for k, count in bursts.items() if count > 1}
+        if again:  # on the next turn, before the vehicles still waiting for their first
+            again.update(self._bursts)
+            self._bursts = again
 
     def _held_at(self) -> float:
         return min(self._clock_holds.values()) if self._clock_holds else math.inf

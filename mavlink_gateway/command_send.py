@@ -29,6 +29,9 @@ STATUSTEXT_WAIT_S = 0.05  # how long a refusal waits for the autopilot's STATUST
 # times in all; the vehicle acts on a command once (emulator.mavlink.command_dedup).
 COMMAND_TRIES = 3
 SILENT_WALL_S = 5.0  # a drone whose telemetry stopped this long ago is tried only once
+# ... once its telemetry is still missing this long after the call: what arrived while this
+# process's loop was busy (a long computation, a loaded machine) is taken in first
+SILENCE_CHECK_WALL_S = 0.2
 # MAVSDK sends a command again after 0.5 s without its ACK: an answer that took this long
 # (wall time) may answer a later copy than the first.
 RETRANSMITTED_AFTER_S = 0.45
@@ -60,7 +63,11 @@ async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[
     after `refresh()` (False: none came, nothing can be seen), decides. A call that got no
     answer is made again up to COMMAND_TRIES times in all, then raises NoAnswer. An
     interrupted `goal` sends nothing more."""
-    tries = 1 if link.silent_for_s() > SILENT_WALL_S else COMMAND_TRIES
+    tries = COMMAND_TRIES
+    if link.silent_for_s() > SILENT_WALL_S:
+        await link.wait_update(link.updates, SILENCE_CHECK_WALL_S)
+        if link.silent_for_s() > SILENT_WALL_S:
+            tries = 1
     for attempt in range(1, tries + 1):
         if goal is not None:
             goal.check()

@@ -59,6 +59,11 @@ class _CallPool(concurrent.futures.ThreadPoolExecutor):
 _call_pools: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, _CallPool] = (
     weakref.WeakKeyDictionary()
 )
+# Drones of the fleets open on each loop: a loop that hosts several sessions sizes its call
+# pool for all of them together.
+_open_drones: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, int] = (
+    weakref.WeakKeyDictionary()
+)
 
 
 def _call_pool(loop: asyncio.AbstractEventLoop, workers: int) -> _CallPool:
@@ -92,6 +97,7 @@ class FleetConnection:
         self._url = ""
         self._origin: GeoFrame | None = None
         self._landed_state_hz: float | None = LANDED_STATE_HZ
+        self._counted = 0  # this fleet's drones in _open_drones
 
     @classmethod
     async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoFrame, *,
@@ -101,7 +107,9 @@ class FleetConnection:
         `landed_state_hz`: the EXTENDED_SYS_STATE rate asked of every drone (None: its
         own)."""
         # MAVSDK runs each blocking call on the default executor: size it for the fleet.
-        calls = _call_pool(asyncio.get_running_loop(), max(32, 2 * len(profiles) + 8))
+        loop = asyncio.get_running_loop()
+        _open_drones[loop] = _open_drones.get(loop, 0) + len(profiles)
+        calls = _call_pool(loop, max(32, 2 * _open_drones[loop] + 8))
         set_mavsdk_log()  # MAVSDK's own log lines: dropped unless this process asked for them
         mavsdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         try:
@@ -111,10 +119,12 @@ class FleetConnection:
                 raise FleetError(f"cannot open the MAVLink connection {url!r}: {error}") from None
             drones = await _attach(mavsdk, url, profiles, origin, timeout_s, landed_state_hz)
         except BaseException:
+            _open_drones[loop] -= len(profiles)
             await calls.drain(CALLS_DRAIN_S)
             mavsdk.destroy()
             raise
         fleet = cls(mavsdk, drones, calls)
+        fleet._counted = len(profiles)
         fleet._url, fleet._origin, fleet._landed_state_hz = url, origin, landed_state_hz
         return fleet
 
@@ -144,7 +154,11 @@ class FleetConnection:
         threads return, then destroy MAVSDK (its threads, sockets and every plugin)."""
         for link in self.drones.values():
             await link.close()
-        current = _call_pools.get(asyncio.get_running_loop())
+        loop = asyncio.get_running_loop()
+        if self._counted:
+            _open_drones[loop] = _open_drones.get(loop, 0) - self._counted
+            self._counted = 0
+        current = _call_pools.get(loop)
         for pool in {p for p in (self._calls, current) if p is not None}:
             await pool.drain(CALLS_DRAIN_S)
         self._mavsdk.destroy()

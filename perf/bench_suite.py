@@ -3,7 +3,8 @@ with --run, the wall time of running it with an agent, with the per-task reset a
 evaluation overheads.
 
     ./dev perf bench_suite                       # counts only
-    ./dev perf bench_suite --run --workers 2     # full 2500-task oracle run, timed
+    ./dev perf bench_suite --run --workers auto  # full 2500-task oracle run, timed
+    ./dev perf bench_suite --run --workers auto --only=-1   # one session per family and level
     ./dev perf bench_suite --run --suite smoke
     ./dev perf bench_suite --family target_tracking --run --agent noop
     ./dev perf bench_suite --family resilience --run --workers 2
@@ -12,6 +13,7 @@ evaluation overheads.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
@@ -21,13 +23,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import pct
+from _common import machine_line, pct
 
 from benchmark.authoring.scenarios import FAMILIES
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import suite_paths
 from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
+from benchmark.running.worker_count import AUTO, auto_workers, parse_workers
 from benchmark.scoring.validators import endpoints_used, leaf_count
 
 
@@ -55,7 +58,8 @@ def main() -> None:
     parser.add_argument("--suite", choices=("smoke", "full"), default="full")
     parser.add_argument("--run", action="store_true", help="run the suite and time it")
     parser.add_argument("--agent", default="oracle")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=parse_workers, default=2, help="N or auto")
+    parser.add_argument("--only", default="", help="only the sessions whose id contains this")
     parser.add_argument("--family", default="", choices=("", *FAMILIES),
                         help="only the sessions of this family")
     args = parser.parse_args()
@@ -64,9 +68,13 @@ def main() -> None:
         paths = tuple(p for p in paths if p.stem.startswith(f"{args.family}-"))
         if not paths:
             parser.error(f"no session of family {args.family!r} in suite {args.suite!r}")
+    paths = tuple(p for p in paths if args.only in p.stem)
     _counts(paths, limit)
     if not args.run:
         return
+    if args.workers == AUTO:
+        args.workers = auto_workers(args.agent, len(paths))
+    print(machine_line(), flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         plan = RunPlan(sessions=paths, agent=args.agent, workers=args.workers,
                        out_dir=Path(tmp), task_limit=limit)
@@ -94,6 +102,7 @@ def main() -> None:
           f" evaluation p50 {statistics.median(evals):.1f} ms p95 {pct(evals, 95):.1f} ms;"
           f" agent wall p50 {statistics.median(agent):.2f} s p95 {pct(agent, 95):.2f} s;"
           f" simulated {sum(r['sim_time_s'] for r in records) / 3600:.1f} h in all")
+    print(f"load average at the end: {os.getloadavg()}")
 
 
 if __name__ == "__main__":

@@ -1,11 +1,16 @@
 """Throughput and results under model latency: the oracle thinks THINK_S before every tool call
 that acts on the world, as a model would, and many sessions run at once (PROCESSES worker
-processes, each holding up to SESSIONS sessions in one event loop).
+processes, each holding up to SESSIONS sessions in one event loop; --workers N|auto: N
+sessions at once spread as `bench run` spreads an agent that thinks, auto as it picks them).
 
-    ./dev perf think_latency --think-s 2 --processes 2 --sessions 12            # full suite
+    ./dev perf think_latency --think-s 2 --workers auto                          # full suite
+    ./dev perf think_latency --think-s 2 --workers auto --only extreme           # a subset
+    ./dev perf think_latency --think-s 2 --processes 2 --sessions 12
     ./dev perf think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
 
-Prints wall time, pass rate, failed tasks and the peak memory of all workers together. With
+Prints wall time, pass rate, failed tasks, the peak memory of all workers together and the
+memory per hosted session (the peak less each worker's own before its first session, over
+the sessions hosted at once). With
 the lockstep clock, think time costs no simulated time, so every task the oracle passes
 without thinking it also passes while thinking; with the stepped clock it does not.
 """
@@ -31,6 +36,7 @@ from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
+from benchmark.running.worker_count import AUTO, auto_workers, hosting_for, parse_workers
 from swarm_agents.oracle import OracleAgent
 
 _SPAWN = multiprocessing.get_context("spawn")
@@ -89,6 +95,8 @@ async def _sessions(paths: list[str], args: argparse.Namespace, out: Any) -> Non
 def _worker(paths: list[str], args: argparse.Namespace, out: Any) -> None:
     import logging
     logging.disable(logging.WARNING)
+    import benchmark.running.orchestrator  # noqa: F401  (what a worker of `bench run` holds)
+    out.put(("base", _rss_mb([os.getpid()])))
     asyncio.run(_sessions(paths, args, out))
     out.put(("done", os.getpid()))
 
@@ -115,9 +123,17 @@ def main() -> None:
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--sessions", type=int, default=8, help="sessions at once per process")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--workers", type=parse_workers, default=None,
+                        help="sessions at once in all (or auto), instead of --processes and "
+                             "--sessions")
     args = parser.parse_args()
     suite, args.task_limit = suite_paths(args.suite)
     paths = [str(p) for p in suite if args.only in p.stem][: args.limit or None]
+    if args.workers is not None:
+        at_once = (auto_workers("thinking", len(paths)) if args.workers == AUTO
+                   else min(args.workers, len(paths)))
+        hosting = hosting_for(at_once)
+        args.processes, args.sessions = hosting.processes, hosting.per_process
     print(machine_line())
     print(f"{len(paths)} sessions, think {args.think_s:g} s (+{args.jitter_s:g}) per call, "
           f"clock {args.clock}, {args.processes} processes x {args.sessions} sessions")
@@ -129,7 +145,7 @@ def main() -> None:
         w.start()
     records: list[dict[str, Any]] = []
     errors: list[str] = []
-    finished, peak_mb = 0, 0.0
+    finished, peak_mb, base_mb = 0, 0.0, 0.0
     pids = [w.pid for w in workers if w.pid is not None]
     while finished < len(workers):
         peak_mb = max(peak_mb, _rss_mb(pids))
@@ -139,6 +155,8 @@ def main() -> None:
             continue
         if kind == "record":
             records.append(value)
+        elif kind == "base":
+            base_mb += value
         elif kind == "error":
             errors.append(value)
         else:
@@ -147,9 +165,12 @@ def main() -> None:
     for w in workers:
         w.join()
     passed = sum(r["passed"] for r in records)
+    hosted = min(len(paths), len(workers) * args.sessions)
     print(f"wall {wall:.0f} s; {passed}/{len(records)} tasks passed "
           f"({100.0 * passed / max(1, len(records)):.1f} %); peak RSS of the workers "
-          f"{peak_mb:.0f} MB; {len(errors)} session errors")
+          f"{peak_mb:.0f} MB ({base_mb:.0f} MB before their first session; "
+          f"{(peak_mb - base_mb) / max(1, hosted):.1f} MB per hosted session, {hosted} at "
+          f"once); {len(errors)} session errors; load average now {os.getloadavg()[0]:.1f}")
     for r in records:
         if not r["passed"]:
             failed = [c for c in r["checks"] if not c["passed"]]

@@ -5,17 +5,21 @@ function for each, wherever it runs it, and passes every message the unit sends 
 driver's `handle` in the driver's process: ``("record", record)``, ``("error", text)`` or
 ``("note", text)``. The driver alone writes the results file, whatever the backend.
 
-- ``local`` (the default): in this process with one worker, else in that many spawned worker
-  processes on this machine. Needs nothing beyond mavswarm itself.
+- ``local`` (the default): in this process with one worker, else in spawned worker processes
+  on this machine: one per unit, or (`shared`, for agents that think) at most one per core,
+  each hosting its share of the units side by side in one event loop
+  (`benchmark/running/worker_count.py`). Needs nothing beyond mavswarm itself.
 - ``ray``: as Ray tasks on a Ray cluster (`benchmark/running/ray_backend.py`), for the optional
   ``ray`` extra; Ray is imported only when this backend is asked for.
 """
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import multiprocessing
 import queue as queue_module
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -40,7 +44,10 @@ class Unit:
 
 UnitWork = Callable[[Unit, Handle], None]
 """Runs one unit, sending its messages as they happen. Backends that run it elsewhere pickle
-it, so it must be a module-level function (or a functools.partial of one)."""
+it, so it must be a module-level function (or a functools.partial of one, or an instance of a
+module-level class). One that also has a `hosted(unit, handle)` coroutine method can be hosted
+several units at once in one process's event loop (the local backend does so)."""
+HostedWork = Callable[[Unit, Handle], Awaitable[None]]
 
 
 class BackendUnavailable(ValueError):
@@ -62,14 +69,16 @@ def require_ray() -> None:
                                  f"({error}): pip install 'mavswarm[ray]'") from None
 
 
-def make_backend(name: str, *, workers: int, ray_address: str = "") -> Backend:
-    """The named backend, running at most `workers` units at once."""
+def make_backend(name: str, *, workers: int, ray_address: str = "",
+                 shared: bool = False) -> Backend:
+    """The named backend, running at most `workers` units at once (local, `shared`: several
+    in one process, see LocalBackend)."""
     if workers < 1:
         raise ValueError("workers must be >= 1")
     if name == "local":
         if ray_address:
             raise ValueError("--ray-address is for --backend ray")
-        return LocalBackend(workers)
+        return LocalBackend(workers, shared=shared)
     if name == "ray":
         require_ray()
         from benchmark.running.ray_backend import RayBackend
@@ -79,19 +88,33 @@ def make_backend(name: str, *, workers: int, ray_address: str = "") -> Backend:
 
 @dataclass(frozen=True)
 class LocalBackend:
-    """Units in this process (one worker) or in spawned worker processes on this machine."""
+    """Units in this process (one worker) or in spawned worker processes on this machine: a
+    process per unit, or with `shared` at most one per core, each hosting several units at
+    once when the work can be hosted (see UnitWork)."""
 
     workers: int = 1
+    cores: int | None = None  # processes at most (default: this machine's cores)
+    shared: bool = False  # several units per process (benchmark.running.worker_count.hosting_for)
 
     def run(self, work: UnitWork, units: Sequence[Unit], handle: Handle) -> None:
+        from benchmark.running.worker_count import hosting_for
         if self.workers == 1:
             for unit in units:
                 work(unit, handle)
+            return
+        hosting = hosting_for(min(self.workers, max(1, len(units))), self.cores,
+                              shared=self.shared)
+        hosted: HostedWork | None = getattr(work, "hosted", None)
+        if hosted is None or hosting.per_process == 1:
+            _run_processes(work, list(units), handle, self.workers, 1)
         else:
-            _run_processes(work, list(units), handle, self.workers)
+            _run_processes(work, list(units), handle, hosting.processes, hosting.per_process)
 
 
-def _worker(work: UnitWork, units: Any, results: Any) -> None:
+def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1) -> None:
+    if per_process > 1:
+        asyncio.run(_host(work.hosted, units, results, per_process))  # type: ignore[attr-defined]
+        return
     while True:
         unit = units.get()
         if unit is None:
@@ -100,15 +123,38 @@ def _worker(work: UnitWork, units: Any, results: Any) -> None:
         results.put(("unit_done", (unit.path, unit.trial)))
 
 
-def _run_processes(work: UnitWork, units: list[Unit], handle: Handle, workers: int) -> None:
+async def _host(hosted: HostedWork, units: Any, results: Any, per_process: int) -> None:
+    """Up to `per_process` units at once in this loop, each lane taking the next unit from
+    the queue as its last one ends, until it takes the end mark."""
+    loop = asyncio.get_running_loop()
+    with concurrent.futures.ThreadPoolExecutor(per_process, "unit-queue") as takers:
+        async def lane() -> None:
+            while True:
+                unit = await loop.run_in_executor(takers, units.get)
+                if unit is None:
+                    return
+                try:
+                    await hosted(unit, results.put)
+                except Exception as error:  # one unit's failure never ends its neighbours
+                    results.put(("error", f"{unit.path} (trial {unit.trial}): "
+                                          f"{type(error).__name__}: {error}"))
+                results.put(("unit_done", (unit.path, unit.trial)))
+
+        await asyncio.gather(*(lane() for _ in range(per_process)))
+
+
+def _run_processes(work: UnitWork, units: list[Unit], handle: Handle, processes: int,
+                   per_process: int) -> None:
     ctx = multiprocessing.get_context("spawn")
     unit_q, result_q = ctx.Queue(), ctx.Queue()
     for unit in units:
         unit_q.put(unit)
-    procs = [ctx.Process(target=_worker, args=(work, unit_q, result_q), daemon=True,
-                         name=f"bench-worker-{k}") for k in range(min(workers, len(units)))]
+    procs = [ctx.Process(target=_worker, args=(work, unit_q, result_q, per_process),
+                         daemon=True, name=f"bench-worker-{k}")
+             for k in range(min(processes, len(units)))]
     for p in procs:
-        unit_q.put(None)
+        for _ in range(per_process):
+            unit_q.put(None)
         p.start()
     remaining = len(units)
     try:

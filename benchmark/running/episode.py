@@ -57,7 +57,8 @@ LOCKSTEP_TELEMETRY_HZ = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATU
                          "ATTITUDE": 0.5, "GPS_RAW_INT": 0.5, "VFR_HUD": 0.5}
 POSITION_MSGS_PER_S = 300.0  # all drones together: what the gateway's MAVSDK keeps up with
 RESET_SYNC_TIMEOUT_S = 20.0
-RESET_RESEND_S = 0.25
+RESET_RESEND_S = 0.25  # a drone whose telemetry still lags is asked again after this long
+RESET_ASK_EVERY_S = 0.02  # at most one drone asked again this often
 PLAY_OUT_WALL_S = 120.0
 SETTLE_S = 1.0
 
@@ -151,7 +152,12 @@ async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
     for link in gateway.drones.values():
         link.failure = None  # the operator's reset repaired every failed drone
     deadline = time.monotonic() + RESET_SYNC_TIMEOUT_S
-    resend = time.monotonic() + RESET_RESEND_S
+    # The reset's telemetry goes out for every drone at once; a ground station's MAVSDK drops
+    # subscription callbacks when such a burst overflows its queue (a large fleet), and a
+    # lossy link loses some. Drones still lagging are asked again one by one, paced, so the
+    # repeats themselves never overflow it.
+    asked: dict[str, float] = {}
+    next_ask = time.monotonic() + RESET_RESEND_S
     while True:
         lagging = []
         for ap in fleet.autopilots:
@@ -163,11 +169,15 @@ async def _sync_telemetry(swarm: Swarm, gateway: Gateway) -> None:
                 lagging.append(ap.vehicle_id)
         if not lagging:
             return
-        if time.monotonic() > deadline:
+        now = time.monotonic()
+        if now > deadline:
             raise RuntimeError(f"telemetry of {lagging} did not show the reset")
-        if time.monotonic() > resend:  # lost on a lossy link: send the new state again
-            swarm.send_all_telemetry()
-            resend = time.monotonic() + RESET_RESEND_S
+        if now >= next_ask:
+            due = [d for d in lagging if now - asked.get(d, -math.inf) >= RESET_RESEND_S]
+            if due:
+                swarm.send_telemetry_of(due[0])
+                asked[due[0]] = now
+            next_ask = now + RESET_ASK_EVERY_S
         await asyncio.sleep(0.005)
 
 

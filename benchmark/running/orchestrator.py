@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import functools
 import json
 import os
 import time
@@ -31,12 +30,13 @@ from benchmark.running.live_channel import LiveChannel
 from benchmark.running.progress import LineProgress, ProgressSink, task_line
 from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.results import ResultsLog, read_task_records
+from benchmark.running.worker_count import AUTO, auto_workers, shares_processes
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 from swarm_agents import plugins
 
-__all__ = ["AGENTS", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
-           "run_benchmark", "run_unit"]
+__all__ = ["AGENTS", "PlanWork", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
+           "run_benchmark", "run_unit", "run_unit_async"]
 
 # The built-in agents; NAME:per-drone: one instance of NAME per drone
 # (swarm_agents.teams.per_drone).
@@ -52,7 +52,7 @@ class RunPlan:
     sessions: tuple[Path, ...]
     agent: str = "oracle"
     trials: int = 1
-    workers: int = 1
+    workers: int | str = 1  # sessions at once, or "auto" (benchmark.running.worker_count)
     out_dir: Path = Path("runs/bench")
     task_limit: int | None = None  # only the first N tasks of each session (smoke runs)
     physics_hz: float = 50.0
@@ -105,7 +105,13 @@ def _limited(session: Session, limit: int | None) -> Session:
 
 def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     """Run one session file for one trial, skipping the tasks `unit.done` holds; each message
-    is sent as it happens. Every backend calls this, on whatever machine runs the unit."""
+    is sent as it happens. Every backend calls this (or `run_unit_async` in a process that
+    hosts several sessions at once), on whatever machine runs the unit."""
+    asyncio.run(run_unit_async(plan, unit, send))
+
+
+async def run_unit_async(plan: RunPlan, unit: Unit, send: Handle) -> None:
+    """`run_unit` in the running event loop, beside other sessions the loop may host."""
     path, trial, done = unit.path, unit.trial, unit.done
     set_mavsdk_log(plan.mavsdk_log)
     try:
@@ -144,11 +150,24 @@ def run_unit(plan: RunPlan, unit: Unit, send: Handle) -> None:
     if plan.live_hz > 0:
         live = LiveChannel(lambda payload: send(("live", payload)), plan.live_hz)
     try:
-        asyncio.run(_in_agent_context(agent, run_session(session, agent, emit=emit,
-                                                         done=done, options=options,
-                                                         live=live)))
+        await _in_agent_context(agent, run_session(session, agent, emit=emit, done=done,
+                                                   options=options, live=live))
     except Exception as error:  # the swarm or gateway failed: report, keep the run going
         send(("error", f"{path} (trial {trial}): {type(error).__name__}: {error}"))
+
+
+@dataclass(frozen=True)
+class PlanWork:
+    """A plan's unit work, as backends call it: `run_unit` (a process or Ray task per unit)
+    or `hosted` (`run_unit_async`, several units side by side in one process's loop)."""
+
+    plan: RunPlan
+
+    def __call__(self, unit: Unit, send: Handle) -> None:
+        run_unit(self.plan, unit, send)
+
+    async def hosted(self, unit: Unit, send: Handle) -> None:
+        await run_unit_async(self.plan, unit, send)
 
 
 async def _in_agent_context(agent: Agent, work: Awaitable[None]) -> None:
@@ -250,18 +269,19 @@ def _known_tasks(paths: Sequence[Path]) -> dict[str, frozenset[str]] | None:
     return known
 
 
-def _session_head(path: Path) -> tuple[str | None, int]:
-    """A session file's id and number of tasks without validating it (an unreadable file:
-    None and 0; the worker reports the problem)."""
+def _session_head(path: Path) -> tuple[str | None, int, int]:
+    """A session file's id, number of tasks and number of drones without validating it (an
+    unreadable file: None, 0, 0; the worker reports the problem)."""
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return None, 0
+        return None, 0, 0
     if not isinstance(data, dict):
-        return None, 0
-    ident, tasks = data.get("id"), data.get("tasks")
+        return None, 0, 0
+    ident, tasks, drones = data.get("id"), data.get("tasks"), data.get("drones")
     return (ident if isinstance(ident, str) else None,
-            len(tasks) if isinstance(tasks, list) else 0)
+            len(tasks) if isinstance(tasks, list) else 0,
+            len(drones) if isinstance(drones, list) else 0)
 
 
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
@@ -283,10 +303,15 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
     if plan.agent in LLM_AGENTS:
         from swarm_agents.llm import ModelConfig
         ModelConfig(base_url=plan.base_url, model=plan.model).resolved()  # fail fast
-    if plan.workers < 1 or plan.trials < 1:
-        raise ValueError("workers and trials must be >= 1")
+    workers = plan.workers
+    if workers == AUTO:
+        workers = auto_workers(plan.agent, plan.trials * len(plan.sessions))
+    if not isinstance(workers, int) or workers < 1 or plan.trials < 1:
+        raise ValueError(f"workers must be >= 1 or {AUTO!r}, trials >= 1 (got "
+                         f"{plan.workers!r}, {plan.trials!r})")
     out = sink if sink is not None else LineProgress(progress)
-    backend = make_backend(plan.backend, workers=plan.workers, ray_address=plan.ray_address)
+    backend = make_backend(plan.backend, workers=workers, ray_address=plan.ray_address,
+                           shared=shares_processes(plan.agent))
     started = time.perf_counter()
     outcome = RunOutcome()
     log = ResultsLog(plan.results_path)
@@ -301,8 +326,11 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         raise
     done = _done_by_unit(previous)
     heads = {p: _session_head(p) for p in plan.sessions}
+    # The largest fleets first: a session's wall time grows with its drones, and the run ends
+    # when its last session does (results do not depend on the order).
+    order = sorted(plan.sessions, key=lambda p: -heads[p][2]) if workers > 1 else plan.sessions
     units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))
-             for trial in range(plan.trials) for p in plan.sessions]
+             for trial in range(plan.trials) for p in order]
     limit = plan.task_limit
     planned = plan.trials * sum(heads[p][1] if limit is None else min(heads[p][1], limit)
                                 for p in plan.sessions)
@@ -332,7 +360,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
             on_message(message)
 
     try:
-        backend.run(functools.partial(run_unit, plan), units, handle)
+        backend.run(PlanWork(plan), units, handle)
     finally:
         log.close()
     outcome.wall_s = time.perf_counter() - started

@@ -3,6 +3,8 @@ operations) through `AgentTools`, planning obstacle-free paths over the world it
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import logging
 import math
 from collections.abc import Awaitable, Callable, Mapping, Sequence
@@ -124,6 +126,10 @@ class OracleAgent:
         self._planner = PathPlanner(scenario.world, clearance_m=PLAN_CLEARANCE_M)
         self._specs = {v.id: v for v in scenario.vehicles}
         self._pursuit = Pursuit(scenario.world)
+        # Paths and meeting points are worked out on a thread of their own, one at a time:
+        # the event loop (the swarm, the gateway, the other drones' threads) keeps running
+        # meanwhile, so no wall-clock wait elsewhere sees a stalled loop as a silent drone.
+        self._planning = concurrent.futures.ThreadPoolExecutor(1, "oracle-planning")
         self.failures: list[str] = []
 
     def set_plan(self, task_id: str, plan: Sequence[Sequence[Op]] | None) -> None:
@@ -332,7 +338,7 @@ class OracleAgent:
         speed = min(self._specs[d].max_speed_m_s, CRUISE_M_S)
 
         def flight_s(goal: tuple[float, float]) -> float:
-            legs = self._legs(here, (goal[0], goal[1], altitude_m))
+            legs = self._plan_legs(here, (goal[0], goal[1], altitude_m))
             length = sum(math.dist(a, b) for a, b in zip([here, *legs[:-1]], legs,
                                                           strict=True))
             return length / (MEET_SPEED_SHARE * speed) + MEET_SLACK_S
@@ -342,10 +348,11 @@ class OracleAgent:
             return straight / (MEET_SPEED_SHARE * speed) + MEET_SLACK_S
 
         try:
-            meet_s = self._pursuit.meeting(target, now, flight_s, lower_s, zone)
+            meet_s = await self._planned(self._pursuit.meeting, target, now, flight_s, lower_s,
+                                         zone)
         except ValueError as error:
             raise OracleError(f"{d}: {error}") from None
-        x, y = self._pursuit.xy(target, meet_s)
+        x, y = await self._planned(self._pursuit.xy, target, meet_s)
         await self._goto(tools, d, (x, y, altitude_m))
         wait_s = meet_s - tools.clock_s
         if wait_s > MIN_HOVER_S:
@@ -357,7 +364,7 @@ class OracleAgent:
         """Stay on the target until until_s: aim at where it will be HOP_S later, wait."""
         while tools.clock_s < until_s + FOLLOW_EXTRA_S:
             aim_s = tools.clock_s + HOP_S
-            x, y = self._pursuit.xy(target, aim_s)
+            x, y = await self._planned(self._pursuit.xy, target, aim_s)
             self._check(d, "follow", await _retried(partial(tools.move_to, d, x, y, altitude_m)))
             wait_s = aim_s - tools.clock_s
             if wait_s > MIN_HOVER_S:
@@ -397,8 +404,16 @@ class OracleAgent:
                 self._check(d, "move", outcome)
                 return
 
-    def _legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
-              ) -> list[tuple[float, float, float]]:
+    async def _planned(self, work: Callable[..., Any], *args: Any) -> Any:
+        """work(*args) on the planning thread (see __init__)."""
+        return await asyncio.get_running_loop().run_in_executor(self._planning, work, *args)
+
+    async def _legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
+                    ) -> list[tuple[float, float, float]]:
+        return list(await self._planned(self._plan_legs, start, goal))
+
+    def _plan_legs(self, start: tuple[float, float, float], goal: tuple[float, float, float]
+                   ) -> list[tuple[float, float, float]]:
         try:
             return self._planner.plan(start, goal)
         except NoPath as error:
@@ -407,7 +422,7 @@ class OracleAgent:
     async def _goto(self, tools: AgentTools, d: str, goal: tuple[float, float, float]) -> None:
         await self._ensure_airborne(tools, d, goal[2])
         try:
-            waypoints = self._planner.plan(self._position(d), goal)
+            waypoints = await self._planned(self._planner.plan, self._position(d), goal)
         except NoPath as error:
             await self._close_in(tools, d, goal, error)
             return
@@ -426,7 +441,7 @@ class OracleAgent:
         here = self._position(d)
         for p in points:
             goal = (p[0], p[1], p[2])
-            waypoints.extend(self._legs(here, goal))
+            waypoints.extend(await self._legs(here, goal))
             here = goal
         await self._fly_waypoints(tools, d, waypoints)
 

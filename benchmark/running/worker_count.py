@@ -1,0 +1,116 @@
+"""How many sessions a benchmark run hosts at once, and in how many processes.
+
+`--workers N` is the number of sessions run at once. An agent that answers at once (the
+oracle, noop) gets a worker process per session: its sessions compute most of the time, and
+a session never waits on a neighbour's computation. Any other agent mostly thinks, so the
+local backend spreads its sessions over at most one worker process per core, each process
+hosting its share side by side in one event loop (a session then costs memory for its swarm
+and gateway only, not a process). `--workers auto` picks N from the machine:
+
+- an agent that answers at once (the oracle, noop) keeps a core busy with a few sessions, so
+  N = INSTANT_SESSIONS_PER_CORE per core;
+- any other agent (a model, a plug-in, an external one) mostly thinks, so N is what memory
+  allows: half the available memory, less one base footprint per process, at SESSION_MB per
+  hosted session;
+
+never more than the run has units (session x trial), never fewer than 1.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+__all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", "SESSION_MB",
+           "Hosting", "auto_workers", "available_memory_mb", "hosting_for", "parse_workers",
+           "shares_processes", "usable_cores"]
+
+AUTO = "auto"
+INSTANT_AGENTS = frozenset({"oracle", "noop"})
+# Measured (perf/think_latency.py, docs/performance.md): the memory one more lockstep
+# session adds to a process that hosts several (its peak, one session of every family and
+# level, 3 to 30 drones), and a worker process before any session.
+SESSION_MB = 55.0
+PROCESS_MB = 100.0
+MEMORY_SHARE = 0.5  # of the memory available when the run starts
+# Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
+# of its wall time (perf/task_spans.py), so three keep a core busy.
+INSTANT_SESSIONS_PER_CORE = 3
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the OS tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def available_memory_mb() -> float:
+    """MemAvailable from /proc/meminfo (Linux); elsewhere free pages times page size."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (ValueError, OSError, AttributeError):
+        return 4096.0
+
+
+def parse_workers(text: str) -> int | str:
+    """A --workers value: a whole number >= 1 or "auto"; ValueError otherwise."""
+    if text.strip().lower() == AUTO:
+        return AUTO
+    try:
+        value = int(text)
+    except ValueError:
+        raise ValueError(f"--workers takes a whole number >= 1 or 'auto', not {text!r}") \
+            from None
+    if value < 1:
+        raise ValueError(f"--workers must be >= 1 (or 'auto'), got {value}")
+    return value
+
+
+def auto_workers(agent: str, units: int, *, cores: int | None = None,
+                 memory_mb: float | None = None) -> int:
+    """Sessions to host at once for `agent` over `units` units (see the module docstring)."""
+    cores = max(1, cores if cores is not None else usable_cores())
+    units = max(1, units)
+    if agent in INSTANT_AGENTS:
+        return max(1, min(units, INSTANT_SESSIONS_PER_CORE * cores))
+    memory = available_memory_mb() if memory_mb is None else memory_mb
+    by_memory = math.floor((memory * MEMORY_SHARE - PROCESS_MB * cores) / SESSION_MB)
+    return max(1, min(units, by_memory))
+
+
+@dataclass(frozen=True)
+class Hosting:
+    """Sessions at once, spread over processes (each hosting up to `per_process`)."""
+
+    sessions: int
+    processes: int
+
+    @property
+    def per_process(self) -> int:
+        return math.ceil(self.sessions / self.processes)
+
+
+def hosting_for(sessions: int, cores: int | None = None, *, shared: bool = True) -> Hosting:
+    """`sessions` at once: over at most one process per core when processes are `shared`,
+    else a process each."""
+    if sessions < 1:
+        raise ValueError("workers must be >= 1")
+    if not shared:
+        return Hosting(sessions, sessions)
+    cores = max(1, cores if cores is not None else usable_cores())
+    return Hosting(sessions, min(sessions, cores))
+
+
+def shares_processes(agent: str) -> bool:
+    """Whether a run of `agent` hosts several sessions per worker process (see above)."""
+    return agent not in INSTANT_AGENTS
