@@ -130,7 +130,7 @@ def add_task_editor_routes(app: FastAPI, state: "ConsoleState", staff: Callable[
 
     @app.get("/api/editor/proofs/{ident}")
     def proof(ident: str, role: Staff) -> dict[str, Any]:
-        found = state.proofs.proofs.get(ident)
+        found = state.proofs.seen(ident)
         if found is None:
             raise HTTPException(404, f"no proof {preview(ident)} (the last "
                                      f"{len(state.proofs.proofs)} are kept)")

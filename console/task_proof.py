@@ -129,10 +129,9 @@ class ProofRunner:
                                                     gateway, options)
                             if record["passed"]:
                                 break
-                    finally:  # the page keeps the last frame; the swarm goes
-                        proof.last_frame = live.state()
+                    finally:  # the page keeps the last frame; the swarm goes, and the
+                        proof.last_frame = live.state()  # live entry once the end is read
                         live.swarm, live.frames = None, lambda: proof.last_frame
-                        self.lives.pop(proof.id, None)
                 proof.record = record
                 proof.status = "passed" if record["passed"] else "failed"
                 proof.error = record.get("error")
@@ -146,10 +145,20 @@ class ProofRunner:
         proof.task = asyncio.get_running_loop().create_task(fly(), name=proof.id)
         return proof
 
+    def seen(self, ident: str) -> Proof | None:
+        """The proof `ident` as a page reads it; a finished proof's live swarm (its last
+        frame) is listed until then, so that even a flight quicker than a page's poll is seen
+        live once."""
+        proof = self.proofs.get(ident)
+        if proof is not None and proof.status != "running":
+            self.lives.pop(proof.id, None)
+        return proof
+
     def _evict(self) -> None:
         for ident in list(self.proofs)[:-KEEP_PROOFS]:
             if self.proofs[ident].status != "running":
                 self.proofs.pop(ident)
+                self.lives.pop(ident, None)
                 if self.forget_feed is not None:
                     self.forget_feed(ident)
 

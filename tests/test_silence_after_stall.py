@@ -5,6 +5,7 @@ first, so the command keeps every try."""
 
 from __future__ import annotations
 
+import asyncio
 import math
 import time
 from types import SimpleNamespace
@@ -54,9 +55,10 @@ async def test_a_drone_that_stays_silent_is_tried_once() -> None:
     session = load_session(SESSIONS_DIR / "area_search-easy-1.json")
     async with swarm_gateway(session, lockstep=True) as (swarm, _services, gateway):
         link = gateway.drones["d1"]
-        link.last_update_wall_s -= SILENT_WALL_S + 1  # as if nothing came for that long
-        swarm.streams.period_s[0] = swarm.streams.next_due_s[0] = math.inf  # and nothing
+        swarm.streams.period_s[0] = swarm.streams.next_due_s[0] = math.inf  # nothing more
         swarm.left.add(0)  # comes: d1 sends no stream and no burst
+        await asyncio.sleep(0.5)  # what was already on its way has come
+        link.last_update_wall_s -= SILENT_WALL_S + 1  # as if nothing came for that long
 
         calls = []
 
