@@ -20,7 +20,7 @@ from agent_contract import Agent
 from benchmark.authoring.generate import ORACLE_TRIES
 from benchmark.authoring.importer import import_session_file
 from benchmark.authoring.session_file import Session, TaskSpec
-from benchmark.running.episode import EpisodeOptions, run_task, swarm_gateway
+from benchmark.running.episode import EpisodeOptions, run_task, session_swarm
 from benchmark.scoring.failed_checks import failed_leaves
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
@@ -109,7 +109,7 @@ async def _prove_all(session: Session, progress: Callable[[TaskProof], None]
                      ) -> list[TaskProof]:
     agent = OracleAgent(session.scenario, {})
     proofs: list[TaskProof] = []
-    async with swarm_gateway(session) as (swarm, services, gateway):
+    async with session_swarm(session, EpisodeOptions()) as (swarm, services, gateway):
         for task in session.tasks:
             if task.error is not None or task.checks is None or task.budget is None:
                 proofs.append(_task_error(session.id, task))
