@@ -23,7 +23,8 @@ from emulator.mavlink.protocol import Address, NetworkProtocol
 from emulator.mavlink.streams import StreamSchedule
 from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
-from emulator.networks import VEHICLES_PER_NETWORK, network_count
+from emulator.networks import VEHICLES_PER_NETWORK
+from emulator.port_plan import PortPlan
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
 from emulator.swarm_faults import SwarmFaults
@@ -47,71 +48,6 @@ MAX_STEPS_PER_RUN = 2000
 # telemetry asked again.
 BURST_VEHICLES_PER_TURN = 3
 log = logging.getLogger("mavswarm.swarm")
-
-
-@dataclass(frozen=True, slots=True)
-class PortPlan:
-    """Where the swarm listens and sends.
-
-    Shared (default): one socket bound at `bind_port` for every vehicle, sending to
-    `api_port` (MAVSDK: ``udpin://0.0.0.0:14540``) and `gcs_port` (QGroundControl).
-    Per-vehicle: vehicle k binds `bind_port + k - 1` and sends to `api_port + k - 1` and
-    `gcs_port`, PX4 multi-instance style. 0 for `api_port`/`gcs_port` disables that target.
-    Shared with more than 250 vehicles: one socket per MAVLink network of 250
-    (emulator.networks); network j binds `bind_port + j` (all OS-chosen when `bind_port` is 0)
-    and sends to `api_port + j` and `gcs_port + j`, as if each were a swarm of its own.
-    """
-
-    bind_host: str = "0.0.0.0"
-    bind_port: int = 0
-    api_host: str = "127.0.0.1"
-    api_port: int = 14540
-    gcs_port: int = 14550
-    per_vehicle: bool = False
-
-    def check(self, n: int) -> None:
-        for name in ("bind_port", "api_port", "gcs_port"):
-            port = getattr(self, name)
-            if not 0 <= port <= 65535:
-                raise ValueError(f"{name} {port} outside 0..65535")
-        if not self.per_vehicle:
-            self._check_networks(network_count(n))
-            return
-        if self.bind_port == 0:
-            raise ValueError("per-vehicle ports need an explicit bind port base")
-        binds = range(self.bind_port, self.bind_port + n)
-        apis = range(self.api_port, self.api_port + n) if self.api_port else range(0)
-        if self.gcs_port and self.gcs_port in apis:
-            raise ValueError(
-                f"{n} vehicles need API ports {apis.start}-{apis.stop - 1}, which include the "
-                f"GCS port {self.gcs_port}; choose another --api-port"
-            )
-        if set(binds) & (set(apis) | {self.gcs_port}):
-            raise ValueError(
-                f"bind ports {binds.start}-{binds.stop - 1} overlap destination ports"
-            )
-        if binds.stop - 1 > 65535 or (apis and apis.stop - 1 > 65535):
-            raise ValueError("port range exceeds 65535")
-
-
-    def _check_networks(self, count: int) -> None:
-        """Shared sockets: `count` networks at bind/api/gcs port + j (see the class)."""
-        def span(port: int) -> range:
-            return range(port, port + count) if port else range(0)
-
-        binds, apis, gcs = span(self.bind_port), span(self.api_port), span(self.gcs_port)
-        for name, ports in (("bind", binds), ("API", apis), ("GCS", gcs)):
-            if ports and ports.stop - 1 > 65535:
-                raise ValueError(f"{count} networks need {name} ports {ports.start}-"
-                                 f"{ports.stop - 1}, beyond 65535")
-        if set(binds) & (set(apis) | set(gcs)):
-            if count == 1:
-                raise ValueError(f"bind port {self.bind_port} is also a destination port")
-            raise ValueError(f"{count} networks' bind ports {binds.start}-{binds.stop - 1} "
-                             "overlap their destination ports")
-        if count > 1 and set(apis) & set(gcs):
-            raise ValueError(f"{count} networks' API ports {apis.start}-{apis.stop - 1} "
-                             f"overlap their GCS ports {gcs.start}-{gcs.stop - 1}")
 
 
 @dataclass(frozen=True, slots=True)

@@ -25,7 +25,7 @@ from benchmark.scoring.failed_checks import failed_leaves
 from emulator.services import SwarmServices
 from emulator.swarm import Swarm
 from mavlink_gateway import Gateway
-from swarm_agents.oracle import OracleAgent
+from swarm_agents.oracle import oracle_for_session
 
 __all__ = ["TaskProof", "fly_task", "import_files", "proof_of", "prove_session"]
 
@@ -107,7 +107,7 @@ def _task_error(session_id: str, task: TaskSpec) -> TaskProof:
 
 async def _prove_all(session: Session, progress: Callable[[TaskProof], None]
                      ) -> list[TaskProof]:
-    agent = OracleAgent(session.scenario, {})
+    agent = oracle_for_session(session, "hand")  # hand plans, else derived from the checks
     proofs: list[TaskProof] = []
     async with session_swarm(session, EpisodeOptions()) as (swarm, services, gateway):
         for task in session.tasks:
@@ -115,9 +115,6 @@ async def _prove_all(session: Session, progress: Callable[[TaskProof], None]
                 proofs.append(_task_error(session.id, task))
                 progress(proofs[-1])
                 continue
-            agent.set_plan(task.id, task.oracle)
-            agent.set_checks(task.id, task.checks, sorted(
-                {f.drone for f in task.faults.failures} if task.faults else ()))
             record = await fly_task(session, task, agent, swarm, services, gateway,
                                     services.operator_snapshot())
             proofs.append(proof_of(session.id, task, record))
