@@ -74,6 +74,9 @@ LEG_RING_M = 15.0
 LEG_RINGS = 20
 LEG_RING_SPOTS = 16
 LEG_SLACK_M = 15.0
+# A move that collision prevention stopped short (wind drift into an obstacle's margin) is
+# planned again from where the drone holds, at most this many times.
+DRIFT_REPLANS = 2
 
 
 def _point(p: Sequence[float]) -> tuple[float, float, float]:
@@ -91,6 +94,10 @@ async def _retried(call: Callable[[], Awaitable[Outcome]]) -> Outcome:
             break
         outcome = await call()
     return outcome
+
+
+def _stopped_by_obstacle(outcome: Outcome) -> bool:
+    return outcome.status is Status.BLOCKED and "obstacle" in outcome.message.lower()
 
 
 class OracleError(RuntimeError):
@@ -421,15 +428,24 @@ class OracleAgent:
 
     async def _goto(self, tools: AgentTools, d: str, goal: tuple[float, float, float]) -> None:
         await self._ensure_airborne(tools, d, goal[2])
-        try:
-            waypoints = await self._planned(self._planner.plan, self._position(d), goal)
-        except NoPath as error:
-            await self._close_in(tools, d, goal, error)
+        for attempt in range(DRIFT_REPLANS + 1):
+            try:
+                waypoints = await self._planned(self._planner.plan, self._position(d), goal)
+            except NoPath as error:
+                await self._close_in(tools, d, goal, error)
+                return
+            if len(waypoints) == 1:
+                what, outcome = "move", await _retried(partial(tools.move_to, d, *goal))
+            else:
+                what, outcome = "path", await self._flown_waypoints(tools, d, waypoints)
+            if attempt < DRIFT_REPLANS and _stopped_by_obstacle(outcome):
+                # Wind carried the drone off its leg into an obstacle's margin: plan again
+                # from where collision prevention held it.
+                if outcome.state is not None:
+                    self._state[d] = outcome.state.to_dict()
+                continue
+            self._check(d, what, outcome)
             return
-        if len(waypoints) == 1:
-            self._check(d, "move", await _retried(partial(tools.move_to, d, *goal)))
-        else:
-            await self._fly_waypoints(tools, d, waypoints)
 
     async def _path(self, tools: AgentTools, d: str,
                     points: list[tuple[float, ...]]) -> None:
@@ -447,6 +463,19 @@ class OracleAgent:
 
     async def _fly_waypoints(self, tools: AgentTools, d: str,
                              waypoints: list[tuple[float, float, float]]) -> None:
+        self._check(d, "path", await self._flown_waypoints(tools, d, waypoints))
+
+    async def _flown_waypoints(self, tools: AgentTools, d: str,
+                               waypoints: list[tuple[float, float, float]]) -> Outcome:
+        """Fly the waypoints, MAX_PATH_POINTS per mission; the first outcome that is not OK,
+        else the last."""
+        outcome = None
         for k in range(0, len(waypoints), MAX_PATH_POINTS):
             chunk = [list(w) for w in waypoints[k:k + MAX_PATH_POINTS]]
-            self._check(d, "path", await _retried(partial(tools.move_along_path, d, chunk)))
+            outcome = await _retried(partial(tools.move_along_path, d, chunk))
+            if outcome.status is not Status.OK:
+                return outcome
+            if outcome.state is not None:
+                self._state[d] = outcome.state.to_dict()
+        assert outcome is not None, "no waypoints to fly"
+        return outcome
