@@ -39,7 +39,7 @@ def test_the_console_stays_open_after_the_run_until_ctrl_c(tmp_path: Path) -> No
         info = httpx.get(f"http://127.0.0.1:{port}/api/info", headers={"X-API-Key": "watch"})
         assert info.status_code == 200 and len(info.json()["live"]) == 1
         proc.send_signal(signal.SIGINT)
-        assert proc.wait(30) == 0
+        assert proc.wait(90) == 0
     finally:
         if proc.poll() is None:
             proc.kill()

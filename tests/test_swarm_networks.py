@@ -118,7 +118,7 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
         expected = [set(range(1, 251)), set(range(1, 11))]
         seen: list[set[int]] = [set(), set()]
         parsers = [mavlink.MAVLink(None), mavlink.MAVLink(None)]
-        deadline = time.monotonic() + 10.0
+        deadline = time.monotonic() + 30.0
         while seen != expected and time.monotonic() < deadline:
             time.sleep(0.05)
             for j, sock in enumerate(receivers):
@@ -130,7 +130,7 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
         assert seen == expected
     finally:
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=30)
+        out, _ = proc.communicate(timeout=90)
         for sock in receivers:
             sock.close()
     assert proc.returncode == 0, out
