@@ -6,7 +6,6 @@ with a note."""
 
 from __future__ import annotations
 
-import concurrent.futures
 import json
 import os
 import shutil
@@ -32,7 +31,7 @@ from tests.browser_fixtures import (
     shot,
     webgl_colours,
 )
-from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process_thread
 from tests.ports import unused_tcp_port, unused_udp_port
 
 pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
@@ -91,12 +90,10 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any
     session.write_text(json.dumps(source))
     # The runs are only what the pages show: `bench run`'s main in this process (on a thread
     # of its own: Playwright's loop runs in this one), not two more interpreters to start.
-    with concurrent.futures.ThreadPoolExecutor(1) as runner:
-        for agent, out in (("oracle", "runA"), ("noop", "runB")):
-            done = runner.submit(run_in_process, "bench", "run", "--agent", agent,
-                                 "--sessions", str(session), "--out", str(work / out),
-                                 cwd=work).result(timeout=180)
-            assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
+    for agent, out in (("oracle", "runA"), ("noop", "runB")):
+        done = run_in_process_thread("bench", "run", "--agent", agent, "--sessions",
+                                     str(session), "--out", str(work / out), cwd=work)
+        assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
     (work / "old").mkdir()
     shutil.copy(work / "runB" / "results.jsonl", work / "old" / "results.jsonl")
     runs, url = _serve(str(work / "runA"), str(work / "runB"), str(work / "old"))
