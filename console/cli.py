@@ -215,9 +215,11 @@ def _run_up(args: argparse.Namespace) -> int:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
-    from console.bench_watch import LiveBoard, serve_in_thread
     if args.bench_command != "run" or not args.web:
         return bench_cli.run_bench(args)
+    # Only here: the console's app (its editor, the oracle, scipy) is a third of a second of
+    # start-up that every other `bench` command would pay.
+    from console.bench_watch import LiveBoard, serve_in_thread
     board = LiveBoard()
     try:
         with serve_in_thread(board, host=args.web_host, port=args.web_port, key=args.web_key,

@@ -5,6 +5,7 @@ a subprocess costs seconds of interpreter and import start-up per call."""
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import io
 import os
@@ -13,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["MAVSWARM", "ROOT", "read_until", "run_in_process", "start_up"]
+__all__ = ["MAVSWARM", "ROOT", "read_until", "run_in_process", "run_in_process_thread", "start_up"]
 
 ROOT = Path(__file__).resolve().parents[1]
 _SCRIPT = Path(sys.executable).with_name("mavswarm")
@@ -69,3 +70,11 @@ def run_in_process(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.CompletedProcess(["mavswarm", *args], status or 0, out.getvalue(),
                                        err.getvalue())
 
+
+
+def run_in_process_thread(*args: str, cwd: Path, timeout_s: float = 300.0
+                          ) -> subprocess.CompletedProcess[str]:
+    """`run_in_process` on a thread of its own, for a caller whose thread holds an event loop
+    (Playwright's sync API keeps one in the test's thread)."""
+    with concurrent.futures.ThreadPoolExecutor(1) as runner:
+        return runner.submit(run_in_process, *args, cwd=cwd).result(timeout=timeout_s)

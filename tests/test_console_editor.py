@@ -22,14 +22,17 @@ from tests.browser_fixtures import (
     screen_of,
     shot,
 )
-from tests.cli_fixtures import MAVSWARM, ROOT, read_until, start_up
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process_thread, start_up
 from tests.ports import unused_tcp_port, unused_udp_port
 
 pytestmark = [pytest.mark.browser]
 
 
-@pytest.fixture
-def editor(tmp_path: Path) -> Iterator[tuple[str, Path]]:
+@pytest.fixture(scope="module")
+def editor(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
+    """`mavswarm replay` serving the editor, shared by the module's tests (one saves under
+    its folder, the other only loads generated levels), and a session file to start from."""
+    tmp_path = tmp_path_factory.mktemp("editor")
     source = json.loads((ROOT / "benchmark/sessions/area_search-easy-1.json").read_text())
     source["tasks"], source["id"] = source["tasks"][:1], "edited-1"
     (tmp_path / "start.json").write_text(json.dumps(source))
@@ -122,9 +125,8 @@ def test_an_edited_session_is_validated_saved_and_loads(browser: Any,
     finally:
         up.terminate()
         up.wait(10)
-    run = subprocess.run([*MAVSWARM, "bench", "run", "--agent", "noop", "--sessions", str(path),
-                          "--out", str(folder / "run")], capture_output=True, text=True,
-                         timeout=120)
+    run = run_in_process_thread("bench", "run", "--agent", "noop", "--sessions", str(path),
+                                "--out", str(folder / "run"), cwd=folder)
     assert run.returncode == 0, run.stdout + run.stderr
     records = (folder / "run" / "results.jsonl").read_text().splitlines()
     assert len(records) == 1 and json.loads(records[0])["session"] == "edited-1"

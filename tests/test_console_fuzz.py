@@ -202,7 +202,7 @@ def test_console_routes_never_5xx_and_refusals_change_nothing(
         drones = list(served.live.gateway.drones)
         seen: Counter[tuple[str, int]] = Counter()
 
-        @settings(FUZZ, max_examples=250)
+        @settings(FUZZ, max_examples=120)
         @given(route=_routes(live, drones), key=KEY, in_header=st.booleans(),
                body=_bodies(folder, outside, drones), query=_queries(folder, outside))
         def check(route: tuple[str, str, bool], key: tuple[str, str | None], in_header: bool,

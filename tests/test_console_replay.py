@@ -31,7 +31,7 @@ from tests.browser_fixtures import (
     shot,
     webgl_colours,
 )
-from tests.cli_fixtures import MAVSWARM, ROOT, read_until
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process_thread
 from tests.ports import unused_tcp_port, unused_udp_port
 
 pytestmark = [pytest.mark.browser, pytest.mark.mavsdk]
@@ -88,9 +88,12 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any
     source["tasks"], source["id"] = [source["tasks"][0], source["tasks"][2]], SESSION
     session = work / "mini.json"
     session.write_text(json.dumps(source))
+    # The runs are only what the pages show: `bench run`'s main in this process (on a thread
+    # of its own: Playwright's loop runs in this one), not two more interpreters to start.
     for agent, out in (("oracle", "runA"), ("noop", "runB")):
-        subprocess.run([*MAVSWARM, "bench", "run", "--agent", agent, "--sessions", str(session),
-                        "--out", str(work / out)], check=True, capture_output=True, timeout=180)
+        done = run_in_process_thread("bench", "run", "--agent", agent, "--sessions",
+                                     str(session), "--out", str(work / out), cwd=work)
+        assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
     (work / "old").mkdir()
     shutil.copy(work / "runB" / "results.jsonl", work / "old" / "results.jsonl")
     runs, url = _serve(str(work / "runA"), str(work / "runB"), str(work / "old"))

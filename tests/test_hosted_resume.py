@@ -14,6 +14,7 @@ from typing import Any
 import httpx
 import pytest
 
+from benchmark.running.hosted.endpoint import MAX_WAIT_S
 from benchmark.running.results import read_records
 from tests.hosted_fixtures import SCRIPT, compared, in_process_records, session_file, start_host
 
@@ -25,6 +26,12 @@ def _play(http: httpx.Client, offer: dict[str, Any], calls: list[list[Any]]) -> 
         r = http.post(f"{offer['tools_url']}/{name}", json=arguments,
                       headers={"X-API-Key": offer["key"]})
         assert r.status_code == 200, r.text
+
+
+def _next(http: httpx.Client, url: str) -> httpx.Response:
+    """`/next`, waiting as long as the endpoint allows for a task to be offered (a loaded
+    machine can take longer than its default wait to start a session's worker)."""
+    return http.get(f"{url}/next", params={"wait_s": MAX_WAIT_S})
 
 
 def _lines(path: Path, count: int, timeout_s: float = 30.0) -> list[str]:
@@ -42,11 +49,11 @@ def test_a_host_killed_mid_task_resumes_without_loss_or_duplicate(tmp_path: Path
     out = tmp_path / "out"
     host = start_host([session], out)
     try:
-        with httpx.Client(timeout=60.0) as http:
-            first = http.get(f"{host.url}/next").json()
+        with httpx.Client(timeout=MAX_WAIT_S + 60.0) as http:
+            first = _next(http, host.url).json()
             _play(http, first, SCRIPT["t01"])
             before = _lines(out / "results.jsonl", 1)
-            second = http.get(f"{host.url}/next").json()
+            second = _next(http, host.url).json()
             assert second["task_id"] == "t02"
             _play(http, second, SCRIPT["t02"][:1])  # mid-task
             host.proc.send_signal(signal.SIGKILL)
@@ -57,11 +64,11 @@ def test_a_host_killed_mid_task_resumes_without_loss_or_duplicate(tmp_path: Path
 
     again = start_host([session], out)
     try:
-        with httpx.Client(timeout=60.0) as http:
-            resumed = http.get(f"{again.url}/next").json()
+        with httpx.Client(timeout=MAX_WAIT_S + 60.0) as http:
+            resumed = _next(http, again.url).json()
             assert resumed["task_id"] == "t02" and resumed["key"] != second["key"]
             _play(http, resumed, SCRIPT["t02"])
-            assert http.get(f"{again.url}/next").status_code == 204
+            assert _next(http, again.url).status_code == 204
         status, printed = again.wait()
     finally:
         again.kill()
@@ -84,17 +91,17 @@ def test_two_sessions_hosted_at_once(tmp_path: Path) -> None:
     host = start_host([one, two], tmp_path / "out", "--workers", "2")
     assert len(host.seats) == 2
     try:
-        with httpx.Client(timeout=60.0) as http:
-            a, b = (http.get(f"{host.url}/next").json() for _ in range(2))
+        with httpx.Client(timeout=MAX_WAIT_S + 60.0) as http:
+            a, b = (_next(http, host.url).json() for _ in range(2))
             assert {a["session"], b["session"]} == {"area_search-easy-1", "twin-session"}
             assert a["base_url"] != b["base_url"]
-            r = http.get(f"{host.url}/next")
+            r = _next(http, host.url)
             assert r.status_code == 409 and "2 session(s) at once" in r.json()["detail"]
             taken = [a, b]
             while taken:
                 offer = taken.pop()
                 _play(http, offer, [["finish", {}]])
-                r = http.get(f"{host.url}/next")
+                r = _next(http, host.url)
                 if r.status_code == 200:
                     taken.append(r.json())
                 else:

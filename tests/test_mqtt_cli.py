@@ -57,6 +57,15 @@ async def test_kill_9_of_the_swarm_reads_offline(broker: Broker) -> None:
         _stop(proc)
 
 
+async def _bench_run(session: Path, out: Path, broker: Broker
+                     ) -> subprocess.CompletedProcess[str]:
+    """`bench run --agent oracle --mqtt` (its main, in this process, on a thread: this loop
+    keeps reading the bus meanwhile)."""
+    return await asyncio.wait_for(asyncio.to_thread(
+        run_in_process, "bench", "run", "--agent", "oracle", "--sessions", str(session),
+        "--out", str(out), "--mqtt", broker.url(), cwd=out.parent), 300)
+
+
 @pytest.mark.slow
 async def test_a_benchmark_run_publishes_every_record_in_order(broker: Broker,
                                                                tmp_path: Path) -> None:
@@ -64,12 +73,8 @@ async def test_a_benchmark_run_publishes_every_record_in_order(broker: Broker,
                          small_session(["takeoff_hold", "new_home", "altitude_change"]))
     out = tmp_path / "run-a"
     async with listener(broker, "operator", "mavswarm/bench/run-a/#") as op:
-        proc = await asyncio.create_subprocess_exec(
-            *MAVSWARM, "bench", "run", "--agent", "oracle", "--sessions", str(session),
-            "--out", str(out), "--mqtt", broker.url(),
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT)
-        stdout, _ = await asyncio.wait_for(proc.communicate(), 300)
-        assert proc.returncode == 0, stdout.decode()[-3000:]
+        run = await _bench_run(session, out, broker)
+        assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
         records = read_records(out / "results.jsonl")
         await op.wait_for(lambda g: g.kind == "progress" and g.payload.get("finished"))
     published = [g.payload for g in op.of("tasks")]
@@ -80,15 +85,11 @@ async def test_a_benchmark_run_publishes_every_record_in_order(broker: Broker,
     final = op.of("progress")[-1].payload
     assert final["tasks"] == len(records) == final["records_in_results"] == 3
     assert final["passed"] == sum(r["passed"] for r in records)
-    assert "MQTT: " in stdout.decode() and " 0 dropped" in stdout.decode()
+    assert "MQTT: " in run.stdout and " 0 dropped" in run.stdout
     # re-running the finished run resumes nothing and publishes the file again, in order
     async with listener(broker, "operator", "mavswarm/bench/run-a/tasks") as again:
-        proc = await asyncio.create_subprocess_exec(
-            *MAVSWARM, "bench", "run", "--agent", "oracle", "--sessions", str(session),
-            "--out", str(out), "--mqtt", broker.url(),
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT)
-        stdout, _ = await asyncio.wait_for(proc.communicate(), 300)
-        assert proc.returncode == 0, stdout.decode()[-3000:]
+        run = await _bench_run(session, out, broker)
+        assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
         await again.wait_for(lambda g: g.payload["key"] == records[-1]["key"])
     assert [g.payload["key"] for g in again.got] == [r["key"] for r in records]
     assert read_records(out / "results.jsonl") == records

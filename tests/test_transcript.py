@@ -25,7 +25,7 @@ from agent_contract.protocol import AgentTask, TaskBudget
 from benchmark.running.replay_data import read_json_gz, replay_path
 from tests.bench_fixtures import small_session, write_json
 from tests.browser_fixtures import ARTIFACTS, open_page, shot
-from tests.cli_fixtures import MAVSWARM, ROOT, read_until
+from tests.cli_fixtures import MAVSWARM, ROOT, read_until, run_in_process_thread
 from tests.ports import unused_tcp_port
 from tests.scripted_llm import call, scripted_llm
 
@@ -96,10 +96,9 @@ def react_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, An
     op = data["tasks"][0]["oracle"][0][0]
     session = write_json(work / "s.json", data)
     with scripted_llm(_script(op["drone"], op["altitude_m"])) as llm:
-        run = subprocess.run(
-            [*MAVSWARM, "bench", "run", "--agent", "react", "--model", "scripted",
-             "--base-url", llm.base_url, "--sessions", str(session), "--out",
-             str(work / "react")], cwd=ROOT, capture_output=True, text=True, timeout=180)
+        run = run_in_process_thread(
+            "bench", "run", "--agent", "react", "--model", "scripted", "--base-url",
+            llm.base_url, "--sessions", str(session), "--out", str(work / "react"), cwd=ROOT)
     assert run.returncode == 0, run.stderr[-2000:]
     record = json.loads((work / "react" / "results.jsonl").read_text())
     port = unused_tcp_port()
