@@ -25,10 +25,12 @@ from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
+from tests.plugin_fixtures import write_plugins
 from tests.scripted_llm import call, scripted_llm
 
-KEYS = ["takeoff_hold", "climb_and_face", "altitude_change", "new_home", "takeoff_hold",
-        "climb_and_face"]
+# Three tasks a session: the node dies while each session holds its second, so each has one
+# task recorded before and one after the one it was running.
+KEYS = ["takeoff_hold", "climb_and_face", "altitude_change"]
 RUN_TIMEOUT_S = 400.0
 
 
@@ -109,6 +111,28 @@ def test_a_ray_run_writes_what_the_local_backend_writes(
     # One worker: one session at a time, though the node has a CPU for each.
     order = [r["session"] for r in records]
     assert order == sorted(order, key=order.index), order
+
+
+@needs_ray
+@pytest.mark.mavsdk
+@pytest.mark.slow
+def test_a_plugin_file_runs_as_ray_tasks(cluster: Any, tmp_path: Path) -> None:
+    """The unit resolves the spec from its text on the node, a relative file path from the
+    directory the run started in."""
+    write_plugins(tmp_path)
+    session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "checkpoint"]))
+    out = tmp_path / "out"
+    spec = "plugins_under_test.py:NoArguments"
+    run = subprocess.run([*MAVSWARM, "bench", "run", "--agent", spec, "--sessions",
+                          str(session), "--out", str(out), "--backend", "ray",
+                          "--ray-address", cluster.address],
+                         cwd=tmp_path, env={**os.environ, **cluster.env},
+                         capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "as Ray tasks at " + cluster.address in run.stdout + run.stderr
+    records = read_records(out / "results.jsonl")
+    assert [(r["agent"], r["finish"], r["tool_calls"]) for r in records] == [
+        (spec, "finished", 1)] * 2
 
 
 _DRONES = re.compile(r"Your drones: ([^.]+)\.")
