@@ -40,7 +40,7 @@ if importlib.util.find_spec("xllamacpp") is None:
 
 MODEL = "smollm2-135m"
 KEYS = ["takeoff_hold", "round_trip_home"]
-ANSWER_TOKENS = 32  # the server's cap on every answer, to keep each call short
+ANSWER_TOKENS = 16  # the server's cap on every answer, to keep each call short
 SERVER_START_S = 120.0
 
 # The server in its own process, as a user would run it: llama.cpp's defaults but a small
