@@ -60,7 +60,8 @@ def sessions(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, ...]:
 def local_records(sessions: tuple[Path, ...], tmp_path_factory: pytest.TempPathFactory
                   ) -> list[dict[str, Any]]:
     out = tmp_path_factory.mktemp("local")
-    run_benchmark(RunPlan(sessions=sessions, out_dir=out, workers=2), progress=lambda _: None)
+    # One worker: in this process (verdicts do not depend on workers, test_bench_run.py).
+    run_benchmark(RunPlan(sessions=sessions, out_dir=out, workers=1), progress=lambda _: None)
     return read_records(out / "results.jsonl")
 
 
@@ -181,7 +182,7 @@ def test_a_node_killed_mid_run_loses_and_duplicates_no_record(
     gate = _SecondTaskGate(sessions)
     assert len(gate.texts) == len(sessions)
     with scripted_llm([], answer=_take_off_then_finish) as llm:
-        run_benchmark(RunPlan(sessions=sessions, out_dir=tmp_path / "local", workers=2,
+        run_benchmark(RunPlan(sessions=sessions, out_dir=tmp_path / "local", workers=1,
                               agent="react", model="scripted", base_url=llm.base_url),
                       progress=lambda _: None)
     local_records = read_records(tmp_path / "local" / "results.jsonl")
