@@ -31,8 +31,11 @@ load_profile()  # before the test modules are imported: their @settings build on
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     """The whole project is imported before the first test, so Hypothesis's pool of source
-    literals is the same whatever test files were collected (tests/hypothesis_draws.py)."""
-    import_project_source()
+    literals is the same whatever test files were collected (tests/hypothesis_draws.py); a
+    session without a Hypothesis test draws nothing and skips it."""
+    if any(getattr(getattr(item, "obj", None), "is_hypothesis_test", False)
+           for item in session.items):
+        import_project_source()
 
 
 @pytest.hookimpl(tryfirst=True)

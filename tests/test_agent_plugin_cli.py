@@ -75,19 +75,12 @@ def _install_tiny_distribution(site: Path) -> None:
 
 
 @pytest.mark.mavsdk
-def test_an_installed_entry_point_is_listed_and_runs(tmp_path: Path) -> None:
+def test_an_installed_entry_point_is_listed_and_runs(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     site = tmp_path / "site"
     _install_tiny_distribution(site)
-    listed = _mavswarm("bench", "agents", path=[site])
-    assert listed.returncode == 0, listed.stderr
-    lines = {line.split()[0]: line for line in listed.stdout.splitlines() if line.strip()}
-    assert "built-in" in lines["oracle"] and "built-in" in lines["react"]
-    assert "plug-in: tiny-agent 0.3" in lines["tiny"]
-    assert "entry point tiny_agent:TinyAgent" in lines["tiny"]
-    assert "tiny_agent:TinyAgent (hidden by the built-in of that name)" in listed.stdout
-    assert "tiny" not in _mavswarm("bench", "agents").stdout.split()  # not installed there
-
     session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "checkpoint"]))
+    # A fresh `mavswarm` process finds the distribution and runs its agent.
     out = tmp_path / "out"
     run = _mavswarm("bench", "run", "--agent", "tiny", "--sessions", str(session),
                     "--out", str(out), path=[site])
@@ -95,9 +88,21 @@ def test_an_installed_entry_point_is_listed_and_runs(tmp_path: Path) -> None:
     records = _records(out)
     assert [(r["agent"], r["finish"], r["tool_calls"]) for r in records] == [
         ("tiny", "finished", 1)] * 2
+
+    # The listing and the built-in's precedence by the command's `main` in this process, with
+    # and then without the distribution on the path.
+    assert "tiny" not in run_in_process("bench", "agents", cwd=tmp_path).stdout.split()
+    monkeypatch.syspath_prepend(str(site))
+    listed = run_in_process("bench", "agents", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr
+    lines = {line.split()[0]: line for line in listed.stdout.splitlines() if line.strip()}
+    assert "built-in" in lines["oracle"] and "built-in" in lines["react"]
+    assert "plug-in: tiny-agent 0.3" in lines["tiny"]
+    assert "entry point tiny_agent:TinyAgent" in lines["tiny"]
+    assert "tiny_agent:TinyAgent (hidden by the built-in of that name)" in listed.stdout
     # a plug-in named like a built-in does not replace it
-    noop = _mavswarm("bench", "run", "--agent", "noop", "--sessions", str(session),
-                     "--out", str(tmp_path / "noop"), path=[site])
+    noop = run_in_process("bench", "run", "--agent", "noop", "--sessions", str(session),
+                          "--out", str(tmp_path / "noop"), cwd=tmp_path)
     assert noop.returncode == 0, noop.stderr
     assert {r["tool_calls"] for r in _records(tmp_path / "noop")} == {0}
 

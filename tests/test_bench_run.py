@@ -24,6 +24,14 @@ def session_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return write_json(folder / "s.json", small_session(KEYS))
 
 
+@pytest.fixture(scope="module")
+def oracle_run(session_file: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The oracle's run of the session, once for the tests that read it: its results folder."""
+    out = tmp_path_factory.mktemp("oracle")
+    _run(session_file, out)
+    return out
+
+
 def _verdicts(records: list[dict]) -> list[tuple]:
     return [(r["task"], r["passed"], tuple(c["passed"] for c in r["checks"]))
             for r in sorted(records, key=lambda r: r["task"])]
@@ -36,8 +44,9 @@ def _run(session: Path, out: Path, agent: str = "oracle", **kw: object) -> list[
     return read_records(out / "results.jsonl")
 
 
-def test_oracle_passes_every_task_and_noop_fails(session_file: Path, tmp_path: Path) -> None:
-    records = _run(session_file, tmp_path / "oracle")
+def test_oracle_passes_every_task_and_noop_fails(session_file: Path, oracle_run: Path,
+                                                 tmp_path: Path) -> None:
+    records = read_records(oracle_run / "results.jsonl")
     assert [r["task"] for r in records] == [f"t0{k}" for k in range(1, 6)]
     failed = [(r["task"], [c for c in r["checks"] if not c["passed"]]) for r in records
               if not r["passed"]]
@@ -53,12 +62,12 @@ def test_oracle_passes_every_task_and_noop_fails(session_file: Path, tmp_path: P
     assert all(r["tool_calls"] == 0 and r["sim_time_s"] == 1.0 for r in noop)
 
 
-def test_resume_after_a_kill_loses_and_duplicates_nothing(session_file: Path,
+def test_resume_after_a_kill_loses_and_duplicates_nothing(session_file: Path, oracle_run: Path,
                                                           tmp_path: Path) -> None:
-    whole = _run(session_file, tmp_path / "whole")
+    whole = read_records(oracle_run / "results.jsonl")
     out = tmp_path / "killed"
     out.mkdir()
-    lines = (tmp_path / "whole" / "results.jsonl").read_text().splitlines(keepends=True)
+    lines = (oracle_run / "results.jsonl").read_text().splitlines(keepends=True)
     # As if killed while writing the third record: two whole lines and a torn one.
     (out / "results.jsonl").write_text("".join(lines[:2]) + lines[2][:57])
     resumed = _run(session_file, out)

@@ -96,9 +96,11 @@ def test_a_test_run_that_used_mavsdk_exits_with_pytests_status(
     status, reached through normal interpreter shutdown (exit handlers run)."""
     test_file = tmp_path / "test_verdict.py"
     test_file.write_text(textwrap.dedent(FAILING.format(verdict=verdict)))
+    # --confcutdir: collection starts at tmp_path instead of listing every parent folder
+    # (the shared /tmp can hold tens of thousands of entries).
     done = _run(["-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "tests.conftest",
-                 "--rootdir", str(tmp_path), "-c", os.devnull, "-o", "asyncio_mode=auto",
-                 str(test_file)])
+                 "--rootdir", str(tmp_path), "--confcutdir", str(tmp_path), "-c", os.devnull,
+                 "-o", "asyncio_mode=auto", str(test_file)])
     _assert_clean(done, status)
     assert ("1 failed" if status else "1 passed") in done.stdout
     assert done.stdout.rstrip().endswith("interpreter shut down")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,7 @@ import pytest
 
 from tests.bench_fixtures import small_session, write_json
 from tests.browser_fixtures import open_page, shot
-from tests.cli_fixtures import MAVSWARM, read_until
+from tests.cli_fixtures import MAVSWARM, read_until, run_in_process
 from tests.ports import unused_tcp_port
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow, pytest.mark.browser]
@@ -45,6 +46,13 @@ class FliesTwoThree(Flies):
 '''
 
 
+def _mavswarm(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """`mavswarm ARGS` by the command's `main` in this process (the replay server below is a
+    process of its own), on a thread of its own: the browser's event loop runs on this one."""
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(run_in_process, *args, cwd=cwd).result()
+
+
 def test_compare_of_two_plugin_agents_reports_exactly_their_differences(
         browser: Any, tmp_path: Path) -> None:
     data = small_session(["takeoff_hold"] * 4)
@@ -54,13 +62,11 @@ def test_compare_of_two_plugin_agents_reports_exactly_their_differences(
     plugin = tmp_path / "takeoff_agents.py"
     plugin.write_text(PLUGIN.format(plans=plans), encoding="utf-8")
     for name, out in (("FliesOneTwo", "one_two"), ("FliesTwoThree", "two_three")):
-        done = subprocess.run([*MAVSWARM, "bench", "run", "--agent", f"{plugin}:{name}",
-                               "--sessions", str(session), "--out", str(tmp_path / out)],
-                              capture_output=True, text=True, timeout=300)
+        done = _mavswarm("bench", "run", "--agent", f"{plugin}:{name}",
+                         "--sessions", str(session), "--out", str(tmp_path / out), cwd=tmp_path)
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
-    done = subprocess.run([*MAVSWARM, "bench", "compare", str(tmp_path / "one_two"),
-                           str(tmp_path / "two_three"), "--out", str(tmp_path / "cmp")],
-                          capture_output=True, text=True, timeout=120)
+    done = _mavswarm("bench", "compare", str(tmp_path / "one_two"),
+                     str(tmp_path / "two_three"), "--out", str(tmp_path / "cmp"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert ("two_three vs one_two: 1 fail->pass, 1 pass->fail, 1 both pass, 1 both fail"
             in done.stdout)

@@ -27,7 +27,7 @@ from inspect_ai.solver import generate
 from inspect_ai.tool import ToolCall
 
 from agent_contract import AgentTools
-from benchmark.authoring.suite import SESSIONS_DIR, SMOKE_TASKS, suite_paths
+from benchmark.authoring.suite import SESSIONS_DIR, SMOKE_SESSIONS, suite_paths
 from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
 from llm_tools import default_registry
@@ -55,20 +55,24 @@ def _only_log(folder: Path) -> EvalLog:
 @pytest.mark.slow
 @pytest.mark.mavsdk
 def test_smoke_eval_on_mockllm_scores_as_a_do_nothing_agent(tmp_path: Path) -> None:
+    # The first task of each smoke session (the task holds all 18: see
+    # test_family_and_suite_tasks_hold_their_tasks), and `bench run`'s noop agent on the same.
+    first_tasks = [f"{session}/t01" for session in SMOKE_SESSIONS]
     run = subprocess.run([INSPECT, "eval", "mavswarm/smoke", "--model", "mockllm/model",
-                          "--display", "none"], cwd=tmp_path, env=inspect_env(tmp_path),
+                          "--sample-id", ",".join(first_tasks), "--display", "none"],
+                         cwd=tmp_path, env=inspect_env(tmp_path),
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-3000:]
     log = _only_log(tmp_path / "logs")
     assert log.status == "success" and log.eval.task == "mavswarm/smoke"
-    assert log.samples is not None and len(log.samples) == 3 * SMOKE_TASKS == 18
+    assert log.samples is not None and len(log.samples) == 3
 
-    paths, limit = suite_paths("smoke")
-    run_benchmark(RunPlan(sessions=paths, agent="noop", task_limit=limit,
+    paths, _ = suite_paths("smoke")
+    run_benchmark(RunPlan(sessions=paths, agent="noop", task_limit=1,
                           out_dir=tmp_path / "noop"), progress=lambda _: None)
     noop = {f"{r['session']}/{r['task']}": r for r in read_records(tmp_path / "noop" /
                                                                     "results.jsonl")}
-    assert set(noop) == {str(s.id) for s in log.samples}
+    assert set(noop) == {str(s.id) for s in log.samples} == set(first_tasks)
     for sample in log.samples:
         # mockllm's default answer has no tool call: nudged twice, the agent stops.
         assert [m.role for m in sample.messages] == (

@@ -25,10 +25,12 @@ from benchmark.running.orchestrator import RunPlan, run_benchmark
 from benchmark.running.results import read_records
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import MAVSWARM, ROOT
+from tests.plugin_fixtures import write_plugins
 from tests.scripted_llm import call, scripted_llm
 
-KEYS = ["takeoff_hold", "climb_and_face", "altitude_change", "new_home", "takeoff_hold",
-        "climb_and_face"]
+# Three tasks a session: the node dies while each session holds its second, so each has one
+# task recorded before and one after the one it was running.
+KEYS = ["takeoff_hold", "climb_and_face", "altitude_change"]
 RUN_TIMEOUT_S = 400.0
 
 
@@ -58,7 +60,8 @@ def sessions(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, ...]:
 def local_records(sessions: tuple[Path, ...], tmp_path_factory: pytest.TempPathFactory
                   ) -> list[dict[str, Any]]:
     out = tmp_path_factory.mktemp("local")
-    run_benchmark(RunPlan(sessions=sessions, out_dir=out, workers=2), progress=lambda _: None)
+    # One worker: in this process (verdicts do not depend on workers, test_bench_run.py).
+    run_benchmark(RunPlan(sessions=sessions, out_dir=out, workers=1), progress=lambda _: None)
     return read_records(out / "results.jsonl")
 
 
@@ -111,6 +114,28 @@ def test_a_ray_run_writes_what_the_local_backend_writes(
     assert order == sorted(order, key=order.index), order
 
 
+@needs_ray
+@pytest.mark.mavsdk
+@pytest.mark.slow
+def test_a_plugin_file_runs_as_ray_tasks(cluster: Any, tmp_path: Path) -> None:
+    """The unit resolves the spec from its text on the node, a relative file path from the
+    directory the run started in."""
+    write_plugins(tmp_path)
+    session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "checkpoint"]))
+    out = tmp_path / "out"
+    spec = "plugins_under_test.py:NoArguments"
+    run = subprocess.run([*MAVSWARM, "bench", "run", "--agent", spec, "--sessions",
+                          str(session), "--out", str(out), "--backend", "ray",
+                          "--ray-address", cluster.address],
+                         cwd=tmp_path, env={**os.environ, **cluster.env},
+                         capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "as Ray tasks at " + cluster.address in run.stdout + run.stderr
+    records = read_records(out / "results.jsonl")
+    assert [(r["agent"], r["finish"], r["tool_calls"]) for r in records] == [
+        (spec, "finished", 1)] * 2
+
+
 _DRONES = re.compile(r"Your drones: ([^.]+)\.")
 
 
@@ -157,7 +182,7 @@ def test_a_node_killed_mid_run_loses_and_duplicates_no_record(
     gate = _SecondTaskGate(sessions)
     assert len(gate.texts) == len(sessions)
     with scripted_llm([], answer=_take_off_then_finish) as llm:
-        run_benchmark(RunPlan(sessions=sessions, out_dir=tmp_path / "local", workers=2,
+        run_benchmark(RunPlan(sessions=sessions, out_dir=tmp_path / "local", workers=1,
                               agent="react", model="scripted", base_url=llm.base_url),
                       progress=lambda _: None)
     local_records = read_records(tmp_path / "local" / "results.jsonl")

@@ -29,7 +29,7 @@ from benchmark.running.episode import run_session
 from benchmark.running.results import read_records
 from swarm_agents.llm import ModelConfig, OpenAIChatModel, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
-from tests.cli_fixtures import MAVSWARM, ROOT
+from tests.cli_fixtures import run_in_process
 from tests.ports import unused_tcp_port
 
 pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
@@ -40,7 +40,7 @@ if importlib.util.find_spec("xllamacpp") is None:
 
 MODEL = "smollm2-135m"
 KEYS = ["takeoff_hold", "round_trip_home"]
-ANSWER_TOKENS = 32  # the server's cap on every answer, to keep each call short
+ANSWER_TOKENS = 16  # the server's cap on every answer, to keep each call short
 SERVER_START_S = 120.0
 
 # The server in its own process, as a user would run it: llama.cpp's defaults but a small
@@ -121,11 +121,6 @@ def _wait_until_healthy(proc: subprocess.Popen[bytes], root: str, log_path: Path
                          f"{log_path.read_text()[-3000:]}")
 
 
-def _clean_env() -> dict[str, str]:
-    """This environment without OpenAI settings, so only the command line points the agent."""
-    return {k: v for k, v in os.environ.items() if not k.startswith("OPENAI_")}
-
-
 def _assert_clean(record: dict[str, Any]) -> None:
     """A record a report can count: it ended for a named reason, it has a verdict from its
     checks, and it counted the model's tokens."""
@@ -156,14 +151,16 @@ async def test_the_sdk_client_gets_answers_and_token_counts(llama_url: str) -> N
 
 
 # ------------------------------------------------------------------- the benchmark path
-def test_bench_run_with_a_real_model_ends_every_task_cleanly(llama_url: str,
-                                                             tmp_path: Path) -> None:
+def test_bench_run_with_a_real_model_ends_every_task_cleanly(
+        llama_url: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`mavswarm bench run` (its `main`, in this process) pointed at the server."""
+    for name in [k for k in os.environ if k.startswith("OPENAI_")]:
+        monkeypatch.delenv(name)  # only the command line points the agent
     session = write_json(tmp_path / "s.json", small_session(KEYS))
     out = tmp_path / "out"
-    run = subprocess.run(
-        [*MAVSWARM, "bench", "run", "--agent", "react", "--model", MODEL,
-         "--base-url", llama_url, "--sessions", str(session), "--out", str(out)],
-        cwd=ROOT, env=_clean_env(), capture_output=True, text=True, timeout=300)
+    run = run_in_process("bench", "run", "--agent", "react", "--model", MODEL,
+                         "--base-url", llama_url, "--sessions", str(session), "--out", str(out),
+                         cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-3000:]
     records = read_records(out / "results.jsonl")
     assert sorted(r["task"] for r in records) == ["t01", "t02"]

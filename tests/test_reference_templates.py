@@ -6,10 +6,8 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 import random
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -30,16 +28,16 @@ from benchmark.authoring.templates.base import SessionView
 from benchmark.authoring.templates.common import FILES
 from benchmark.running.generation import generate_session
 from tests.bench_fixtures import reference_session
+from tests.cli_fixtures import run_in_process
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULTS = ROOT / "tests" / "data" / "multiuav_default_templates.json"
-ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT),
-                                                                  os.environ.get("PYTHONPATH")]))}
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "mavswarm", *args], capture_output=True,
-                          text=True, env=ENV, cwd=ROOT, timeout=600)
+    """`mavswarm ARGS` by the command's `main` in this process (what it prints and its status
+    are what is checked; the command as a process is tested in test_cli_errors.py)."""
+    return run_in_process(*args, cwd=ROOT)
 
 
 def _view(family: str = "area_search", level: str = "moderate", **sized: Any) -> SessionView:

@@ -5,14 +5,11 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
 from pathlib import Path
-
-import pytest
 
 from benchmark.reporting.report import write_report
 from benchmark.reporting.report_html import inspector_link
-from tests.cli_fixtures import MAVSWARM
+from tests.cli_fixtures import run_in_process
 from tests.compare_fixtures import record, write_results
 
 
@@ -25,13 +22,11 @@ def _two_runs(tmp_path: Path) -> tuple[Path, Path]:
     return a, b
 
 
-@pytest.mark.slow
 def test_several_runs_are_reported_apart(tmp_path: Path) -> None:
     a, b = _two_runs(tmp_path)  # both folders are named "oracle": ids oracle and oracle+
     out = tmp_path / "rep"
-    done = subprocess.run([*MAVSWARM, "bench", "report", str(a), str(b / "results.jsonl"),
-                           "--out", str(out), "--inspector-url", "http://h.test:9"],
-                          capture_output=True, text=True, timeout=120)
+    done = run_in_process("bench", "report", str(a), str(b / "results.jsonl"),
+                          "--out", str(out), "--inspector-url", "http://h.test:9", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "| Task Pass Rate | 100.0 % | 4 / 4 tasks |" in done.stdout
     assert "| Task Pass Rate | 25.0 % | 1 / 4 tasks |" in done.stdout

@@ -1,7 +1,7 @@
 """Task records read back from results.jsonl are checked before resume or a report uses them:
 a damaged line stops the read with its file and line and never counts as a new task. A real
-resume (`mavswarm bench run` in a subprocess) and `bench report`, and a seeded property-based
-fuzz of the reader."""
+resume (`mavswarm bench run` in a subprocess; the run before it and `bench report` by the
+command's `main` in this process), and a seeded property-based fuzz of the reader."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from benchmark.running.episode import base_record, error_record
 from benchmark.running.results import ResultsError, read_task_records
 from benchmark.running.task_record import TaskRecord, record_key, record_problem
 from tests.bench_fixtures import small_session, write_json
+from tests.cli_fixtures import run_in_process
 
 FUZZ = settings(derandomize=True, database=None, deadline=None, print_blob=True,
                 suppress_health_check=list(HealthCheck), max_examples=400)
@@ -146,7 +147,7 @@ def test_resume_stops_at_a_mangled_key_and_runs_nothing(tmp_path: Path) -> None:
     session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "climb_and_face"]))
     out = tmp_path / "out"
     args = ("bench", "run", "--agent", "noop", "--sessions", str(session), "--out", str(out))
-    first = _mavswarm(*args, cwd=tmp_path)
+    first = run_in_process(*args, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     results = out / "results.jsonl"
     lines = results.read_text().splitlines(keepends=True)
@@ -163,8 +164,8 @@ def test_resume_stops_at_a_mangled_key_and_runs_nothing(tmp_path: Path) -> None:
     assert "does not match its fields" in message
     assert results.read_text() == damaged  # nothing run, nothing written
 
-    report = _mavswarm("bench", "report", str(results), "--out", str(tmp_path / "rep"),
-                       cwd=tmp_path)
+    report = run_in_process("bench", "report", str(results), "--out", str(tmp_path / "rep"),
+                            cwd=tmp_path)
     assert report.returncode == 2 and report.stderr.startswith(f"mavswarm: {results}:2: ")
     assert len(report.stderr.splitlines()) == 1
 

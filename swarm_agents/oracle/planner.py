@@ -12,13 +12,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse
 import shapely
-from scipy.sparse.csgraph import dijkstra
 
 from emulator.world import World
+
+if TYPE_CHECKING:
+    import scipy.sparse
 
 __all__ = ["NoPath", "PathPlanner"]
 
@@ -226,6 +228,9 @@ class PathPlanner:
             raise NoPath(f"goal {goal} cannot be reached from open space at altitude {z_m} m")
         gx, gy = goal[0], goal[1]
         direct_m = math.hypot(gx - start[0], gy - start[1])
+        # scipy on first use: every `mavswarm` command imports the oracle (the task editor
+        # derives plans), few of them plan a path.
+        from scipy.sparse.csgraph import dijkstra
         for limit_m in (DETOUR_FACTOR * direct_m + DETOUR_EXTRA_CELLS * self.cell_m, math.inf):
             dist, pred, _ = dijkstra(band.graph, directed=True, indices=sources,
                                      return_predecessors=True, min_only=True, limit=limit_m)
@@ -313,6 +318,7 @@ class PathPlanner:
 def _grid_graph(node: np.ndarray, cell_of_node: np.ndarray, cell_m: float
                 ) -> scipy.sparse.csr_matrix:
     """8-connected directed graph between free cells (both directions of every edge)."""
+    import scipy.sparse
     ny, nx = node.shape
     padded = np.pad(node, 1, constant_values=-1)
     steps = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
