@@ -6,9 +6,9 @@ such a block is freed it raises the threshold to that block's size (up to 32 MiB
 frees large numpy arrays all the time (the oracle's routing grids and searches, the ground
 truth's chunks joined for an evaluation, a replay's window), so soon every array up to
 several MiB comes from the heap instead, and what a session frees there mostly stays with the
-process: a worker hosting sessions side by side grew by 60 MB per 30-drone session where its
-live data was some 45 (`perf/think_latency.py`). Setting the threshold fixes it where it
-starts (glibc then stops moving it), so freed large blocks leave the process again.
+process: ten sessions hosted in two workers held 45.5 MB each at their peak, 32.2 MB with the
+threshold fixed (`perf/think_latency.py`, docs/performance.md). Setting the threshold fixes it
+where it starts (glibc then stops moving it), so freed large blocks leave the process again.
 """
 
 from __future__ import annotations
