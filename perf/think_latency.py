@@ -96,6 +96,8 @@ def _worker(paths: list[str], args: argparse.Namespace, out: Any) -> None:
     import logging
     logging.disable(logging.WARNING)
     import benchmark.running.orchestrator  # noqa: F401  (what a worker of `bench run` holds)
+    from benchmark.running.worker_heap import return_large_blocks
+    return_large_blocks()  # as a worker of `bench run` does (benchmark.running.backends)
     out.put(("base", _rss_mb([os.getpid()])))
     asyncio.run(_sessions(paths, args, out))
     out.put(("done", os.getpid()))

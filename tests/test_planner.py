@@ -13,7 +13,7 @@ import shapely.affinity
 
 from emulator.world import Obstacle, World, ellipse_polygon
 from swarm_agents.oracle.coverage import lawnmower, order_visits, split_lanes
-from swarm_agents.oracle.planner import NoPath, PathPlanner
+from swarm_agents.oracle.planner import GRIDS_KEPT, NoPath, PathPlanner
 
 Point3 = tuple[float, float, float]
 
@@ -133,6 +133,30 @@ def test_descent_blocked_by_a_roof_happens_at_the_goal() -> None:
     route = PathPlanner(world).plan(start, goal)
     _assert_flyable(world, start, goal, route)
     assert route[-2] == (80.0, 0.0, 30.0)
+
+
+def test_routing_grids_kept_are_bounded_and_rebuilt_alike() -> None:
+    # Walls of five heights make five altitude bands; a session's planner used to keep every
+    # band's grid (an extreme-level world's: about 10 MB each) for the whole session.
+    heights = (10.0, 20.0, 30.0, 40.0, 0.0)
+    world = World(obstacles=[_wall(f"w{i}", 100.0 * i - 5.0, 100.0 * i + 5.0, -150.0, 150.0,
+                                   height_m=h) for i, h in enumerate(heights)])
+    planner = PathPlanner(world)
+    queries = [((-50.0, 0.0, z), (450.0, 0.0, z)) for z in (5.0, 15.0, 25.0, 35.0, 45.0)]
+    first = [planner.plan(start, goal) for start, goal in queries]
+    assert len(planner._grids) <= GRIDS_KEPT < len(queries)
+    for (start, goal), route in zip(queries, first, strict=True):
+        _assert_flyable(world, start, goal, route)
+        assert planner.plan(start, goal) == route == PathPlanner(world).plan(start, goal)
+    assert len(planner._grids) <= GRIDS_KEPT
+
+
+def test_clearance_checks_alone_build_no_grid() -> None:
+    world = World(obstacles=[Obstacle.disc("far", "far", (0.0, 500.0), 20.0)])
+    planner = PathPlanner(world)
+    goal = (100.0, 10.0, 30.0)
+    assert planner.plan((-100.0, 0.0, 30.0), goal) == [goal]
+    assert not planner._grids
 
 
 @pytest.mark.parametrize("gap_m", [0.8, 4.0])

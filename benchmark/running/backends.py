@@ -112,6 +112,8 @@ class LocalBackend:
 
 
 def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1) -> None:
+    from benchmark.running.worker_heap import return_large_blocks
+    return_large_blocks()  # what a finished task frees leaves the worker
     if per_process > 1:
         asyncio.run(_host(work.hosted, units, results, per_process))  # type: ignore[attr-defined]
         return

@@ -10,6 +10,7 @@ tracking errors do not trip collision prevention.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -33,6 +34,11 @@ VERTICAL_SLACK_M = 1.0
 BORDER_CELLS = 4
 # The largest grid the planner builds; a larger map needs a coarser cell_m.
 MAX_GRID_CELLS = 4_000_000
+# Routing grids kept built: a grid is about 100 bytes per free cell (an extreme-level world's
+# 100,000 cells: 10 MB), and a session's flights route in one altitude band for stretches of
+# many routes, so only the last band's grid is kept; another is built (a few tens of ms) when
+# a route needs it: an extreme-level session builds 18-23 grids in 20 tasks (0.3-0.5 s).
+GRIDS_KEPT = 1
 # Attachment of start/goal to the grid: clear legs wanted, and the most legs tried.
 _ATTACH_WANTED = 6
 # Dijkstra first searches only paths up to this detour over the straight distance.
@@ -49,19 +55,30 @@ class NoPath(Exception):
 
 @dataclass(frozen=True, slots=True)
 class _Band:
-    """The grid and clearance index of the obstacles that block one altitude band."""
+    """The obstacles that block one altitude band: their footprints and clearance index."""
 
     ids: tuple[int, ...]
+    footprints: np.ndarray  # raw footprints of ids (object array)
+    tree: shapely.STRtree | None
+
+
+@dataclass(frozen=True, slots=True)
+class _Grid:
+    """The routing grid of one band: free cells numbered as graph nodes, and the graph."""
+
     x0_m: float
     y0_m: float
     nx: int
     ny: int
-    free: np.ndarray  # (ny, nx) bool
-    node: np.ndarray  # (ny, nx) int, -1 where blocked
-    cell_of_node: np.ndarray  # (n,) flat cell index
-    graph: scipy.sparse.csr_matrix | None
-    footprints: np.ndarray  # raw footprints of ids (object array)
-    tree: shapely.STRtree | None
+    node: np.ndarray  # (ny, nx) int32, -1 where blocked
+    cell_of_node: np.ndarray  # (n,) int32 flat cell index
+    graph: scipy.sparse.csr_matrix
+
+    @property
+    def nbytes(self) -> int:
+        g = self.graph
+        return (self.node.nbytes + self.cell_of_node.nbytes + g.data.nbytes + g.indices.nbytes
+                + g.indptr.nbytes)
 
     def centre(self, flat: int, cell_m: float) -> Point2:
         iy, ix = divmod(int(flat), self.nx)
@@ -79,7 +96,9 @@ def _point3(value: Sequence[float], name: str) -> Point3:
 
 
 class PathPlanner:
-    """Plans obstacle-free polylines through one world; grids are cached per altitude band."""
+    """Plans obstacle-free polylines through one world. The obstacles of each altitude band are
+    indexed once; a band's routing grid is built when a route needs it, and only the
+    GRIDS_KEPT grids used last are kept."""
 
     def __init__(self, world: World, *, clearance_m: float = 6.0, cell_m: float = 4.0) -> None:
         if not (math.isfinite(cell_m) and cell_m > 0.0):
@@ -100,6 +119,7 @@ class PathPlanner:
         heights = np.array([o.height_m for o in world.obstacles], dtype=float)
         self._top_m = np.where(heights == 0.0, np.inf, heights + margin_m)
         self._bands: dict[tuple[int, ...], _Band] = {}
+        self._grids: OrderedDict[tuple[int, ...], _Grid] = OrderedDict()
 
     # ------------------------------------------------------------------ public
     def leg_clear(self, a_m: Sequence[float], b_m: Sequence[float]) -> bool:
@@ -182,11 +202,24 @@ class PathPlanner:
     def _build_band(self, ids: tuple[int, ...]) -> _Band:
         footprints = np.array([self.world.obstacles[i].footprint for i in ids], dtype=object)
         if not ids:
-            empty = np.zeros((0, 0), dtype=bool)
-            return _Band(ids, 0.0, 0.0, 0, 0, empty, empty.astype(int), np.zeros(0, int),
-                         None, footprints, None)
+            return _Band(ids, footprints, None)
+        shapely.prepare(footprints)
+        return _Band(ids, footprints, shapely.STRtree(footprints))
+
+    def _grid(self, band: _Band) -> _Grid:
+        """The routing grid of a band with obstacles (built again if it was dropped)."""
+        grid = self._grids.get(band.ids)
+        if grid is not None:
+            self._grids.move_to_end(band.ids)
+            return grid
+        grid = self._grids[band.ids] = self._build_grid(band)
+        while len(self._grids) > GRIDS_KEPT:
+            self._grids.popitem(last=False)
+        return grid
+
+    def _build_grid(self, band: _Band) -> _Grid:
         cell = self.cell_m
-        inflated = shapely.buffer(footprints, self.clearance_m, quad_segs=_QUAD_SEGS)
+        inflated = shapely.buffer(band.footprints, self.clearance_m, quad_segs=_QUAD_SEGS)
         shapely.prepare(inflated)
         bounds = shapely.bounds(inflated)
         pad = BORDER_CELLS * cell
@@ -205,25 +238,23 @@ class PathPlanner:
             ys = y0 + (np.arange(iy0, iy1) + 0.5) * cell
             gx, gy = np.meshgrid(xs, ys)
             free[iy0:iy1, ix0:ix1] &= ~shapely.intersects_xy(poly, gx, gy)
-        cell_of_node = np.flatnonzero(free.ravel())
-        node = np.full((ny, nx), -1, dtype=np.int64)
-        node.ravel()[cell_of_node] = np.arange(cell_of_node.size)
-        graph = _grid_graph(node, cell_of_node, cell)
-        shapely.prepare(footprints)
-        return _Band(ids, x0, y0, nx, ny, free, node, cell_of_node, graph, footprints,
-                     shapely.STRtree(footprints))
+        cell_of_node = np.flatnonzero(free.ravel()).astype(np.int32)
+        node = np.full((ny, nx), -1, dtype=np.int32)
+        node.ravel()[cell_of_node] = np.arange(cell_of_node.size, dtype=np.int32)
+        return _Grid(x0, y0, nx, ny, node, cell_of_node, _grid_graph(node, cell_of_node, cell))
 
     # -------------------------------------------------------------- routing
     def _route_in_band(self, band: _Band, start: Point3, goal: Point3) -> list[Point2]:
         z_m = goal[2]
         if self.world.first_blockage(start, goal) is None and self._soft_ok(start, goal):
             return [goal[:2]]
-        if band.graph is None:
+        if not band.ids:
             raise NoPath(f"no obstacle blocks altitude {z_m} m, yet {start} -> {goal} is blocked")
-        sources = self._attach(band, start, z_m, leaving=True)
+        grid = self._grid(band)
+        sources = self._attach(grid, start, z_m, leaving=True)
         if not sources:
             raise NoPath(f"start {start} cannot reach open space at altitude {z_m} m")
-        targets = self._attach(band, goal, z_m, leaving=False)
+        targets = self._attach(grid, goal, z_m, leaving=False)
         if not targets:
             raise NoPath(f"goal {goal} cannot be reached from open space at altitude {z_m} m")
         gx, gy = goal[0], goal[1]
@@ -232,11 +263,11 @@ class PathPlanner:
         # derives plans), few of them plan a path.
         from scipy.sparse.csgraph import dijkstra
         for limit_m in (DETOUR_FACTOR * direct_m + DETOUR_EXTRA_CELLS * self.cell_m, math.inf):
-            dist, pred, _ = dijkstra(band.graph, directed=True, indices=sources,
+            dist, pred, _ = dijkstra(grid.graph, directed=True, indices=sources,
                                      return_predecessors=True, min_only=True, limit=limit_m)
             best_node, best_cost = -1, math.inf
             for n in targets:
-                cx, cy = band.centre(band.cell_of_node[n], self.cell_m)
+                cx, cy = grid.centre(grid.cell_of_node[n], self.cell_m)
                 cost = dist[n] + math.hypot(cx - gx, cy - gy)
                 if cost < best_cost:
                     best_node, best_cost = n, cost
@@ -249,7 +280,7 @@ class PathPlanner:
         while pred[chain[-1]] >= 0:
             chain.append(int(pred[chain[-1]]))
         chain.reverse()
-        points = [start] + [(*band.centre(band.cell_of_node[n], self.cell_m), z_m)
+        points = [start] + [(*grid.centre(grid.cell_of_node[n], self.cell_m), z_m)
                             for n in chain] + [goal]
         route = _string_pull(points, self._leg_ok)
         for a, b in zip([start, *route[:-1]], route, strict=True):
@@ -257,22 +288,22 @@ class PathPlanner:
                 raise NoPath(f"planned leg {a} -> {b} is blocked")
         return [(p[0], p[1]) for p in route]
 
-    def _attach(self, band: _Band, point: Point3, z_m: float, *, leaving: bool) -> list[int]:
+    def _attach(self, grid: _Grid, point: Point3, z_m: float, *, leaving: bool) -> list[int]:
         """Grid nodes joined to point by a clear straight leg (point -> cell when leaving)."""
         px, py = point[0], point[1]
         cell = self.cell_m
-        ix = min(max(math.floor((px - band.x0_m) / cell), 0), band.nx - 1)
-        iy = min(max(math.floor((py - band.y0_m) / cell), 0), band.ny - 1)
+        ix = min(max(math.floor((px - grid.x0_m) / cell), 0), grid.nx - 1)
+        iy = min(max(math.floor((py - grid.y0_m) / cell), 0), grid.ny - 1)
         radius = math.ceil(self.clearance_m / cell) + 2
         tried: set[int] = set()
         found: list[int] = []
         while True:
-            x_lo, x_hi = max(ix - radius, 0), min(ix + radius + 1, band.nx)
-            y_lo, y_hi = max(iy - radius, 0), min(iy + radius + 1, band.ny)
-            window = band.node[y_lo:y_hi, x_lo:x_hi]
+            x_lo, x_hi = max(ix - radius, 0), min(ix + radius + 1, grid.nx)
+            y_lo, y_hi = max(iy - radius, 0), min(iy + radius + 1, grid.ny)
+            window = grid.node[y_lo:y_hi, x_lo:x_hi]
             wy, wx = np.nonzero(window >= 0)
-            cx = band.x0_m + (wx + x_lo + 0.5) * cell
-            cy = band.y0_m + (wy + y_lo + 0.5) * cell
+            cx = grid.x0_m + (wx + x_lo + 0.5) * cell
+            cy = grid.y0_m + (wy + y_lo + 0.5) * cell
             order = np.argsort(np.hypot(cx - px, cy - py), kind="stable")
             for k in order.tolist():
                 n = int(window[wy[k], wx[k]])
@@ -287,7 +318,7 @@ class PathPlanner:
                         return found
                 if len(tried) >= _ATTACH_MAX_TRIES:
                     return found
-            whole = x_lo == 0 and y_lo == 0 and x_hi == band.nx and y_hi == band.ny
+            whole = x_lo == 0 and y_lo == 0 and x_hi == grid.nx and y_hi == grid.ny
             if found or whole:
                 return found
             radius *= 2
