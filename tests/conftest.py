@@ -17,6 +17,7 @@ import pytest
 from emulator.clock import ClockConfig
 from emulator.scenario import Scenario, default_scenario
 from emulator.swarm import PortPlan, Swarm
+from tests import file_order
 from tests.browser_fixtures import CHROMIUM_ARGS, chromium_path
 from tests.hypothesis_draws import import_project_source, load_profile
 from tests.ports import drop_registry, unused_udp_port
@@ -47,25 +48,12 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker(pytest.mark.slow)
 
 
-class _LongFilesFirst:
-    """Once the tests are selected, the files with the most slow tests, then the most tests,
-    come first (each file's tests in their order): the parallel run (`--dist loadfile
-    --no-loadscope-reorder`, as ./dev runs it) hands out files in this order, so the long ones
-    start at once and the short ones fill in at the end, instead of a long file starting last
-    and running alone."""
-
-    @pytest.hookimpl(trylast=True)
-    def pytest_collection_modifyitems(self, items: list[pytest.Item]) -> None:
-        weight: dict[str, tuple[int, int]] = {}
-        for item in items:
-            slow, count = weight.get(item.location[0], (0, 0))
-            weight[item.location[0]] = (slow + (item.get_closest_marker("slow") is not None),
-                                        count + 1)
-        items.sort(key=lambda item: tuple(-w for w in weight[item.location[0]]))  # stable
+def pytest_addoption(parser: pytest.Parser) -> None:
+    file_order.add_option(parser)
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    config.pluginmanager.register(_LongFilesFirst(), "mavswarm-long-files-first")
+    config.pluginmanager.register(file_order.FileOrder(config), "mavswarm-file-order")
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
