@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import signal
+import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -130,8 +133,26 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
         assert seen == expected
     finally:
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=90)
+        try:
+            out, _ = proc.communicate(timeout=90)
+        except subprocess.TimeoutExpired:  # leave no swarm process behind, then fail
+            for child in _children(proc.pid):
+                os.kill(child, signal.SIGKILL)
+            proc.kill()
+            out, _ = proc.communicate(timeout=10)
+            out += "\n(did not stop within 90 s of Ctrl-C)"
         for sock in receivers:
             sock.close()
     assert proc.returncode == 0, out
     assert "stopping after" in out
+
+
+def _children(pid: int) -> list[int]:
+    """The process ids whose parent is pid (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError):
+                if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                    found.append(int(entry.name))
+    return found
