@@ -74,12 +74,6 @@ class _Grid:
     cell_of_node: np.ndarray  # (n,) int32 flat cell index
     graph: scipy.sparse.csr_matrix
 
-    @property
-    def nbytes(self) -> int:
-        g = self.graph
-        return (self.node.nbytes + self.cell_of_node.nbytes + g.data.nbytes + g.indices.nbytes
-                + g.indptr.nbytes)
-
     def centre(self, flat: int, cell_m: float) -> Point2:
         iy, ix = divmod(int(flat), self.nx)
         return self.x0_m + (ix + 0.5) * cell_m, self.y0_m + (iy + 0.5) * cell_m
