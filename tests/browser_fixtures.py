@@ -37,7 +37,11 @@ __all__ = [
 T = TypeVar("T")
 ARTIFACTS = ROOT / "artifacts" / "console"
 DRONE_RGB = (230, 0, 126)  # the map's drone colour (console/web/src/map2d.js)
-CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+# WebGL on SwiftShader (there is no GPU); the page's layers composited on the CPU, as Chromium
+# does on a machine without a GPU (compositing every frame through SwiftShader costs twice the
+# CPU and slows every other test running beside it).
+CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                 "--disable-gpu-compositing"]
 
 
 def chromium_path() -> str:

@@ -16,6 +16,18 @@ function shape2d(points) {
   return shape;
 }
 
+// A renderer without a GPU (SwiftShader, llvmpipe: remote desktops, virtual machines) draws
+// every pixel on the CPU, where multisampling costs several times a plain frame: there the
+// view renders without it, so a live swarm stays smooth and the machine stays usable.
+function softwareRenderer() {
+  const gl = document.createElement("canvas").getContext("webgl2");
+  if (!gl) return false;
+  const info = gl.getExtension("WEBGL_debug_renderer_info");
+  const name = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+  gl.getExtension("WEBGL_lose_context")?.loseContext();
+  return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+}
+
 function textSprite(text, heightM) {
   const canvas = document.createElement("canvas");
   canvas.width = 256; canvas.height = 64;
@@ -31,7 +43,8 @@ function textSprite(text, heightM) {
 export class View3D {
   constructor(container) {
     this.container = container;
-    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.software = softwareRenderer();
+    this.renderer = new THREE.WebGLRenderer({ antialias: !this.software, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(window.devicePixelRatio || 1);
     container.appendChild(this.renderer.domElement);
     this.canvas = this.renderer.domElement;
