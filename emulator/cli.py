@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 import json
 import multiprocessing
+import multiprocessing.connection
 import os
 import signal
 import sys
@@ -32,6 +33,9 @@ from emulator.scenario import Scenario, ScenarioError, default_scenario, load_sc
 from emulator.swarm import PortPlan, Swarm
 
 __all__ = ["MAX_VEHICLES_PER_NETWORK", "Attachment", "add_parsers", "run_up"]
+
+SUPERVISE_POLL_S = 0.5  # how often the process of several networks looks for Ctrl-C
+STOP_GRACE_S = 60.0  # how long a network process may take to stop before it is killed
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
@@ -225,13 +229,43 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
         )
         proc.start()
         procs.append(proc)
+    _supervise(procs)
+    return 0
+
+
+class _Stop(Exception):
+    """Ctrl-C or SIGTERM reached the process that started the networks."""
+
+
+def _raise_stop(signum: int, frame: object) -> None:
+    raise _Stop(signal.Signals(signum).name)
+
+
+def _supervise(procs: list[multiprocessing.Process]) -> None:
+    """Wait for the network processes; on Ctrl-C or SIGTERM stop them all (each writes its
+    figures and truth), killing any still running after STOP_GRACE_S.
+
+    The wait wakes every SUPERVISE_POLL_S: a signal the kernel hands to another thread of this
+    process (numpy's, say) does not interrupt a blocking wait of the main thread, so a plain
+    `join` could sleep through Ctrl-C; and SIGTERM is handled as Ctrl-C, so stopping this
+    process never leaves its networks running on their own."""
+    previous = {sig: signal.signal(sig, _raise_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        for proc in procs:
-            proc.join()
-    except KeyboardInterrupt:
+        while any(proc.is_alive() for proc in procs):
+            multiprocessing.connection.wait([proc.sentinel for proc in procs],
+                                            timeout=SUPERVISE_POLL_S)
+    except (_Stop, KeyboardInterrupt):
         for proc in procs:
             proc.terminate()
+        deadline = time.monotonic() + STOP_GRACE_S
         for proc in procs:
-            proc.join()
-    return 0
+            proc.join(max(0.0, deadline - time.monotonic()))
+        for proc in procs:
+            if proc.is_alive():
+                print(f"{proc.name} did not stop within {STOP_GRACE_S:g} s: killed", flush=True)
+                proc.kill()
+                proc.join()
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 

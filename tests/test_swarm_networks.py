@@ -147,6 +147,28 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
     assert "stopping after" in out
 
 
+@pytest.mark.slow
+def test_sigterm_stops_every_network_process_as_ctrl_c_does() -> None:
+    proc = start_up("--drones", "260", "--no-truth", "--bind-host", "127.0.0.1",
+                    "--bind-port", "0", "--api-port", "0", "--gcs-port", "0")
+    children: list[int] = []
+    try:
+        read_until(proc, "MAVProxy", timeout_s=60.0)
+        children = _children(proc.pid)
+        assert children, "the networks run in a process of their own"
+        proc.terminate()
+        out, _ = proc.communicate(timeout=90)
+    finally:
+        if proc.poll() is None:  # leave no swarm process behind, then fail
+            for child in _children(proc.pid):
+                os.kill(child, signal.SIGKILL)
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, out
+    assert "[nets 0-1] stopping after" in out
+    assert not [pid for pid in children if Path(f"/proc/{pid}").exists()]
+
+
 def _children(pid: int) -> list[int]:
     """The process ids whose parent is pid (Linux /proc)."""
     found = []
