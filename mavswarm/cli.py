@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -30,7 +32,7 @@ from emulator import cli as emulator_cli
 from mavlink_gateway import set_mavsdk_log
 from mqtt_bus import cli as mqtt_cli
 
-__all__ = ["OneLineParser", "build_parser", "main"]
+__all__ = ["OneLineParser", "build_parser", "main", "stop_on_ctrl_c"]
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -56,8 +58,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def stop_on_ctrl_c() -> None:
+    """Make Ctrl-C (SIGINT) stop the command, as every command says it does.
+
+    A shell starts a command in the background (`mavswarm up &` in a script, a CI step) with
+    SIGINT ignored, and Python then leaves it ignored: `kill -INT` would not stop a swarm, a
+    server or a console left open. Python's own handler is put back (in the main thread, the
+    only one that may set handlers)."""
+    if threading.current_thread() is threading.main_thread() and \
+            signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `mavswarm` with `argv` (default: the process's arguments); the exit status."""
+    stop_on_ctrl_c()
     args = build_parser().parse_args(argv)
     verbose = bool(getattr(args, "verbose", False))
     set_mavsdk_log(verbose)  # MAVSDK's own log lines: off unless --verbose

@@ -19,10 +19,14 @@ pytestmark = [pytest.mark.mavsdk, pytest.mark.slow]
 
 
 def _bench_web(tmp_path: Path, port: int, *extra: str) -> subprocess.Popen[str]:
+    """The command as a shell script's background job starts it: with SIGINT ignored (`trap ''
+    INT`), which the command undoes, since it ends on Ctrl-C."""
     session = write_json(tmp_path / "s.json", small_session(["takeoff_hold", "climb_and_face"]))
+    command = [*MAVSWARM, "bench", "run", "--agent", "noop", "--sessions", str(session),
+               "--out", str(tmp_path / "run"), "--web", "--web-port", str(port), "--web-key",
+               "watch", *extra]
     return subprocess.Popen(
-        [*MAVSWARM, "bench", "run", "--agent", "noop", "--sessions", str(session), "--out",
-         str(tmp_path / "run"), "--web", "--web-port", str(port), "--web-key", "watch", *extra],
+        ["sh", "-c", 'trap "" INT; exec "$@"', "sh", *command],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"})
 
