@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import binomtest
 
 from benchmark.reporting.compare.stats import ClusterBootstrap, mcnemar_exact_p
 
@@ -26,6 +25,7 @@ def test_mcnemar_exact_p_of_small_tables_by_hand() -> None:
 
 @pytest.mark.parametrize(("up", "down"), [(441, 31), (12, 9), (0, 3), (150, 151), (2, 40)])
 def test_mcnemar_matches_scipys_binomial_test(up: int, down: int) -> None:
+    from scipy.stats import binomtest
     expected = binomtest(up, up + down, 0.5, alternative="two-sided").pvalue
     assert mcnemar_exact_p(up, down) == pytest.approx(expected, rel=1e-9, abs=1e-300)
 

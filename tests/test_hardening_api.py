@@ -9,7 +9,6 @@ from typing import Any
 
 import httpx
 import pytest
-from mcp import Client
 
 from benchmark.server import LiveSession
 from emulator.radio import Radio, RadioError
@@ -208,6 +207,7 @@ async def test_registry_call_never_raises(arguments: Any) -> None:
 
 
 async def test_mcp_answers_hostile_arguments_with_is_error() -> None:
+    from mcp import Client
     async with served(role="agent") as s:
         live = s.live
         before = _snapshot(live)

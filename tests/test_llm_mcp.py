@@ -8,11 +8,9 @@ import contextlib
 import json
 import sys
 from collections.abc import AsyncIterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import mcp_types as types
 import pytest
-from mcp import Client, StdioServerParameters
 
 from agent_contract import AgentTask, AgentTools
 from agent_contract.protocol import TaskBudget
@@ -24,6 +22,9 @@ from mavlink_gateway import Gateway
 from tests.asgi_fixtures import listening
 from tests.bench_fixtures import small_session
 
+if TYPE_CHECKING:
+    import mcp_types as types
+
 BUDGET = TaskBudget(tool_calls=50, sim_time_s=600.0)
 
 
@@ -33,6 +34,7 @@ def _task_tools(gateway: Gateway, budget: TaskBudget = BUDGET) -> AgentTools:
 
 def _payload(result: types.CallToolResult) -> dict[str, Any]:
     """The structured content, after checking the text block carries the same JSON."""
+    import mcp_types as types
     (block,) = result.content
     assert isinstance(block, types.TextContent)
     assert block.text == json.dumps(result.structured_content, separators=(",", ":"),
@@ -60,6 +62,7 @@ def _on_ground(gateway: Gateway) -> dict[str, tuple[bool, str]]:
 
 
 async def test_lists_every_tool_with_strict_input_and_shared_output_schema() -> None:
+    from mcp import Client
     registry = default_registry()
     async with Client(build_server(registry, lambda: None)) as client:
         listed = (await client.list_tools()).tools
@@ -76,6 +79,7 @@ async def test_lists_every_tool_with_strict_input_and_shared_output_schema() -> 
 
 
 def test_call_result_flags_error_statuses_only() -> None:
+    import mcp_types as types
     for status, flagged in [("ok", False), ("partial", False), ("blocked", False),
                             ("timeout", False), ("rejected", True), ("error", True)]:
         result = call_result({"status": status, "message": "m", "n": [1, 2]})
@@ -89,6 +93,7 @@ def test_call_result_flags_error_statuses_only() -> None:
 
 
 async def test_calls_without_a_running_task_are_errors() -> None:
+    from mcp import Client
     async with Client(build_server(default_registry(), lambda: None)) as client:
         idle = await client.call_tool("list_drones", {})
         unknown = await client.call_tool("teleport", {})
@@ -99,6 +104,7 @@ async def test_calls_without_a_running_task_are_errors() -> None:
 
 @pytest.mark.slow
 async def test_stdio_server_in_a_subprocess() -> None:
+    from mcp import Client, StdioServerParameters
     code = ("import anyio; from llm_tools import default_registry; "
             "from llm_tools.mcp_server import serve_stdio; "
             "anyio.run(lambda: serve_stdio(default_registry(), lambda: None))")
@@ -112,6 +118,7 @@ async def test_stdio_server_in_a_subprocess() -> None:
 
 @pytest.mark.mavsdk
 async def test_in_process_client_flies_a_real_swarm() -> None:
+    from mcp import Client
     async with _swarm() as (gateway, drone, altitude_m):
         tools = _task_tools(gateway)
         async with Client(build_server(default_registry(), lambda: tools)) as client:
@@ -152,6 +159,7 @@ async def test_in_process_client_flies_a_real_swarm() -> None:
 
 @pytest.mark.mavsdk
 async def test_streamable_http_client_flies_a_real_swarm_and_sees_a_spent_budget() -> None:
+    from mcp import Client
     async with _swarm() as (gateway, drone, altitude_m):
         current = [_task_tools(gateway)]
         app = streamable_http_app(default_registry(), lambda: current[0])

@@ -15,7 +15,6 @@ from typing import Any
 
 import httpx
 import pytest
-from mcp import Client, StdioServerParameters
 
 from benchmark.authoring.session_file import dump_session
 from benchmark.server import Hub, Role, create_app
@@ -184,6 +183,8 @@ async def test_mcp_server_over_streamable_http(tmp_path: Path,
     path = _write(tmp_path, session_data)
     op = session_data["tasks"][0]["oracle"][0][0]
 
+    from mcp import Client
+
     def start(ready: Callable[[str], None]) -> Coroutine[Any, Any, None]:
         return serve_mcp(path, transport="http", host="127.0.0.1", port=0, on_ready=ready)
 
@@ -205,6 +206,8 @@ async def test_mcp_server_over_streamable_http(tmp_path: Path,
 @pytest.mark.mavsdk
 async def test_mcp_server_over_stdio_in_a_subprocess(tmp_path: Path,
                                                      session_data: dict[str, Any]) -> None:
+    from mcp import Client, StdioServerParameters  # the MCP SDK: only where a test uses it
+
     path = _write(tmp_path, session_data)
     params = StdioServerParameters(command=MAVSWARM[0], args=[*MAVSWARM[1:], "mcp", str(path)],
                                    cwd=str(Path(__file__).resolve().parents[1]))

@@ -10,7 +10,6 @@ from collections.abc import Iterator
 from typing import Any
 
 import httpx
-from mcp import Client
 
 from agent_contract.tools import RESULT_STATUSES
 from benchmark.server import Hub, Role, create_app
@@ -45,6 +44,7 @@ def _of(lists: Lists, name: str) -> list[list[Any]]:
 
 
 async def _surfaces() -> dict[str, Lists]:
+    from mcp import Client
     hub = Hub()
     hub.add_key("key-admin", Role.ADMIN, None)
     transport = httpx.ASGITransport(app=create_app(hub))

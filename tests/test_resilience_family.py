@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from mcp import Client
 
 from benchmark.authoring.generate import build_task
 from benchmark.authoring.scenarios import LEVELS, generate_world
@@ -76,6 +75,7 @@ def test_task_texts_state_the_goal_never_the_fault() -> None:
 
 @pytest.mark.mavsdk
 async def test_no_rest_or_mcp_payload_for_agents_mentions_the_scheduled_faults() -> None:
+    from mcp import Client
     data = small_session(KEYS, family="resilience", seed=7)
     assert all(task.get("faults") for task in data["tasks"])
     async with served(data=data) as s:

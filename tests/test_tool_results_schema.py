@@ -12,7 +12,6 @@ from typing import Any
 import httpx
 import pytest
 from jsonschema import Draft202012Validator
-from mcp import Client
 from openai.types.chat import ChatCompletionMessage
 
 from agent_contract import AgentTask, AgentTools, TaskBudget
@@ -99,6 +98,7 @@ async def _check_every_tool(gateway: Gateway, registry: ToolRegistry, surface: s
 
 @pytest.mark.mavsdk
 async def test_every_tool_result_validates_on_rest_mcp_and_openai() -> None:
+    from mcp import Client
     data = small_session(["takeoff_hold"])
     session = session_from_dict(data, source="s.json")
     task = session.tasks[0]
@@ -163,6 +163,7 @@ def test_an_outcome_cannot_hide_its_own_fields_behind_its_data() -> None:
 
 
 async def test_every_surface_lists_the_statuses_of_the_one_type() -> None:
+    from mcp import Client
     statuses = [s.value for s in Status] + [ERROR_STATUS]
     assert list(RESULT_STATUSES) == statuses
     assert {"unknown", "failed"} <= set(statuses)
