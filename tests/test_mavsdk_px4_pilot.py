@@ -134,7 +134,11 @@ async def test_follow_me_example_follows_the_target_at_the_configured_distance(
         dx, dy = rows[:, 1] - tx, rows[:, 2] - ty
         # left of a north-east walker: north-west of it, 12 m off, at 15 m
         left = np.array([-1.0, 1.0]) / math.sqrt(2.0) * 12.0
-        assert np.abs(dx - left[0]).max() < 0.5 and np.abs(dy - left[1]).max() < 0.5
+        # The phone reports in wall time while the swarm runs at 5x: on a loaded machine a
+        # report comes late now and then and the vehicle briefly follows an older estimate.
+        off = np.hypot(dx - left[0], dy - left[1])
+        assert np.percentile(off, 95) < 0.1 and off.max() < 1.0, (np.percentile(off, 95),
+                                                                  off.max())
         assert np.abs(rows[:, 3] - 15.0).max() < 0.1
         await follow_me.stop()
         await first(telemetry.subscribe_flight_mode(), lambda m: m == FlightMode.HOLD, 3.0,
