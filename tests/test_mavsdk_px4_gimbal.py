@@ -29,8 +29,12 @@ async def test_gimbal_example_takes_control_and_aims(swarm_factory, mavsdk_clien
         assert (item.gimbal_manager_component_id, item.gimbal_device_id) == (1, 154)
         assert (item.vendor_name, item.model_name) == ("mavswarm", "gimbal")
         await gimbal.take_control(item.gimbal_id, ControlMode.PRIMARY)
-        control = await gimbal.get_control_status(item.gimbal_id)
-        assert control.control_mode == ControlMode.PRIMARY
+
+        async def in_control() -> bool:  # from the next GIMBAL_MANAGER_STATUS on
+            control = await gimbal.get_control_status(item.gimbal_id)
+            return bool(control.control_mode == ControlMode.PRIMARY)
+
+        await eventually(in_control, 5.0, "MAVSDK reading primary control")
         await gimbal.set_angles(item.gimbal_id, 0.0, -45.0, 20.0, GimbalMode.YAW_FOLLOW,
                                 SendMode.ONCE)
         truth = swarm.links[1].gimbal
