@@ -233,14 +233,6 @@ def _up_networks(args: argparse.Namespace, clock: ClockConfig, total: int) -> in
     return 0
 
 
-class _Stop(Exception):
-    """Ctrl-C or SIGTERM reached the process that started the networks."""
-
-
-def _raise_stop(signum: int, frame: object) -> None:
-    raise _Stop(signal.Signals(signum).name)
-
-
 def _supervise(procs: list[multiprocessing.Process]) -> None:
     """Wait for the network processes; on Ctrl-C or SIGTERM stop them all (each writes its
     figures and truth), killing any still running after STOP_GRACE_S.
@@ -249,12 +241,13 @@ def _supervise(procs: list[multiprocessing.Process]) -> None:
     process (numpy's, say) does not interrupt a blocking wait of the main thread, so a plain
     `join` could sleep through Ctrl-C; and SIGTERM is handled as Ctrl-C, so stopping this
     process never leaves its networks running on their own."""
-    previous = {sig: signal.signal(sig, _raise_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    previous = {sig: signal.signal(sig, signal.default_int_handler)  # KeyboardInterrupt
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         while any(proc.is_alive() for proc in procs):
             multiprocessing.connection.wait([proc.sentinel for proc in procs],
                                             timeout=SUPERVISE_POLL_S)
-    except (_Stop, KeyboardInterrupt):
+    except KeyboardInterrupt:
         for proc in procs:
             proc.terminate()
         deadline = time.monotonic() + STOP_GRACE_S

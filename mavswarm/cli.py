@@ -32,7 +32,7 @@ from emulator import cli as emulator_cli
 from mavlink_gateway import set_mavsdk_log
 from mqtt_bus import cli as mqtt_cli
 
-__all__ = ["OneLineParser", "build_parser", "main", "stop_on_ctrl_c"]
+__all__ = ["OneLineParser", "build_parser", "main"]
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -58,7 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def stop_on_ctrl_c() -> None:
+def _stop_on_ctrl_c() -> None:
     """Make Ctrl-C (SIGINT) stop the command, as every command says it does.
 
     A shell starts a command in the background (`mavswarm up &` in a script, a CI step) with
@@ -72,7 +72,7 @@ def stop_on_ctrl_c() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `mavswarm` with `argv` (default: the process's arguments); the exit status."""
-    stop_on_ctrl_c()
+    _stop_on_ctrl_c()
     args = build_parser().parse_args(argv)
     verbose = bool(getattr(args, "verbose", False))
     set_mavsdk_log(verbose)  # MAVSDK's own log lines: off unless --verbose

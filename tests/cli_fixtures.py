@@ -71,7 +71,6 @@ def run_in_process(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
                                        err.getvalue())
 
 
-
 def run_in_process_thread(*args: str, cwd: Path, timeout_s: float = 300.0
                           ) -> subprocess.CompletedProcess[str]:
     """`run_in_process` on a thread of its own, for a caller whose thread holds an event loop

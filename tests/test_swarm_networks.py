@@ -132,15 +132,7 @@ def test_up_runs_networks_of_250_in_one_process() -> None:
                                 seen[j].add(m.get_srcSystem())
         assert seen == expected
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            out, _ = proc.communicate(timeout=90)
-        except subprocess.TimeoutExpired:  # leave no swarm process behind, then fail
-            for child in _children(proc.pid):
-                os.kill(child, signal.SIGKILL)
-            proc.kill()
-            out, _ = proc.communicate(timeout=10)
-            out += "\n(did not stop within 90 s of Ctrl-C)"
+        out = _stopped(proc, signal.SIGINT)
         for sock in receivers:
             sock.close()
     assert proc.returncode == 0, out
@@ -156,17 +148,26 @@ def test_sigterm_stops_every_network_process_as_ctrl_c_does() -> None:
         read_until(proc, "MAVProxy", timeout_s=60.0)
         children = _children(proc.pid)
         assert children, "the networks run in a process of their own"
-        proc.terminate()
-        out, _ = proc.communicate(timeout=90)
     finally:
-        if proc.poll() is None:  # leave no swarm process behind, then fail
-            for child in _children(proc.pid):
-                os.kill(child, signal.SIGKILL)
-            proc.kill()
-            proc.wait()
+        out = _stopped(proc, signal.SIGTERM)
     assert proc.returncode == 0, out
     assert "[nets 0-1] stopping after" in out
     assert not [pid for pid in children if Path(f"/proc/{pid}").exists()]
+
+
+def _stopped(proc: subprocess.Popen[str], sig: signal.Signals) -> str:
+    """Send `sig` and wait up to 90 s for the process to end; what it printed. A process that
+    does not stop is killed with its children (none is left behind) and the output says so."""
+    proc.send_signal(sig)
+    try:
+        out, _ = proc.communicate(timeout=90)
+    except subprocess.TimeoutExpired:
+        for child in _children(proc.pid):
+            os.kill(child, signal.SIGKILL)
+        proc.kill()
+        out, _ = proc.communicate(timeout=10)
+        out += f"\n(did not stop within 90 s of {sig.name})"
+    return out
 
 
 def _children(pid: int) -> list[int]:
