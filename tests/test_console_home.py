@@ -69,7 +69,7 @@ def test_an_unbuilt_page_says_how_to_build_it(browser: Any, unbuilt: dict[str, s
     port = unused_tcp_port()
     proc = _mavswarm(unbuilt, tmp_path, "replay", str(results), "--port", str(port))
     try:
-        printed = read_until(proc, "npm", 30)
+        printed = read_until(proc, "npm ci", 30)
         assert "run inspector: http://" in printed
         assert "not built" in printed and "npm ci && npm run build" in printed
         with open_page(browser, f"http://127.0.0.1:{port}/runs") as page:
@@ -88,7 +88,7 @@ def test_up_web_says_the_page_is_not_built(unbuilt: dict[str, str], tmp_path: Pa
                      "--web-port", str(unused_tcp_port()), "--api-port", str(unused_udp_port()),
                      "--gcs-port", "0", "--bind-port", str(unused_udp_port()))
     try:
-        printed = read_until(proc, "npm", 60)
+        printed = read_until(proc, "npm ci", 60)  # not "npm": a random key may hold it
         assert "web console: http://" in printed
         assert "the web console's page is not built" in printed
     finally:

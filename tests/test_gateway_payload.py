@@ -217,6 +217,7 @@ async def test_charge_at_a_station():
         assert m and 35 <= int(m.group(1)) <= 40, out.message
         assert_consistent(s, out, "d1")
         assert out.state.flight_state == "on_ground" and not out.state.armed
+        await s.settle()  # one called charged at 99 % charges on to full where it rests
         # It flew there (no teleport), landed on the station, and charged in simulated time.
         assert math.hypot(ap.position_m[0] - 50.0, ap.position_m[1]) <= 5.0
         assert not ap.in_air and not ap.armed and ap.battery_pct == 100.0
@@ -237,6 +238,7 @@ async def test_charge_at_a_station():
         assert re.fullmatch(r"d1 charged at st-1 from \d+% to (99|100)%", out.message), \
             out.message
         assert_consistent(s, out, "d1")
+        await s.settle()
         kinds = [e.kind for e in s.swarm.recorder.events("d1", t0_s=t1)]
         assert "takeoff" not in kinds
         assert kinds.index("landed") < kinds.index("charging") < kinds.index("charged")
