@@ -384,7 +384,14 @@ async def test_five_drones_fly_concurrently_and_a_busy_drone_refuses():
         goals = {d: (5.0 * i + 100.0 * math.sin(i * 1.2), 100.0 * math.cos(i * 1.2), 15.0)
                  for i, d in enumerate(ids)}
         t0 = s.now_s
-        outs = await asyncio.gather(*(gw.move_to(d, *goals[d]) for d in ids))
+        # The clock is pinned until all five fly: stepped, the first drone's flight would
+        # otherwise run on while a loaded machine sends the other commands in wall time.
+        pin = s.swarm.pin()
+        moves = asyncio.gather(*(gw.move_to(d, *goals[d]) for d in ids))
+        while not s.swarm.fleet.busy.all() and not moves.done():
+            await asyncio.sleep(0.001)
+        s.swarm.release_clock(pin)
+        outs = await moves
         assert [o.status for o in outs] == [Status.OK] * 5, outs
         elapsed = s.now_s - t0
         spans = []
