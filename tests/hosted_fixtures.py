@@ -97,9 +97,11 @@ class Host:
         return self.proc.returncode, self.printed + rest
 
     def kill(self) -> None:
+        """Stop it if it still runs; what it printed goes to stderr (shown if the test fails)."""
         if self.proc.poll() is None:
             self.proc.kill()
-            self.proc.communicate(timeout=10)
+            rest, _ = self.proc.communicate(timeout=10)
+            sys.stderr.write(f"the hosted run printed:\n{self.printed}{rest or ''}")
 
 
 def start_host(sessions: list[Path], out: Path, *extra: str) -> Host:

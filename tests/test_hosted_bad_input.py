@@ -1,7 +1,9 @@
 """A hosted run under garbage from its agents: bad `/next` queries, a `/next` while the one
 task hosted is out, missing, unknown and stale keys, calls after `finish`, unknown tools and
 sessions, malformed and 1 MiB bodies, hundreds of concurrent requests. Each gets a clear 4xx
-and changes nothing; the run still records every task exactly once and exits 0."""
+and changes nothing; the run still records every task exactly once and exits 0. A connection
+left idle longer than HTTP clients keep theirs is still answered on (the client closes first,
+so a reused connection is never reset under a request)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import h11
 import httpx
 import pytest
 
@@ -74,6 +77,28 @@ async def _task_refusals(http: httpx.AsyncClient, offer: dict[str, Any]) -> None
     assert "checks" not in str(seen) and "oracle" not in str(seen)
 
 
+async def _answered_after_idling(url: str, path: str, key: str, idle_s: float) -> list[int]:
+    """The statuses of two GETs of `path` on one connection, `idle_s` apart."""
+    parts = httpx.URL(url)
+    reader, writer = await asyncio.open_connection(parts.host, parts.port)
+    conn, statuses = h11.Connection(h11.CLIENT), []
+    try:
+        for pause_s in (0.0, idle_s):
+            await asyncio.sleep(pause_s)
+            writer.write(conn.send(h11.Request(method="GET", target=path, headers=[
+                ("Host", parts.host), ("X-API-Key", key)])) + conn.send(h11.EndOfMessage()))
+            await writer.drain()
+            while not isinstance(event := conn.next_event(), h11.EndOfMessage):
+                if event is h11.NEED_DATA:
+                    conn.receive_data(await reader.read(65536))
+                elif isinstance(event, h11.Response):
+                    statuses.append(event.status_code)
+            conn.start_next_cycle()
+    finally:
+        writer.close()
+    return statuses
+
+
 async def test_garbage_gets_clear_4xx_and_changes_nothing(tmp_path: Path) -> None:
     session = session_file(tmp_path)
     host = start_host([session], tmp_path / "out")
@@ -83,6 +108,8 @@ async def test_garbage_gets_clear_4xx_and_changes_nothing(tmp_path: Path) -> Non
             await _endpoint_refusals(http, host.url)
             first = (await http.get(f"{host.url}/next")).json()
             assert first["task_id"] == "t01" and set(first["drones"]) == {"d1", "d2", "d3"}
+            idler = asyncio.create_task(_answered_after_idling(
+                first["base_url"], "/sessions/current/task-progress", first["key"], 5.5))
             r = await http.get(f"{host.url}/next")  # one session hosted, its task is out
             assert r.status_code == 409 and "t01" in _detail(r) and "finish" in _detail(r)
             await _task_refusals(http, first)
@@ -102,6 +129,11 @@ async def test_garbage_gets_clear_4xx_and_changes_nothing(tmp_path: Path) -> Non
             after = await http.post(f"{first['tools_url']}/finish",
                                     headers={"X-API-Key": first["key"]}, json={})
             assert after.status_code == 410 and "has ended" in _detail(after)
+
+            # Idle past the clients' 5 s, the same connection still answers (410 once the task
+            # has ended), rather than being closed by the server.
+            first_status, later_status = await idler
+            assert first_status == 200 and later_status in (200, 410)
 
             second = (await http.get(f"{host.url}/next")).json()
             assert second["task_id"] == "t02" and second["key"] != first["key"]

@@ -35,6 +35,7 @@ from benchmark.running.episode import CLOCKS
 from benchmark.server import Hub, create_app
 from benchmark.server.api_keys import ApiKey, generated_keys, parse_api_key
 from benchmark.server.api_keys import add_keys as _add_keys
+from benchmark.server.http_config import uvicorn_config
 from benchmark.server.hub import LiveSession
 from benchmark.server.listen import listen_socket
 from benchmark.server.operator_rule import served_refusal
@@ -117,8 +118,7 @@ async def serve_asgi(app: Any, *, host: str, port: int,
     """Run `app` under uvicorn until this task is cancelled or the server is told to stop
     by a signal; `on_ready(base_url)` is called once it listens (port 0 picks a free one)."""
     sock = listen_socket(host, port)  # a busy port: one OSError, before uvicorn starts
-    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level="warning",
-                                           lifespan="on"))
+    server = uvicorn.Server(uvicorn_config(app, host=host, port=port, lifespan="on"))
     task = asyncio.create_task(server.serve(sockets=[sock]))
     try:
         while not server.started:

@@ -19,7 +19,6 @@ from collections.abc import AsyncIterator, Callable
 from typing import Annotated, Any
 
 import httpx
-import uvicorn
 from fastapi import FastAPI, HTTPException, Query, Request
 from fastapi.responses import JSONResponse, Response
 
@@ -27,6 +26,7 @@ from benchmark.running.hosted.board import AllOut, Board, NotYet
 from benchmark.running.hosted.offer import TaskOffer
 from benchmark.running.hosted.unit_server import TAKEN_PATH, QuietServer
 from benchmark.server.auth import API_KEY_HEADER
+from benchmark.server.http_config import uvicorn_config
 from llm_tools.body_limit import BodyLimit
 
 __all__ = ["DEFAULT_WAIT_S", "Endpoint", "Seats", "endpoint_app"]
@@ -211,8 +211,8 @@ class Endpoint:
     async def _serve(self) -> None:
         self._loop = asyncio.get_running_loop()
         self._board.bind(self._loop)
-        config = uvicorn.Config(endpoint_app(self._board, self._seats), log_level="warning",
-                                lifespan="on", timeout_graceful_shutdown=1)
+        config = uvicorn_config(endpoint_app(self._board, self._seats), lifespan="on",
+                                timeout_graceful_shutdown=1)
         self._server = QuietServer(config)
         task = asyncio.create_task(self._server.serve(sockets=[self._sock]))
         while not self._server.started and not task.done():

@@ -31,6 +31,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from benchmark.running.hosted.offer import TokenUse
 from benchmark.server import Hub, Role, create_app
 from benchmark.server.auth import API_KEY_HEADER, live_session, require
+from benchmark.server.http_config import uvicorn_config
 from benchmark.server.hub import Caller, LiveSession
 from llm_tools.body_limit import BodyLimit
 from llm_tools.input_limits import preview
@@ -144,8 +145,8 @@ class UnitServer:
 
     async def start(self) -> str:
         """Listen on a free port; the base URL agents reach it at."""
-        config = uvicorn.Config(self.app, host=self.host, port=0, log_level="warning",
-                                lifespan="off", timeout_graceful_shutdown=1)
+        config = uvicorn_config(self.app, host=self.host, port=0, lifespan="off",
+                                timeout_graceful_shutdown=1)
         self._server = QuietServer(config)
         # In a context of its own: requests must not inherit the thread of control of the
         # task that happened to start the server (HostedTools runs them as the current one).
