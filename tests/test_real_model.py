@@ -27,6 +27,7 @@ from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import session_from_dict
 from benchmark.running.episode import run_session
 from benchmark.running.results import read_records
+from llm_tools.registry import ToolRegistry
 from swarm_agents.llm import ModelConfig, OpenAIChatModel, ReactAgent, WorkflowAgent
 from tests.bench_fixtures import small_session, write_json
 from tests.cli_fixtures import run_in_process
@@ -191,11 +192,14 @@ class _Observed:
 
 async def test_react_and_workflow_agents_end_each_task_with_a_reason(llama_url: str) -> None:
     """Both agents through the benchmark's episode (in process, with tighter limits than the
-    command line's), each task watched to the end."""
+    command line's, and the tools a take-off-and-hold task needs: the planner's prompt lists
+    every tool it is given, and a CPU reads each prompt token), each task watched to the
+    end."""
     session = session_from_dict(small_session(KEYS[:1]), source="s.json")
     config = ModelConfig(base_url=llama_url, model=MODEL, max_completion_tokens=ANSWER_TOKENS)
-    agents = [_Observed(ReactAgent(config, max_steps=4)),
-              _Observed(WorkflowAgent(config, max_steps=6, max_rounds=1))]
+    tools = ToolRegistry(["list_drones", "drone_state", "take_off", "hover", "land", "finish"])
+    agents = [_Observed(ReactAgent(config, registry=tools, max_steps=4)),
+              _Observed(WorkflowAgent(config, registry=tools, max_steps=6, max_rounds=1))]
     for observed in agents:
         records: list[dict[str, Any]] = []
         await asyncio.wait_for(run_session(session, observed, emit=records.append), 240)
