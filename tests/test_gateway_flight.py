@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import asyncio
 import math
+from collections.abc import Awaitable
+from typing import Any
 
 import numpy as np
 import pytest
 
 from emulator.geo import wrap_heading_deg
 from emulator.world import Obstacle, Wind
-from mavlink_gateway import Status
+from mavlink_gateway import Outcome, Status
 from tests.gateway_fixtures import (
     assert_consistent,
     expect_refusal,
@@ -373,25 +375,34 @@ async def test_set_home_then_return_home_lands_there():
         assert (await gw.set_home("d1")).ok
 
 
+async def _all_busy_then(s: Any, calls: list[Awaitable[Outcome]]) -> list[Outcome]:
+    """The outcomes of `calls`, made at once with the stepped clock stopped until every
+    drone is busy (or every call has answered)."""
+    pin = s.swarm.pin()
+    try:
+        together = asyncio.gather(*calls)
+        while not s.swarm.fleet.busy.all() and not together.done():
+            await asyncio.sleep(0.001)
+    finally:
+        s.swarm.release_clock(pin)
+    return await together
+
+
 async def test_five_drones_fly_concurrently_and_a_busy_drone_refuses():
     drones = [vehicle(k, 5.0 * (k - 1), 0.0) for k in range(1, 6)]
     async with gateway_session(tiny_scenario(drones), telemetry_hz=None) as s:
         gw = s.gw
         ids = [f"d{k}" for k in range(1, 6)]
-        outs = await asyncio.gather(*(gw.take_off(d, 10 + 2 * i) for i, d in enumerate(ids)))
+        # The clock is pinned until all five climb: stepped, the first drones' climbs would
+        # otherwise run out the last one's time while a loaded machine arms it in wall time.
+        outs = await _all_busy_then(s, [gw.take_off(d, 10 + 2 * i) for i, d in enumerate(ids)])
         assert [o.status for o in outs] == [Status.OK] * 5, outs
 
         goals = {d: (5.0 * i + 100.0 * math.sin(i * 1.2), 100.0 * math.cos(i * 1.2), 15.0)
                  for i, d in enumerate(ids)}
         t0 = s.now_s
-        # The clock is pinned until all five fly: stepped, the first drone's flight would
-        # otherwise run on while a loaded machine sends the other commands in wall time.
-        pin = s.swarm.pin()
-        moves = asyncio.gather(*(gw.move_to(d, *goals[d]) for d in ids))
-        while not s.swarm.fleet.busy.all() and not moves.done():
-            await asyncio.sleep(0.001)
-        s.swarm.release_clock(pin)
-        outs = await moves
+        # Pinned again until all five fly, for the same reason.
+        outs = await _all_busy_then(s, [gw.move_to(d, *goals[d]) for d in ids])
         assert [o.status for o in outs] == [Status.OK] * 5, outs
         elapsed = s.now_s - t0
         spans = []
