@@ -2,8 +2,9 @@
 (the live view of the swarm it runs) and `mavswarm bench run` (the sessions it runs);
 `mavswarm serve` gets the console under `/console`.
 
-`add_parsers` adds `replay`; `extend_parsers` adds `--web` to `up` and the console to `serve`,
-both defined by the packages below (the composition root calls it after they added theirs).
+`add_parsers` adds `replay`; `extend_up`, `extend_serve` and `extend_bench` add `--web` to `up`
+and `bench run` and the console to `serve`, commands defined by the packages below (the
+composition root calls each after the command's own package added it).
 """
 
 from __future__ import annotations
@@ -19,9 +20,8 @@ from collections.abc import AsyncIterator, Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from benchmark import cli as bench_cli
 from console.frame_rate import DEFAULT_RATE_HZ, check_rate_hz
-from emulator import cli as emulator_cli
+from emulator.capacity import MAX_VEHICLES_PER_NETWORK
 
 if TYPE_CHECKING:  # the rest is imported by the commands that use it: `--help` stays quick
     from benchmark.authoring.session_folders import SessionFolders
@@ -32,8 +32,8 @@ if TYPE_CHECKING:  # the rest is imported by the commands that use it: `--help` 
     from emulator.swarm import Swarm
     from mavlink_gateway import Gateway
 
-__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "add_parsers", "console_for_hub", "extend_parsers",
-           "run_replay", "swarm_console"]
+__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "add_parsers", "console_for_hub", "extend_bench",
+           "extend_serve", "extend_up", "run_replay", "swarm_console"]
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
@@ -58,16 +58,24 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     replay.set_defaults(run=run_replay)
 
 
-def extend_parsers(sub: argparse._SubParsersAction) -> None:
-    """`up --web` and the console of `serve`."""
+def extend_up(sub: argparse._SubParsersAction) -> None:
+    """`up --web`: the live view of the swarm."""
     up = sub.choices["up"]
     _add_web_arguments(up, "serve the web console's live view of the swarm (prints the URL)")
     _add_session_dir_argument(up)
     up.set_defaults(run=_run_up, run_up_next=up.get_default("run"))
+
+
+def extend_serve(sub: argparse._SubParsersAction) -> None:
+    """The console of `serve`, under /console."""
     serve = sub.choices["serve"]
     _add_session_dir_argument(serve)
     serve.set_defaults(extend=console_for_hub, run=_run_serve,
                        run_serve_next=serve.get_default("run"))
+
+
+def extend_bench(sub: argparse._SubParsersAction) -> None:
+    """`bench run --web`: the console following the sessions being run."""
     bench = sub.choices["bench"]
     bench_sub = next(a for a in bench._actions if isinstance(a, argparse._SubParsersAction))
     run = bench_sub.choices["run"]
@@ -75,7 +83,7 @@ def extend_parsers(sub: argparse._SubParsersAction) -> None:
                             "it stays open after the run until Ctrl-C")
     run.add_argument("--web-exit", action="store_true",
                      help="--web: close the console and exit when the run ends")
-    bench.set_defaults(run=_run_bench)
+    bench.set_defaults(run=_run_bench, run_bench_next=bench.get_default("run"))
 
 
 def _add_web_arguments(parser: argparse.ArgumentParser, what: str) -> None:
@@ -197,7 +205,7 @@ async def swarm_console(swarm: Swarm, *, host: str = DEFAULT_HOST, port: int = D
 
 def _run_up(args: argparse.Namespace) -> int:
     if args.web:
-        most = emulator_cli.MAX_VEHICLES_PER_NETWORK
+        most = MAX_VEHICLES_PER_NETWORK
         if args.session is None and (args.drones or 0) > most:
             print(f"mavswarm: --web shows one swarm of at most {most} drones; {args.drones} "
                   "run as several networks", file=sys.stderr)
@@ -216,7 +224,7 @@ def _run_up(args: argparse.Namespace) -> int:
 
 def _run_bench(args: argparse.Namespace) -> int:
     if args.bench_command != "run" or not args.web:
-        return bench_cli.run_bench(args)
+        return int(args.run_bench_next(args))
     # Only here: the console's app (its editor, the oracle, scipy) is a third of a second of
     # start-up that every other `bench` command would pay.
     from console.bench_watch import LiveBoard, serve_in_thread
@@ -226,7 +234,7 @@ def _run_bench(args: argparse.Namespace) -> int:
                              rate_hz=args.web_hz) as (url, key):
             _print(f"web console: {url}/?key={key} (pick the session to follow)")
             args.live_hz, args.on_live = args.web_hz, board.update
-            status = bench_cli.run_bench(args)
+            status = int(args.run_bench_next(args))
             if args.web_exit or status in (2, 130):  # asked to, bad input, or interrupted
                 return status
             _print(f"the run is over; the web console stays open at {url}/?key={key} until "

@@ -11,13 +11,16 @@
 packages' info logging; without it MAVSDK is silent.
 
 Each package adds its subcommands with `add_parsers(subparsers)` and names the function that
-runs them (`run`, taking the parsed options, returning the exit status); this module only
-assembles them.
+runs them (`run`, taking the parsed options, returning the exit status); a package above may
+add to a command below it (`extend_up`...). This module only assembles them, and imports only
+the parts of the command asked for: `mavswarm up` does not load the benchmark or the REST
+server (`--help` and an unknown command load every part).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import logging
 import signal
 import sys
@@ -25,14 +28,32 @@ import threading
 from collections.abc import Sequence
 from typing import NoReturn
 
-from benchmark import cli as bench_cli
-from benchmark.server import serve
-from console import cli as console_cli
-from emulator import cli as emulator_cli
 from mavlink_gateway import set_mavsdk_log
-from mqtt_bus import cli as mqtt_cli
 
 __all__ = ["OneLineParser", "build_parser", "main"]
+
+PARTS = (
+    "emulator.cli:add_parsers",  # up
+    "mqtt_bus.cli:extend_up",
+    "benchmark.server.serve:add_parsers",  # serve, mcp
+    "benchmark.cli:add_parsers",  # bench
+    "mqtt_bus.cli:add_parsers",  # mqtt-bridge
+    "console.cli:add_parsers",  # replay
+    "console.cli:extend_up",
+    "console.cli:extend_serve",
+    "console.cli:extend_bench",
+)
+"""Every part of the command line, `module:function(subparsers)`, in the order they apply."""
+
+COMMAND_PARTS = {
+    "up": ("emulator.cli:add_parsers", "mqtt_bus.cli:extend_up", "console.cli:extend_up"),
+    "serve": ("benchmark.server.serve:add_parsers", "console.cli:extend_serve"),
+    "mcp": ("benchmark.server.serve:add_parsers",),
+    "bench": ("benchmark.cli:add_parsers", "console.cli:extend_bench"),
+    "mqtt-bridge": ("mqtt_bus.cli:add_parsers",),
+    "replay": ("console.cli:add_parsers",),
+}
+"""The parts each command needs: the one that defines it and those that add to it."""
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -43,19 +64,24 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The whole command line."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole command line, or the part of it `command` needs (a command that does not
+    exist gets the whole, so that its error lists every command)."""
     parser = OneLineParser(prog="mavswarm", description=__doc__.split("\n\n")[0],
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    emulator_cli.add_parsers(sub)
-    mqtt_cli.extend_up(sub.choices["up"])
-    serve.add_parsers(sub)
-    bench_cli.add_parsers(sub)
-    mqtt_cli.add_parsers(sub)
-    console_cli.add_parsers(sub)
-    console_cli.extend_parsers(sub)
+    wanted = COMMAND_PARTS.get(command or "", PARTS)
+    for part in PARTS:
+        if part in wanted:
+            module, function = part.split(":")
+            getattr(importlib.import_module(module), function)(sub)
     return parser
+
+
+def _command(argv: Sequence[str]) -> str | None:
+    """The command named on the line (its first word: `mavswarm` itself takes no options but
+    --help)."""
+    return argv[0] if argv and not argv[0].startswith("-") else None
 
 
 def _stop_on_ctrl_c() -> None:
@@ -73,7 +99,8 @@ def _stop_on_ctrl_c() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `mavswarm` with `argv` (default: the process's arguments); the exit status."""
     _stop_on_ctrl_c()
-    args = build_parser().parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(_command(words)).parse_args(words)
     verbose = bool(getattr(args, "verbose", False))
     set_mavsdk_log(verbose)  # MAVSDK's own log lines: off unless --verbose
     if verbose:

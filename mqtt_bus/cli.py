@@ -49,8 +49,9 @@ def mqtt_options(args: argparse.Namespace) -> BrokerUrl | None:
 
 
 # ---------------------------------------------------------------------- up
-def extend_up(up: argparse.ArgumentParser) -> None:
-    """Give `mavswarm up` the --mqtt options."""
+def extend_up(sub: argparse._SubParsersAction) -> None:
+    """Give `mavswarm up` (on the `mavswarm` command's subparsers) the --mqtt options."""
+    up = sub.choices["up"]
     add_mqtt_arguments(up)
     up.set_defaults(run=_run_up)
 
