@@ -10,13 +10,11 @@ import functools
 import sys
 from collections.abc import AsyncIterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from mqtt_bus.session_bus import SessionBus
 from mqtt_bus.topics import check_segment
 from mqtt_bus.url import BrokerUrl, parse_broker_url
-
-if TYPE_CHECKING:  # the bus (and its MQTT client) is imported by `up --mqtt` alone
-    from mqtt_bus.session_bus import SessionBus
 
 __all__ = ["add_mqtt_arguments", "add_parsers", "extend_up", "mqtt_options"]
 

@@ -1,7 +1,6 @@
 """The `mavswarm` command line is assembled from each package's parts, and a command loads only
 its own: each command built alone takes the same options and runs the same function as in
-the whole command line, and `up` starts without the benchmark, the REST server, FastAPI or an
-MQTT client (the mqtt_bus package loads its parts on first use)."""
+the whole command line, and `up` starts without the benchmark, the REST server or FastAPI."""
 
 from __future__ import annotations
 
@@ -51,17 +50,3 @@ def test_up_loads_neither_the_benchmark_nor_the_server() -> None:
     loaded = set(json.loads(out))
     assert "emulator.swarm" in loaded and "console.cli" in loaded
     assert not {m for m in loaded if m == "benchmark" or m.startswith(("benchmark.", "fastapi"))}
-    assert "aiomqtt" not in loaded and "mqtt_bus.bench_bus" not in loaded  # no --mqtt asked
-
-
-def test_mqtt_bus_names_load_on_first_use() -> None:
-    import importlib
-
-    import mqtt_bus
-    assert sorted(mqtt_bus.__all__) == sorted(mqtt_bus._EXPORTS)
-    for name in mqtt_bus.__all__:
-        assert getattr(mqtt_bus, name) is getattr(
-            importlib.import_module(mqtt_bus._EXPORTS[name]), name)
-    assert set(mqtt_bus.__all__) <= set(dir(mqtt_bus))
-    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
-        _ = mqtt_bus.nothing
