@@ -32,28 +32,21 @@ from mavlink_gateway import set_mavsdk_log
 
 __all__ = ["OneLineParser", "build_parser", "main"]
 
-PARTS = (
-    "emulator.cli:add_parsers",  # up
-    "mqtt_bus.cli:extend_up",
-    "benchmark.server.serve:add_parsers",  # serve, mcp
-    "benchmark.cli:add_parsers",  # bench
-    "mqtt_bus.cli:add_parsers",  # mqtt-bridge
-    "console.cli:add_parsers",  # replay
-    "console.cli:extend_up",
-    "console.cli:extend_serve",
-    "console.cli:extend_bench",
+PARTS: tuple[tuple[str, frozenset[str]], ...] = (
+    ("emulator.cli:add_parsers", frozenset({"up"})),
+    ("mqtt_bus.cli:extend_up", frozenset({"up"})),
+    ("benchmark.server.serve:add_parsers", frozenset({"serve", "mcp"})),
+    ("benchmark.cli:add_parsers", frozenset({"bench"})),
+    ("mqtt_bus.cli:add_parsers", frozenset({"mqtt-bridge"})),
+    ("console.cli:add_parsers", frozenset({"replay"})),
+    ("console.cli:extend_up", frozenset({"up"})),
+    ("console.cli:extend_serve", frozenset({"serve"})),
+    ("console.cli:extend_bench", frozenset({"bench"})),
 )
-"""Every part of the command line, `module:function(subparsers)`, in the order they apply."""
+"""Every part of the command line, `module:function(subparsers)`, in the order they apply,
+with the commands it defines or adds to."""
 
-COMMAND_PARTS = {
-    "up": ("emulator.cli:add_parsers", "mqtt_bus.cli:extend_up", "console.cli:extend_up"),
-    "serve": ("benchmark.server.serve:add_parsers", "console.cli:extend_serve"),
-    "mcp": ("benchmark.server.serve:add_parsers",),
-    "bench": ("benchmark.cli:add_parsers", "console.cli:extend_bench"),
-    "mqtt-bridge": ("mqtt_bus.cli:add_parsers",),
-    "replay": ("console.cli:add_parsers",),
-}
-"""The parts each command needs: the one that defines it and those that add to it."""
+COMMANDS = frozenset().union(*(commands for _, commands in PARTS))
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -70,9 +63,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = OneLineParser(prog="mavswarm", description=__doc__.split("\n\n")[0],
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    wanted = COMMAND_PARTS.get(command or "", PARTS)
-    for part in PARTS:
-        if part in wanted:
+    for part, commands in PARTS:
+        if command not in COMMANDS or command in commands:
             module, function = part.split(":")
             getattr(importlib.import_module(module), function)(sub)
     return parser

@@ -11,6 +11,8 @@ so no socket that binds port 0 (a swarm's, a client's) can take one in between.
 from __future__ import annotations
 
 import fcntl
+import functools
+import itertools
 import os
 import random
 import socket
@@ -56,6 +58,7 @@ def drop_registry() -> None:
         registry.unlink(missing_ok=True)
 
 
+@functools.cache
 def _ephemeral_range() -> tuple[int, int]:
     """The ports the kernel picks from for a socket bound to port 0 (or never bound)."""
     try:
@@ -79,11 +82,7 @@ def _candidates() -> Iterator[int]:
 
 
 def _unused(kind: int, host: str) -> int:
-    tried = 0
-    for port in _candidates():
-        tried += 1
-        if tried > 1000:
-            break
+    for port in itertools.islice(_candidates(), 1000):
         with socket.socket(socket.AF_INET, kind) as s:
             try:
                 s.bind((host, port))
