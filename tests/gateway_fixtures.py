@@ -10,7 +10,7 @@ import asyncio
 import contextlib
 import math
 import time
-from collections.abc import AsyncIterator, Mapping
+from collections.abc import AsyncIterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +22,7 @@ from emulator.services import SwarmServices
 from emulator.swarm import PortPlan, Swarm
 from mavlink_gateway import FleetConnection, Gateway, Outcome, Status, profiles_from_scenario
 from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.flight import ARRIVAL_M
 from tests.ports import unused_udp_port
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "expect_refusal",
     "gateway_session",
     "max_step_m",
+    "near",
     "no_teleport",
     "rejected",
     "same_truth",
@@ -179,6 +181,13 @@ def max_step_m(s: GatewaySession, drone: str, t0_s: float, t1_s: float | None = 
     if len(traj) < 2:
         return 0.0
     return float(np.linalg.norm(np.diff(traj[:, 1:4], axis=0), axis=1).max())
+
+
+def near(s: GatewaySession, drone: str, point: Sequence[float],
+         tol_m: float = ARRIVAL_M) -> None:
+    """The drone's true position is within tol_m (default: the gateway's arrival radius)."""
+    pos = s.ap(drone).position_m
+    assert math.dist(pos, point) <= tol_m, (drone, pos, point)
 
 
 def no_teleport(s: GatewaySession, drone: str, t0_s: float) -> None:
