@@ -28,6 +28,7 @@ from emulator.port_plan import PortPlan
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
 from emulator.swarm_faults import SwarmFaults
+from emulator.telemetry_bursts import TelemetryBursts
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
@@ -41,12 +42,6 @@ STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the 
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
 MAX_STEPS_PER_RUN = 2000
-# Vehicles whose whole telemetry goes out in one loop turn (a burst: a lockstep halt, an
-# operator reset); the others follow on the next turns. A ground station's MAVSDK hands every
-# message to its subscribers through one bounded queue and drops callbacks once a burst
-# overflows it (every vehicle of a large swarm at once does), so the client would wait for
-# telemetry asked again.
-BURST_VEHICLES_PER_TURN = 3
 log = logging.getLogger("mavswarm.swarm")
 
 
@@ -122,6 +117,7 @@ class Swarm:
         # when it gets a message, its vehicle's state changes or it has a gimbal, and leaves
         # when a tick finds it without one, so idle vehicles cost nothing per link tick.
         self._tick_candidates: set[int] = set()
+        self.bursts = TelemetryBursts(self.fleet)
         for link in self.links:
             self.hook_link(link)
         self.endpoints: list[UdpEndpoint] = []
@@ -137,7 +133,6 @@ class Swarm:
         self._clock_holds: dict[object, float] = {}
         self.watches = WatchBoard(self.fleet, self.hold_clock_at, self.release_clock,
                                   self._request_burst)
-        self._bursts: dict[int, int] = {}
 
     # -------------------------------------------------------------- lifecycle
     async def __aenter__(self) -> Swarm:
@@ -193,6 +188,8 @@ class Swarm:
         """Hear what a vehicle's link tells the swarm (its MAVLink signal, its duties)."""
         link.on_mavlink_signal = self.faults.mavlink_signal_changed
         link.on_tick_duty = self._tick_candidates.add
+        link.on_changed = self.bursts.changed
+        self.bursts.changed(link.k)
         if link.needs_tick:
             self._tick_candidates.add(link.k)
 
@@ -320,23 +317,17 @@ class Swarm:
 
     def _request_burst(self, k: int) -> None:
         """Lockstep halt of vehicle k: its whole telemetry now and once more on the next loop
-        turn, every other vehicle's once, so a client sees the stopped state within
-        milliseconds whatever the stream rates (k first: its client waits on it)."""
-        self._burst_first(k, 2)
-        for other in range(self.fleet.n):
-            self._bursts.setdefault(other, 1)
+        turn, once that of every other vehicle that changed since its last (a lossy link: of
+        every other vehicle), so a client sees the stopped state within milliseconds whatever
+        the stream rates (k first: its client waits on it). See emulator.telemetry_bursts."""
+        failed = {ap.k for ap in self.fleet.autopilots if ap.failures.standing_report()}
+        self.bursts.halt(k, also=failed, every_vehicle=self.faults.gate.active)
         self._wake.set()
 
     def send_telemetry_of(self, drone_id: str) -> None:
         """One vehicle's whole telemetry now and once more on the next loop turn."""
-        self._burst_first(self.fleet.index_by_id[drone_id], 2)
+        self.bursts.first(self.fleet.index_by_id[drone_id], 2)
         self._wake.set()
-
-    def _burst_first(self, k: int, count: int) -> None:
-        """Vehicle k's burst before every other one pending."""
-        pending = self._bursts
-        self._bursts = {k: max(count, pending.pop(k, 0))}
-        self._bursts.update(pending)
 
     def wake(self) -> None:
         """Have the scheduler look at the fleet again now (it changed between steps)."""
@@ -344,19 +335,11 @@ class Swarm:
 
     def send_all_telemetry(self) -> None:
         """Every vehicle's whole telemetry on the next loop turn (after an operator reset)."""
-        for k in range(self.fleet.n):
-            self._bursts.setdefault(k, 1)
+        self.bursts.everyone()
         self._wake.set()
 
     def _send_bursts(self) -> None:
-        bursts = self._bursts
-        if len(bursts) <= BURST_VEHICLES_PER_TURN:
-            self._bursts = {}
-        else:  # the first few now, the others on the next turns (see BURST_VEHICLES_PER_TURN)
-            now = list(bursts)[:BURST_VEHICLES_PER_TURN]
-            bursts = {k: self._bursts.pop(k) for k in now}
-        for k in self.left:  # a vehicle that left says nothing more
-            bursts.pop(k, None)
+        bursts = self.bursts.take_turn(self.left)
         if not bursts:
             return
         if self.faults.gate.active:  # a lost MISSION_ITEM_REACHED is told again
@@ -371,10 +354,6 @@ class Swarm:
         on = np.isfinite(schedule.period_s[ks])
         self._send_streams((spec.msg_id, ks[on[:, col]])
                            for col, spec in enumerate(schedule.streams))
-        again = {k: count - 1 for k, count in bursts.items() if count > 1}
-        if again:  # on the next turn, before the vehicles still waiting for their first
-            again.update(self._bursts)
-            self._bursts = again
 
     def _held_at(self) -> float:
         return min(self._clock_holds.values()) if self._clock_holds else math.inf
@@ -412,15 +391,21 @@ class Swarm:
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
                 while self._should_step() and time.monotonic() < deadline:
+                    self.bursts.note_active()
                     fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
-                    self.faults.fire_due()
+                    if self.faults.fire_due():
+                        self.bursts.all_changed()
                     self._release_waiters()
                     self.watches.check()
             else:
                 assert self._pacer is not None
-                for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
+                due = self._pacer.steps_due(wall, fleet.step_count)
+                if due:
+                    self.bursts.note_active()
+                for _ in range(due):
                     fleet.step()
-                    self.faults.fire_due()
+                    if self.faults.fire_due():
+                        self.bursts.all_changed()
                 self._release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:
@@ -429,7 +414,7 @@ class Swarm:
                 if next_telemetry <= wall:  # late (or the first turn): keep the cadence from now
                     next_telemetry = wall + tick
                 self._send_telemetry(wall)
-            if self._bursts:
+            if self.bursts.pending:
                 self._send_bursts()
             if wall >= next_link_tick:
                 next_link_tick = wall + LINK_TICK_S
@@ -445,7 +430,7 @@ class Swarm:
             wake_at = max(self.streams.next_wakeup_s(), next_telemetry)
             if self._pacer is not None:  # real time: sleep until a step or telemetry is due
                 wake_at = min(wake_at, self._pacer.next_step_wall_s(fleet.step_count))
-                cap = LOOP_TICK_S if self._bursts else REALTIME_IDLE_S
+                cap = LOOP_TICK_S if self.bursts.pending else REALTIME_IDLE_S
             else:
                 cap = LOOP_TICK_S
             timeout = min(cap, max(0.0, wake_at - time.monotonic()))

@@ -31,6 +31,7 @@ from emulator.mavlink.mission_transfer import MissionTransfer
 from emulator.mavlink.offboard import SETPOINT_APPLIERS, Complaint
 from emulator.mavlink.payload_items import payload_item_reply
 from emulator.mavlink.pilot_input import apply_follow_target, apply_manual_control
+from emulator.mavlink.queries import changes_state
 from emulator.mavlink.reply import Action, Reply, SendMessage, SendOnce
 from emulator.mavlink.streams import CAMERA_HEARTBEAT, StreamSchedule
 from mavlink_vocabulary import MavComponent, MavResult, MessageId
@@ -76,6 +77,9 @@ class VehicleLink:
         # told (with k) whenever this link may have gained a wall-clock duty (`needs_tick`):
         # a message handled, the vehicle's state changed, a payload item reached
         self.on_tick_duty: Callable[[int], None] | None = None
+        # told (with k) whenever what this vehicle's telemetry shows may have changed other
+        # than by flying: a message that is not a query, an autopilot event
+        self.on_changed: Callable[[int], None] | None = None
         ap.listener = self
 
     # ---------------------------------------------------------------- sending
@@ -133,10 +137,12 @@ class VehicleLink:
 
     # ------------------------------------------------------ autopilot listener
     def on_statustext(self, severity: int, text: str) -> None:
+        self._changed()
         self.dedup.on_vehicle_text(severity, text)
         self.statustext(severity, text)
 
     def on_mission_item_reached(self, seq: int) -> None:
+        self._changed()
         self.last_reached = seq
         self.send(mavlink.MAVLink_mission_item_reached_message(seq))
 
@@ -148,12 +154,15 @@ class VehicleLink:
             self.send(mavlink.MAVLink_mission_item_reached_message(self.last_reached))
 
     def on_mission_current(self) -> None:
+        self._changed()
         self.send(msgs.mission_current(self.ap))
 
     def on_home_changed(self) -> None:
+        self._changed()
         self.send_once(MessageId.HOME_POSITION)
 
     def on_image_captured(self, capture: ImageCapture) -> None:
+        self._changed()
         self.send(self.camera.image_captured(self.ap, capture), CAMERA_COMPONENT_ID)
 
     def on_payload_item(self, item: MissionItem) -> None:
@@ -186,6 +195,12 @@ class VehicleLink:
                 handler(self, m)
             finally:
                 self._tick_duty()
+                if changes_state(m):
+                    self._changed()
+
+    def _changed(self) -> None:
+        if self.on_changed is not None:
+            self.on_changed(self.k)
 
     def _tick_duty(self) -> None:
         if self.on_tick_duty is not None:
