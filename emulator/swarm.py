@@ -33,16 +33,30 @@ from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
-LOOP_TICK_S = 0.005  # the longest the loop sleeps (real time: unless nothing is due sooner)
-REALTIME_IDLE_S = 0.02  # real time: the longest sleep when no step or telemetry is due sooner
+LOOP_TICK_S = 0.005  # the longest the loop sleeps while bursts wait for their turn
+# The longest it sleeps otherwise, when no step or telemetry is due sooner: what needs it
+# sooner wakes it (a datagram, a clock released, a watch, a burst asked for).
+IDLE_TICK_S = 0.05
 # Due telemetry is gathered and sent in batches this often, or at the shortest stream period
-# when a client asked for a faster stream (streams are capped at 100 Hz).
+# when a client asked for a faster stream (streams are capped at 100 Hz). When every stream is
+# slower than TICKS_PER_PERIOD ticks of it (a lockstep run's 0.5-2 Hz keep-alive streams), the
+# ticks are a TICKS_PER_PERIOD-th of the shortest period apart, at most TELEMETRY_TICK_MAX_S:
+# each tick costs about the same whatever it sends, and an idle hosted session pays it
+# all the time.
 TELEMETRY_TICK_S = 0.02
+TELEMETRY_TICK_MAX_S = 0.1
+TICKS_PER_PERIOD = 5
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
 MAX_STEPS_PER_RUN = 2000
 log = logging.getLogger("mavswarm.swarm")
+
+
+def telemetry_tick_s(shortest_period_s: float) -> float:
+    """How often due telemetry is gathered, given the shortest stream period (see above)."""
+    slow = min(TELEMETRY_TICK_MAX_S, shortest_period_s / TICKS_PER_PERIOD)
+    return min(shortest_period_s, max(TELEMETRY_TICK_S, slow))
 
 
 @dataclass(frozen=True, slots=True)
@@ -409,7 +423,7 @@ class Swarm:
                 self._release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:
-                tick = min(TELEMETRY_TICK_S, self.streams.shortest_period_s())
+                tick = telemetry_tick_s(self.streams.shortest_period_s())
                 next_telemetry += tick
                 if next_telemetry <= wall:  # late (or the first turn): keep the cadence from now
                     next_telemetry = wall + tick
@@ -430,9 +444,7 @@ class Swarm:
             wake_at = max(self.streams.next_wakeup_s(), next_telemetry)
             if self._pacer is not None:  # real time: sleep until a step or telemetry is due
                 wake_at = min(wake_at, self._pacer.next_step_wall_s(fleet.step_count))
-                cap = LOOP_TICK_S if self.bursts.pending else REALTIME_IDLE_S
-            else:
-                cap = LOOP_TICK_S
+            cap = LOOP_TICK_S if self.bursts.pending else IDLE_TICK_S
             timeout = min(cap, max(0.0, wake_at - time.monotonic()))
             if self.clock.stepped:
                 # Not asyncio.wait_for: before Python 3.12 it swallows a cancellation that
