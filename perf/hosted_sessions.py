@@ -86,7 +86,7 @@ def _agent(url: str, think_s: float, done: list[int], stop: threading.Event) -> 
     with httpx.Client(timeout=None) as http:
         while not stop.is_set():
             answer = http.get(f"{url}/next")
-            if answer.status_code == 204:
+            if answer.status_code in (204, 409):  # the run ended; the tasks left are out
                 return
             if answer.status_code == 503:
                 continue

@@ -25,6 +25,7 @@ is kept with its `error` set, and is recorded as a task error when run.
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -86,6 +87,13 @@ class Session:
     scenario: Scenario
     tasks: tuple[TaskSpec, ...]
     data: Mapping[str, Any]
+
+    @functools.cached_property
+    def fingerprint(self) -> str:
+        """Its session file's fingerprint (benchmark.authoring.fingerprint), worked out once:
+        every task record carries it."""
+        from benchmark.authoring.fingerprint import session_fingerprint
+        return session_fingerprint(self)
 
 
 def task_from_dict(k: int, raw: Any, scenario: Scenario) -> TaskSpec:
