@@ -18,6 +18,7 @@ from benchmark.running.worker_count import (
     INSTANT_SESSIONS_PER_CORE,
     PROCESS_MB,
     SESSION_MB,
+    THINKING_SESSIONS_PER_CORE,
     auto_workers,
     hosting_for,
     parse_workers,
@@ -33,11 +34,14 @@ def test_auto_for_an_instant_agent_follows_the_cores() -> None:
     assert auto_workers("oracle", 3, cores=8) == 3  # never more than the units
 
 
-def test_auto_for_a_thinking_agent_follows_the_memory() -> None:
-    memory = 2 * (2 * PROCESS_MB + 50 * SESSION_MB)  # half of it: 50 sessions after 2 bases
-    assert auto_workers("react", 125, cores=2, memory_mb=memory) == 50
-    assert auto_workers("external", 20, cores=2, memory_mb=memory) == 20
+def test_auto_for_a_thinking_agent_follows_the_memory_and_the_cores() -> None:
+    memory = 2 * (4 * PROCESS_MB + 50 * SESSION_MB)  # half of it: 50 sessions after 4 bases
+    assert auto_workers("react", 125, cores=4, memory_mb=memory) == 50  # memory bound
+    assert auto_workers("external", 20, cores=4, memory_mb=memory) == 20  # the units
     assert auto_workers("pkg.mod:Agent", 125, cores=2, memory_mb=100.0) == 1  # at least one
+    plenty = 1e6  # the cores bound: each session costs CPU while its agent thinks
+    assert auto_workers("react", 125, cores=2, memory_mb=plenty) == 2 * THINKING_SESSIONS_PER_CORE
+    assert auto_workers("external", 125, cores=1, memory_mb=plenty) == THINKING_SESSIONS_PER_CORE
 
 
 def test_hosting_spreads_sessions_over_at_most_one_process_per_core() -> None:

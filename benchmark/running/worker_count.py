@@ -11,7 +11,9 @@ and gateway only, not a process). `--workers auto` picks N from the machine:
   N = INSTANT_SESSIONS_PER_CORE per core;
 - any other agent (a model, a plug-in, an external one) mostly thinks, so N is what memory
   allows: half the available memory, less one base footprint per process, at SESSION_MB per
-  hosted session;
+  hosted session; and what the cores allow: THINKING_SESSIONS_PER_CORE per core, since a
+  session costs CPU even while its agent thinks (its swarm's keep-alive telemetry, its
+  client's side of the links) and more while it flies;
 
 never more than the run has units (session x trial), never fewer than 1.
 """
@@ -23,8 +25,8 @@ import os
 from dataclasses import dataclass
 
 __all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", "SESSION_MB",
-           "Hosting", "auto_workers", "available_memory_mb", "hosting_for", "parse_workers",
-           "shares_processes", "usable_cores"]
+           "THINKING_SESSIONS_PER_CORE", "Hosting", "auto_workers", "available_memory_mb",
+           "hosting_for", "parse_workers", "shares_processes", "usable_cores"]
 
 AUTO = "auto"
 INSTANT_AGENTS = frozenset({"oracle", "noop"})
@@ -37,6 +39,11 @@ MEMORY_SHARE = 0.5  # of the memory available when the run starts
 # Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
 # of its wall time (perf/task_spans.py), so three keep a core busy.
 INSTANT_SESSIONS_PER_CORE = 3
+# Sessions of an agent that thinks, per core: one hosted session costs 1.7-4.2 % of a core
+# while its agent thinks (3 to 30 drones, perf/idle_sessions.py) and its share of the flying
+# besides; with 63 per core the whole suite's sessions kept both cores busy, thinking or not
+# (perf/think_latency.py), with 16 each worker had a third of its core to spare.
+THINKING_SESSIONS_PER_CORE = 16
 
 
 def usable_cores() -> int:
@@ -85,7 +92,7 @@ def auto_workers(agent: str, units: int, *, cores: int | None = None,
         return max(1, min(units, INSTANT_SESSIONS_PER_CORE * cores))
     memory = available_memory_mb() if memory_mb is None else memory_mb
     by_memory = math.floor((memory * MEMORY_SHARE - PROCESS_MB * cores) / SESSION_MB)
-    return max(1, min(units, by_memory))
+    return max(1, min(units, by_memory, THINKING_SESSIONS_PER_CORE * cores))
 
 
 @dataclass(frozen=True)
