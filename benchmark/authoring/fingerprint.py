@@ -8,38 +8,34 @@ fingerprint hashes the sorted (session id, fingerprint) pairs of its sessions.
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from benchmark.authoring.session_file import Session, dump_session
+from benchmark.authoring.session_file import (
+    FINGERPRINT_CHARS,
+    Session,
+    dump_session,
+    text_fingerprint,
+)
 
 __all__ = ["FINGERPRINT_CHARS", "MixedSuitesError", "check_poolable", "session_fingerprint",
            "suite_fingerprint", "suite_fingerprint_of_files"]
-
-FINGERPRINT_CHARS = 16
-
 
 class MixedSuitesError(ValueError):
     """Records of one session id carry different fingerprints: they come from different
     suites (say a public and a private split) and their scores must not be pooled."""
 
 
-def _digest(text: str | bytes) -> str:
-    data = text.encode("utf-8") if isinstance(text, str) else text
-    return hashlib.sha256(data).hexdigest()[:FINGERPRINT_CHARS]
-
-
 def session_fingerprint(session: Session) -> str:
     """The fingerprint of a loaded session (that of its canonical file text)."""
-    return _digest(dump_session(session.data))
+    return session.fingerprint
 
 
 def suite_fingerprint(pairs: Iterable[tuple[str, str]]) -> str:
     """The fingerprint of a suite from its (session id, session fingerprint) pairs."""
     lines = "".join(f"{sid} {fp}\n" for sid, fp in sorted(set(pairs)))
-    return _digest(lines)
+    return text_fingerprint(lines)
 
 
 def suite_fingerprint_of_files(paths: Iterable[Path]) -> str:
@@ -47,8 +43,8 @@ def suite_fingerprint_of_files(paths: Iterable[Path]) -> str:
     import json
     pairs = []
     for path in paths:
-        text = Path(path).read_text(encoding="utf-8")
-        pairs.append((str(json.loads(text)["id"]), _digest(dump_session(json.loads(text)))))
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        pairs.append((str(data["id"]), text_fingerprint(dump_session(data))))
     return suite_fingerprint(pairs)
 
 

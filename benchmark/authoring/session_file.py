@@ -26,6 +26,7 @@ is kept with its `error` set, and is recorded as a task error when run.
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -43,6 +44,7 @@ from emulator.scenario import Scenario, ScenarioError, scenario_from_model
 from emulator.scenario_errors import describe_error
 
 __all__ = [
+    "FINGERPRINT_CHARS",
     "SCHEMA",
     "Session",
     "SessionFileError",
@@ -52,7 +54,18 @@ __all__ = [
     "read_session_json",
     "session_from_dict",
     "task_from_dict",
+    "text_fingerprint",
 ]
+
+FINGERPRINT_CHARS = 16
+
+
+def text_fingerprint(text: str | bytes) -> str:
+    """The first FINGERPRINT_CHARS hex digits of the sha256 of a text (a session file's
+    canonical text: its fingerprint, see benchmark.authoring.fingerprint)."""
+    data = text.encode("utf-8") if isinstance(text, str) else text
+    return hashlib.sha256(data).hexdigest()[:FINGERPRINT_CHARS]
+
 
 class SessionFileError(ValueError):
     """Raised when a session file cannot be used at all; names the file and the field."""
@@ -92,8 +105,7 @@ class Session:
     def fingerprint(self) -> str:
         """Its session file's fingerprint (benchmark.authoring.fingerprint), worked out once:
         every task record carries it."""
-        from benchmark.authoring.fingerprint import session_fingerprint
-        return session_fingerprint(self)
+        return text_fingerprint(dump_session(self.data))
 
 
 def task_from_dict(k: int, raw: Any, scenario: Scenario) -> TaskSpec:
