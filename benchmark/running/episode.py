@@ -50,12 +50,11 @@ BENCH_TELEMETRY_HZ = {"HEARTBEAT": 5.0, "EXTENDED_SYS_STATE": 5.0, "SYS_STATUS":
                       "GLOBAL_POSITION_INT": 20.0, "LOCAL_POSITION_NED": 1.0,
                       "ATTITUDE": 2.0, "GPS_RAW_INT": 0.5, "VFR_HUD": 1.0}
 # Lockstep: outcomes are judged where the clock stops, on telemetry the swarm sends at once
-# there, and an agent only reads the world while the clock stands still, after such a burst;
-# the periodic streams only keep the links alive (the 1 Hz heartbeat, which MAVSDK needs, and
-# the other streams slowly). A hosted session whose agent thinks costs about this traffic.
-LOCKSTEP_STREAM_HZ = 0.2
-LOCKSTEP_TELEMETRY_HZ = {name: 1.0 if name == "HEARTBEAT" else LOCKSTEP_STREAM_HZ
-                         for name in BENCH_TELEMETRY_HZ}
+# there, so the periodic streams only keep the links alive and the caches roughly current.
+LOCKSTEP_TELEMETRY_HZ = {"HEARTBEAT": 1.0, "EXTENDED_SYS_STATE": 1.0, "SYS_STATUS": 1.0,
+                         "BATTERY_STATUS": 1.0, "HOME_POSITION": 0.5,
+                         "GLOBAL_POSITION_INT": 2.0, "LOCAL_POSITION_NED": 0.5,
+                         "ATTITUDE": 0.5, "GPS_RAW_INT": 0.5, "VFR_HUD": 0.5}
 POSITION_MSGS_PER_S = 300.0  # all drones together: what the gateway's MAVSDK keeps up with
 RESET_SYNC_TIMEOUT_S = 20.0
 RESET_RESEND_S = 0.25  # a drone whose telemetry still lags is asked again after this long
