@@ -331,11 +331,13 @@ class Swarm:
 
     def _request_burst(self, k: int) -> None:
         """Lockstep halt of vehicle k: its whole telemetry now and once more on the next loop
-        turn, once that of every other vehicle that changed since its last (a lossy link: of
-        every other vehicle), so a client sees the stopped state within milliseconds whatever
-        the stream rates (k first: its client waits on it). See emulator.telemetry_bursts."""
+        turn, once that of every other vehicle that changed since its last (on a lossy link or
+        in real time, of every other vehicle: changes are noted between stepped slices), so a
+        client sees the stopped state within milliseconds whatever the stream rates (k first:
+        its client waits on it). See emulator.telemetry_bursts."""
         failed = {ap.k for ap in self.fleet.autopilots if ap.failures.standing_report()}
-        self.bursts.halt(k, also=failed, every_vehicle=self.faults.gate.active)
+        everyone = self.faults.gate.active or not self.clock.stepped
+        self.bursts.halt(k, also=failed, every_vehicle=everyone)
         self._wake.set()
 
     def send_telemetry_of(self, drone_id: str) -> None:
@@ -413,10 +415,7 @@ class Swarm:
                     self.watches.check()
             else:
                 assert self._pacer is not None
-                due = self._pacer.steps_due(wall, fleet.step_count)
-                if due:
-                    self.bursts.note_active()
-                for _ in range(due):
+                for _ in range(self._pacer.steps_due(wall, fleet.step_count)):
                     fleet.step()
                     if self.faults.fire_due():
                         self.bursts.all_changed()
