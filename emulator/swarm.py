@@ -8,7 +8,7 @@ import json
 import logging
 import math
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,10 +18,9 @@ from emulator.clock import ClockConfig, RealTimePacer
 from emulator.flight.fleet import Fleet
 from emulator.link_faults import LinkFaults
 from emulator.lockstep import Watch, WatchBoard
-from emulator.mavlink.frames import FramePart, frame_batch
 from emulator.mavlink.protocol import Address, NetworkProtocol
 from emulator.mavlink.streams import StreamSchedule
-from emulator.mavlink.telemetry import BATCHED_STREAMS, FleetTelemetry
+from emulator.mavlink.telemetry import FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.networks import VEHICLES_PER_NETWORK
 from emulator.port_plan import PortPlan
@@ -29,6 +28,7 @@ from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
 from emulator.swarm_faults import SwarmFaults
 from emulator.telemetry_bursts import TelemetryBursts
+from emulator.telemetry_out import TelemetryOut
 from emulator.transport import UdpEndpoint
 
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
@@ -127,6 +127,8 @@ class Swarm:
         for link in self.links:
             for component, sequences in self.telemetry.sequences.items():
                 link.encoder(component).share_sequence(sequences, link.k)
+        self.out = TelemetryOut(self.telemetry, self.networks, self.network_of, self.links,
+                                self._network_index)
         # The links that may have a wall-clock duty (VehicleLink.needs_tick): a link joins
         # when it gets a message, its vehicle's state changes or it has a gimbal, and leaves
         # when a tick finds it without one, so idle vehicles cost nothing per link tick.
@@ -143,7 +145,6 @@ class Swarm:
         self._pacer: RealTimePacer | None = None
         self._wall_start_s = wall
         self._sim_start_s = 0.0
-        self._telemetry_errors = 0
         self._clock_holds: dict[object, float] = {}
         self.watches = WatchBoard(self.fleet, self.hold_clock_at, self.release_clock,
                                   self._request_burst)
@@ -207,10 +208,6 @@ class Swarm:
         if link.needs_tick:
             self._tick_candidates.add(link.k)
 
-    def _emit(self, k: int, data: bytes) -> None:
-        """One telemetry frame of vehicle k into its network's queue."""
-        self.network_of[k].send_frame(k, data)
-
     # ----------------------------------------------------------------- access
     @property
     def n(self) -> int:
@@ -263,7 +260,7 @@ class Swarm:
             datagrams_out=sum(n.stats.datagrams_out for n in self.networks),
             frames_out=sum(n.stats.frames_out for n in self.networks),
             unroutable=sum(n.stats.unroutable for n in self.networks),
-            internal_errors=self._telemetry_errors
+            internal_errors=self.out.errors
             + sum(n.stats.handler_errors for n in self.networks),
         )
 
@@ -368,7 +365,7 @@ class Swarm:
         ks = np.fromiter(bursts, dtype=np.intp, count=len(bursts))
         schedule = self.streams
         on = np.isfinite(schedule.period_s[ks])
-        self._send_streams((spec.msg_id, ks[on[:, col]])
+        self.out.send((spec.msg_id, ks[on[:, col]])
                            for col, spec in enumerate(schedule.streams))
 
     def _held_at(self) -> float:
@@ -455,7 +452,7 @@ class Swarm:
                 await asyncio.sleep(max(timeout, 0.0005))
 
     def _send_telemetry(self, wall: float) -> None:
-        self._send_streams(self.streams.due(wall))
+        self.out.send(self.streams.due(wall))
 
     def send_due_telemetry(self, wall_now_s: float) -> None:
         """Send every telemetry stream due by `wall_now_s` (the scheduler does this every
@@ -472,81 +469,6 @@ class Swarm:
             elif k not in self.left:
                 link.tick(wall_now_s)
         self._tick_candidates.difference_update(idle)
-
-    def _send_streams(self, due: Iterable[tuple[int, np.ndarray]]) -> None:
-        """Stream `msg_id` of vehicles `ks`, for each (msg_id, ks): batched, framed together
-        and packed several frames to a datagram."""
-        for network in self.networks:
-            network.begin_batch()
-        try:
-            parts: list[FramePart] = []
-            order: list[np.ndarray] = []
-            for msg_id, ks in due:
-                if not len(ks):
-                    continue
-                if msg_id in BATCHED_STREAMS:
-                    try:
-                        parts.append(self.telemetry.part(msg_id, ks))
-                        order.append(ks)
-                        continue
-                    except Exception:  # the I/O edge: log, count, send them one by one
-                        self._telemetry_errors += 1
-                        log.exception("batched message %d failed", msg_id)
-                self._send_one_by_one(msg_id, ks)
-            if parts:
-                self._emit_parts(parts, order)
-        finally:
-            for network in self.networks:
-                network.end_batch()
-
-    def _emit_parts(self, parts: list[FramePart], order: list[np.ndarray]) -> None:
-        ks = np.concatenate(order)
-        rows = net = None
-        if self._network_index is not None:  # several networks: each one's frames together
-            net = self._network_index[ks]
-            rows = np.argsort(net, kind="stable")
-            ks, net = ks[rows], net[rows]
-        try:
-            frames = frame_batch(parts, rows)
-        except Exception:  # the I/O edge: log, count, send them one by one
-            self._telemetry_errors += 1
-            log.exception("framing a telemetry batch failed")
-            for part, part_ks in zip(parts, order, strict=True):
-                self._send_one_by_one(part.layout.msg_id, part_ks)
-            return
-        data, emit, start, ends = frames.data, self._emit, 0, frames.ends.tolist()
-        if len(self.networks) == 1 and self.networks[0].send_frames(data, ends):
-            return  # one shared network and a clean link: the whole batch at once
-        if net is not None and self._send_by_network(data, frames.ends, ends, net):
-            return
-        for k, end in zip(ks.tolist(), ends, strict=True):
-            emit(k, data[start:end])
-            start = end
-
-    def _send_by_network(self, data: bytes, ends_at: np.ndarray, ends: list[int],
-                         net: np.ndarray) -> bool:
-        """Frames sorted by network (`net`: each one's network), each network's at once.
-        False, sending nothing, when a network present cannot take a whole batch (a link
-        with faults)."""
-        present = np.flatnonzero(np.diff(net, prepend=-1)).tolist()  # first row of each
-        nets = net[present].tolist()
-        if not all(self.networks[j].can_send_frames() for j in nets):
-            return False
-        bounds = [*present[1:], len(ends)]
-        base = 0
-        for j, first, last in zip(nets, present, bounds, strict=True):
-            top = ends[last - 1]
-            self.networks[j].send_frames(data[base:top], (ends_at[first:last] - base).tolist())
-            base = top
-        return True
-
-    def _send_one_by_one(self, msg_id: int, ks: np.ndarray) -> None:
-        for k in ks.tolist():
-            try:
-                self.links[k].send_stream(msg_id)
-            except Exception:  # the I/O edge: log, count, keep the swarm alive
-                self._telemetry_errors += 1
-                log.exception("vehicle %d failed to send message %d", k + 1, msg_id)
 
     def _release_waiters(self) -> None:
         now = self.fleet.now_s
