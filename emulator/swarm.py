@@ -24,6 +24,7 @@ from emulator.mavlink.telemetry import FleetTelemetry
 from emulator.mavlink.vehicle_link import VehicleLink
 from emulator.networks import VEHICLES_PER_NETWORK
 from emulator.port_plan import PortPlan
+from emulator.quiet_streams import QuietStreams
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
 from emulator.swarm_faults import SwarmFaults
@@ -133,7 +134,13 @@ class Swarm:
         # when it gets a message, its vehicle's state changes or it has a gimbal, and leaves
         # when a tick finds it without one, so idle vehicles cost nothing per link tick.
         self._tick_candidates: set[int] = set()
-        self.bursts = TelemetryBursts(self.fleet)
+        # a lockstep clock's periodic streams carry only what may have changed
+        self.quiet = (QuietStreams(n, self.streams.streams, wall) if self.clock.lockstep
+                      else None)
+        self.bursts = TelemetryBursts(self.fleet, self.quiet)
+        if self.quiet is not None:  # a new ground station is sent everything for a while
+            for network in self.networks:
+                network.on_new_peer = self.quiet.new_peer
         for link in self.links:
             self.hook_link(link)
         self.endpoints: list[UdpEndpoint] = []
@@ -367,6 +374,8 @@ class Swarm:
         on = np.isfinite(schedule.period_s[ks])
         self.out.send((spec.msg_id, ks[on[:, col]])
                            for col, spec in enumerate(schedule.streams))
+        if self.quiet is not None:
+            self.quiet.sent(ks)
 
     def _held_at(self) -> float:
         return min(self._clock_holds.values()) if self._clock_holds else math.inf
@@ -452,7 +461,10 @@ class Swarm:
                 await asyncio.sleep(max(timeout, 0.0005))
 
     def _send_telemetry(self, wall: float) -> None:
-        self.out.send(self.streams.due(wall))
+        due = self.streams.due(wall)
+        if self.quiet is not None and not self.faults.gate.active:  # lossy: every period
+            due = self.quiet.filter(due, wall)
+        self.out.send(due)
 
     def send_due_telemetry(self, wall_now_s: float) -> None:
         """Send every telemetry stream due by `wall_now_s` (the scheduler does this every
@@ -468,6 +480,8 @@ class Swarm:
                 idle.append(k)
             elif k not in self.left:
                 link.tick(wall_now_s)
+                if self.quiet is not None:  # a duty may change it (a link-loss failsafe)
+                    self.quiet.mark((k,))
         self._tick_candidates.difference_update(idle)
 
     def _release_waiters(self) -> None:

@@ -20,6 +20,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from emulator.flight.fleet import Fleet
+    from emulator.quiet_streams import QuietStreams
 
 __all__ = ["BURST_VEHICLES_PER_TURN", "TelemetryBursts"]
 
@@ -33,8 +34,10 @@ BURST_VEHICLES_PER_TURN = 3
 class TelemetryBursts:
     """The bursts still to send (vehicle -> times) and the vehicles changed since theirs."""
 
-    def __init__(self, fleet: Fleet) -> None:
+    def __init__(self, fleet: Fleet, quiet: QuietStreams | None = None) -> None:
+        """quiet: the swarm's quiet streams (a lockstep clock), told of every change too."""
         self._fleet = fleet
+        self.quiet = quiet
         self.pending: dict[int, int] = {}
         self._changed: set[int] = set(range(fleet.n))
 
@@ -42,17 +45,24 @@ class TelemetryBursts:
     def changed(self, k: int) -> None:
         """Vehicle k's state may have changed (a message, an autopilot event)."""
         self._changed.add(k)
+        if self.quiet is not None:
+            self.quiet.mark((k,))
 
     def all_changed(self) -> None:
         """Every vehicle's state may have changed (a fault fired)."""
         self._changed.update(range(self._fleet.n))
+        if self.quiet is not None:
+            self.quiet.mark_all()
 
     def note_active(self) -> None:
         """Before physics steps: the vehicles they may change (at rest, one stays as it is)."""
         f = self._fleet
         active = f.armed | f.airborne | f.busy | (f.bat.charge_rate_pct_s > 0.0)
         if active.any():
-            self._changed.update(np.flatnonzero(active).tolist())
+            ks = np.flatnonzero(active).tolist()
+            self._changed.update(ks)
+            if self.quiet is not None:
+                self.quiet.mark(ks)
 
     # --------------------------------------------------------------- requests
     def first(self, k: int, count: int) -> None:

@@ -22,6 +22,8 @@ DISCOVERY_TIMEOUT_S = 15.0
 # How long close() waits for MAVSDK calls still running on worker threads (a command's own
 # retries end within seconds) before it destroys MAVSDK.
 CALLS_DRAIN_S = 30.0
+# A drone whose first telemetry has not come is asked for it again this often (`refresh`).
+ASK_AGAIN_S = 0.2
 
 
 _MAVSDK_MODULES = frozenset({"mavsdk"})
@@ -97,15 +99,19 @@ class FleetConnection:
         self._url = ""
         self._origin: GeoFrame | None = None
         self._landed_state_hz: float | None = LANDED_STATE_HZ
+        self._refresh: Callable[[str], None] | None = None
         self._counted = 0  # this fleet's drones in _open_drones
 
     @classmethod
     async def connect(cls, url: str, profiles: Sequence[DroneProfile], origin: GeoFrame, *,
                       timeout_s: float = DISCOVERY_TIMEOUT_S,
-                      landed_state_hz: float | None = LANDED_STATE_HZ) -> FleetConnection:
+                      landed_state_hz: float | None = LANDED_STATE_HZ,
+                      refresh: Callable[[str], None] | None = None) -> FleetConnection:
         """Open `url` (e.g. ``udpin://0.0.0.0:14540``) and wait for every drone in profiles.
         `landed_state_hz`: the EXTENDED_SYS_STATE rate asked of every drone (None: its
-        own)."""
+        own). `refresh`: asks the world for a drone's whole telemetry at once (a lockstep
+        swarm in this process, whose streams carry only changes), used while a drone's first
+        telemetry is awaited."""
         # MAVSDK runs each blocking call on the default executor: size it for the fleet.
         loop = asyncio.get_running_loop()
         _open_drones[loop] = _open_drones.get(loop, 0) + len(profiles)
@@ -117,7 +123,8 @@ class FleetConnection:
                 await mavsdk.add_any_connection(url)
             except MavsdkConnectionError as error:
                 raise FleetError(f"cannot open the MAVLink connection {url!r}: {error}") from None
-            drones = await _attach(mavsdk, url, profiles, origin, timeout_s, landed_state_hz)
+            drones = await _attach(mavsdk, url, profiles, origin, timeout_s, landed_state_hz,
+                                   refresh)
         except BaseException:
             _open_drones[loop] -= len(profiles)
             await calls.drain(CALLS_DRAIN_S)
@@ -126,6 +133,7 @@ class FleetConnection:
         fleet = cls(mavsdk, drones, calls)
         fleet._counted = len(profiles)
         fleet._url, fleet._origin, fleet._landed_state_hz = url, origin, landed_state_hz
+        fleet._refresh = refresh
         return fleet
 
     async def attach(self, profiles: Sequence[DroneProfile], *,
@@ -139,7 +147,7 @@ class FleetConnection:
         if self._origin is None:
             raise FleetError("this fleet was not opened with FleetConnection.connect")
         found = await _attach(self._mavsdk, self._url, new, self._origin, timeout_s,
-                              self._landed_state_hz)
+                              self._landed_state_hz, self._refresh)
         self.drones.update(found)
         return found
 
@@ -171,9 +179,10 @@ class FleetConnection:
 
 
 async def _attach(mavsdk: Mavsdk, url: str, profiles: Sequence[DroneProfile], origin: GeoFrame,
-                  timeout_s: float, landed_state_hz: float | None) -> dict[str, DroneLink]:
+                  timeout_s: float, landed_state_hz: float | None,
+                  refresh: Callable[[str], None] | None = None) -> dict[str, DroneLink]:
     """Wait for every drone in profiles to appear on `mavsdk`, start a DroneLink each and
-    wait for its first telemetry."""
+    wait for its first telemetry (asked of `refresh` every ASK_AGAIN_S, if given)."""
     by_system = {p.system_id: p for p in profiles}
     found: dict[int, object] = {}
     deadline = time.monotonic() + timeout_s
@@ -194,12 +203,17 @@ async def _attach(mavsdk: Mavsdk, url: str, profiles: Sequence[DroneProfile], or
               for p in profiles}
     for link in drones.values():
         link.start()
-    deadline = time.monotonic() + timeout_s
+    deadline, ask_at = time.monotonic() + timeout_s, time.monotonic()
     while not all(link.ready for link in drones.values()):
+        if refresh is not None and time.monotonic() >= ask_at:
+            ask_at = time.monotonic() + ASK_AGAIN_S
+            for drone_id, link in drones.items():
+                if not link.ready:
+                    refresh(drone_id)
         if time.monotonic() > deadline:
             for link in drones.values():
                 await link.close()
             silent = [d for d, link in drones.items() if not link.ready]
             raise FleetError(f"no telemetry from drones {silent}")
-        await asyncio.sleep(0.05)
+        await asyncio.sleep(0.02 if refresh is not None else 0.05)
     return drones

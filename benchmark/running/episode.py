@@ -126,6 +126,7 @@ async def swarm_gateway(session: Session, physics_hz: float = 50.0, *, lockstep:
         async with await FleetConnection.connect(
             f"udpin://127.0.0.1:{port}", profiles_from_scenario(scenario), scenario.world.origin,
             landed_state_hz=None if lockstep else LANDED_STATE_HZ,
+            refresh=services.refresh_telemetry if lockstep else None,
         ) as fleet:
             yield swarm, services, Gateway(fleet.drones, services, connection=fleet)
 

@@ -73,6 +73,8 @@ class NetworkProtocol:
         self.gate = gate  # link faults (emulator.link_faults), if any
         self.is_open = False  # frames are queued only while a transport serves the network
         self.on_pending: Callable[[], None] | None = None  # told when the queue fills
+        # a ground station began talking (told the wall-clock time)
+        self.on_new_peer: Callable[[float], None] | None = None
         self._queue: list[bytes] = []
         self._batch = bytearray()
         self._batching = False
@@ -102,6 +104,8 @@ class NetworkProtocol:
         self._peers[addr] = now
         if not known:
             self._refresh_targets()
+            if self.on_new_peer is not None:
+                self.on_new_peer(now)
         links = self.links
         for m in self.decoder.decode(data):
             msg_id = m.get_msgId()

@@ -177,6 +177,7 @@ class VehicleLink:
         self.send(msgs.heartbeat(self.ap))
         self.send(msgs.extended_sys_state(self.ap))
         self._tick_duty()
+        self._changed()
 
     def on_operator_reset(self) -> None:
         """An operator moved the vehicle or refilled its battery: report the new state now."""
