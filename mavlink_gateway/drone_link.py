@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from mavsdk.asyncio.plugins.action import ActionAsync
-from mavsdk.asyncio.plugins.camera import CameraAsync
 from mavsdk.asyncio.plugins.mavlink_direct import MavlinkDirectAsync
 from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 from mavsdk.asyncio.plugins.param import ParamAsync
@@ -35,7 +34,7 @@ from mavlink_vocabulary import (
     parse_statustext,
 )
 
-__all__ = ["UNREACHABLE_WALL_S", "DroneLink", "DroneProfile"]
+__all__ = ["UNREACHABLE_WALL_S", "Capture", "DroneLink", "DroneProfile"]
 
 # MAVSDK's landed-state names as MAV_LANDED_STATE (anything else: undefined)
 _LANDED_STATES = {"ON_GROUND": MavLandedState.ON_GROUND, "IN_AIR": MavLandedState.IN_AIR,
@@ -68,6 +67,15 @@ def _release(waiter: asyncio.Future[None]) -> None:
 
 
 @dataclass(frozen=True, slots=True)
+class Capture:
+    """One CAMERA_IMAGE_CAPTURED: the photo's index and where it was taken."""
+
+    index: int
+    latitude_deg: float
+    longitude_deg: float
+
+
+@dataclass(frozen=True, slots=True)
 class DroneProfile:
     """What the fleet's owner knows of a drone (not of the world): its id and limits."""
 
@@ -92,7 +100,6 @@ class DroneLink:
         self.action = ActionAsync(system)
         self.telemetry = TelemetryAsync(system)
         self.mission = MissionRawAsync(system)
-        self.camera = CameraAsync(system)
         self.param = ParamAsync(system)
         self.direct = MavlinkDirectAsync(system)
         self.capture_sequence = 0  # the camera protocol's capture sequence number, per drone
@@ -112,7 +119,7 @@ class DroneLink:
         # complete even when the one MISSION_ITEM_REACHED of its last item was lost
         self.mission_state: tuple[int, int] = (0, 0)
         self.status_texts: list[str] = []
-        self.captures: list[Any] = []
+        self.captures: list[Capture] = []  # CAMERA_IMAGE_CAPTURED as they came
         self.updates = 0  # telemetry messages seen; lets waits know fresh data arrived
         self.seen: dict[str, int] = {}  # telemetry messages seen per stream
         # per stream: how many messages in a row brought the same value as the one before
@@ -143,7 +150,10 @@ class DroneLink:
         follow("status_text", t.subscribe_status_text(), self._on_status_text)
         follow("mission_progress", self.mission.subscribe_mission_progress(),
                lambda p: setattr(self, "mission_progress", (p.current, p.total)))
-        follow("capture", self.camera.subscribe_capture_info(), self.captures.append)
+        # Read straight off the link: MAVSDK's camera plugin would poll every component that
+        # heartbeats for camera information several times a second, for the whole session.
+        follow("capture", self.direct.subscribe_message("CAMERA_IMAGE_CAPTURED"),
+               self._on_capture)
         follow("mission_current", self.direct.subscribe_message("MISSION_CURRENT"),
                self._on_mission_current)
         self._tasks.append(asyncio.create_task(self._request_rates(),
@@ -226,6 +236,12 @@ class DroneLink:
         if self.landed_state == "ON_GROUND" and v.name in ("TAKING_OFF", "IN_AIR"):
             self.armed = True
         self.landed_state = v.name
+
+    def _on_capture(self, m: Any) -> None:
+        with contextlib.suppress(ValueError, TypeError, KeyError, AttributeError):
+            fields = json.loads(m.fields_json)
+            self.captures.append(Capture(int(fields["image_index"]), int(fields["lat"]) / 1e7,
+                                         int(fields["lon"]) / 1e7))
 
     def _on_mission_current(self, m: Any) -> None:
         with contextlib.suppress(ValueError, TypeError, KeyError, AttributeError):

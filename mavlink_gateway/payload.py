@@ -59,8 +59,8 @@ class PayloadPrimitives(FlightPrimitives):
             def done() -> Outcome | None:
                 if len(link.captures) > before:
                     info = link.captures[-1]
-                    x, y, _ = link.origin.to_local(info.position.latitude_deg,
-                                                   info.position.longitude_deg, 0.0)
+                    x, y, _ = link.origin.to_local(info.latitude_deg, info.longitude_deg,
+                                                   0.0)
                     return Outcome(Status.OK, f"{link.drone_id} took photo {info.index} at "
                                    f"({x:.1f}, {y:.1f})", link.state(), {"photo": info.index})
                 return None
