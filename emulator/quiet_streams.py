@@ -26,7 +26,7 @@ from mavlink_vocabulary import MessageId
 __all__ = ["KEEP_ALIVE_STREAMS", "NEW_PEER_FULL_S", "REFRESH_S", "QuietStreams"]
 
 KEEP_ALIVE_STREAMS = frozenset({int(MessageId.HEARTBEAT), CAMERA_HEARTBEAT})
-REFRESH_S = 5.0
+REFRESH_S = 20.0
 NEW_PEER_FULL_S = 5.0
 
 

@@ -35,9 +35,9 @@ from emulator.transport import UdpEndpoint
 __all__ = ["PortPlan", "Swarm", "SwarmStats"]
 
 LOOP_TICK_S = 0.005  # the longest the loop sleeps while bursts wait for their turn
-# The longest it sleeps otherwise, when no step or telemetry is due sooner: what needs it
-# sooner wakes it (a datagram, a clock released, a watch, a burst asked for).
-IDLE_TICK_S = 0.05
+# The longest it sleeps otherwise, when no step, telemetry or link duty is due sooner: what
+# needs it sooner wakes it (a datagram, a clock released, a watch, a burst asked for).
+IDLE_TICK_S = 0.25
 # Due telemetry is gathered and sent in batches this often, or at the shortest stream period
 # when a client asked for a faster stream (streams are capped at 100 Hz). When every stream is
 # slower than TICKS_PER_PERIOD ticks of it (a lockstep run's 0.5-2 Hz keep-alive streams), the
@@ -447,6 +447,8 @@ class Swarm:
                 continue
             self._wake.clear()
             wake_at = max(self.streams.next_wakeup_s(), next_telemetry)
+            if self._tick_candidates:  # a link with a wall-clock duty (an upload's retries)
+                wake_at = min(wake_at, next_link_tick)
             if self._pacer is not None:  # real time: sleep until a step or telemetry is due
                 wake_at = min(wake_at, self._pacer.next_step_wall_s(fleet.step_count))
             cap = LOOP_TICK_S if self.bursts.pending else IDLE_TICK_S

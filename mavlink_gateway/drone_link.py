@@ -73,6 +73,7 @@ class Capture:
     index: int
     latitude_deg: float
     longitude_deg: float
+    absolute_altitude_m: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -241,7 +242,7 @@ class DroneLink:
         with contextlib.suppress(ValueError, TypeError, KeyError, AttributeError):
             fields = json.loads(m.fields_json)
             self.captures.append(Capture(int(fields["image_index"]), int(fields["lat"]) / 1e7,
-                                         int(fields["lon"]) / 1e7))
+                                         int(fields["lon"]) / 1e7, int(fields["alt"]) / 1e3))
 
     def _on_mission_current(self, m: Any) -> None:
         with contextlib.suppress(ValueError, TypeError, KeyError, AttributeError):

@@ -55,9 +55,8 @@ class GatewayView:
             self._texts_seen[drone] = len(texts)
             captures = link.captures
             for info in captures[self._captures_seen.get(drone, 0):]:
-                p = info.position
-                x, y, z = link.origin.to_local(p.latitude_deg, p.longitude_deg,
-                                               p.absolute_altitude_m)
+                x, y, z = link.origin.to_local(info.latitude_deg, info.longitude_deg,
+                                               info.absolute_altitude_m)
                 events.append(photo_event(drone, now, int(info.index), (x, y, z), None))
             self._captures_seen[drone] = len(captures)
         return events

@@ -90,6 +90,9 @@ async def expect_denied(client: MavClient, system: int, command: int, *params: f
 async def arm_and_take_off(client: MavClient, swarm, system: int) -> None:
     ap = swarm.fleet.autopilots[system - 1]
     t0 = swarm.fleet.now_s
+    # at 20x, PX4's pre-flight auto-disarm (10 s) is half a wall second: a loaded machine
+    # could let it pass between ARM and TAKEOFF
+    await client.param_set(system, "COM_DISARM_PRFLT", -1.0)
     assert (await client.command_long(system, 400, 1.0)).result == ACCEPTED
     assert (await client.command_long(system, 22, *[NAN] * 7)).result == ACCEPTED
     await wait_truth(swarm, lambda: bool(swarm.recorder.events(
