@@ -73,3 +73,33 @@ class PortPlan:
         if count > 1 and set(apis) & set(gcs):
             raise ValueError(f"{count} networks' API ports {apis.start}-{apis.stop - 1} "
                              f"overlap their GCS ports {gcs.start}-{gcs.stop - 1}")
+
+    def connection_urls(self, networks: int, vehicles: int, bound_ports: list[int]
+                        ) -> list[str]:
+        """Where MAVSDK, QGroundControl and MAVProxy connect to a swarm of `vehicles` in
+        `networks` networks whose sockets are bound at `bound_ports` (empty before start)."""
+        urls = []
+        if networks > 1 and not self.per_vehicle:  # networks of 250 (emulator.networks)
+            if self.api_port:
+                urls.append(f"MAVSDK:         udpin://0.0.0.0:{self.api_port} .. "
+                            f"{self.api_port + networks - 1} (one per network of 250)")
+            if self.gcs_port:
+                urls.append(f"QGroundControl: UDP {self.gcs_port} .. "
+                            f"{self.gcs_port + networks - 1}")
+            if bound_ports:
+                first = bound_ports[0]
+                where = (f"{first} .. {first + networks - 1}" if self.bind_port else
+                         f"{first} (network 0; each network's port chosen by the OS)")
+                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{where}")
+            return urls
+        if self.api_port:
+            if self.per_vehicle:
+                urls.append(f"udpin://0.0.0.0:{self.api_port} .. "
+                            f"{self.api_port + vehicles - 1} (one per vehicle)")
+            else:
+                urls.append(f"MAVSDK:         udpin://0.0.0.0:{self.api_port}")
+        if self.gcs_port:
+            urls.append(f"QGroundControl: UDP {self.gcs_port} (default link)")
+        if bound_ports and not self.per_vehicle:
+            urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{bound_ports[0]}")
+        return urls

@@ -226,33 +226,9 @@ class Swarm:
         return self.fleet.recorder
 
     def connection_urls(self) -> list[str]:
-        p = self.ports
-        urls = []
-        count = len(self.networks)
-        if count > 1 and not p.per_vehicle:  # networks of 250 (emulator.networks)
-            if p.api_port:
-                urls.append(f"MAVSDK:         udpin://0.0.0.0:{p.api_port} .. "
-                            f"{p.api_port + count - 1} (one per network of 250)")
-            if p.gcs_port:
-                urls.append(f"QGroundControl: UDP {p.gcs_port} .. {p.gcs_port + count - 1}")
-            if self.endpoints:
-                first = self.endpoints[0].local_address[1]
-                where = (f"{first} .. {first + count - 1}" if p.bind_port else
-                         f"{first} (network 0; each network's port chosen by the OS)")
-                urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{where}")
-            return urls
-        if p.api_port:
-            if p.per_vehicle:
-                urls.append(f"udpin://0.0.0.0:{p.api_port} .. {p.api_port + self.n - 1} "
-                            "(one per vehicle)")
-            else:
-                urls.append(f"MAVSDK:         udpin://0.0.0.0:{p.api_port}")
-        if p.gcs_port:
-            urls.append(f"QGroundControl: UDP {p.gcs_port} (default link)")
-        if self.endpoints and not p.per_vehicle:
-            _host, port = self.endpoints[0].local_address
-            urls.append(f"MAVProxy:       --master=udpout:127.0.0.1:{port}")
-        return urls
+        """Where MAVSDK, QGroundControl and MAVProxy connect (emulator.port_plan)."""
+        bound = [e.local_address[1] for e in self.endpoints]
+        return self.ports.connection_urls(len(self.networks), self.n, bound)
 
     def stats(self) -> SwarmStats:
         wall = time.monotonic() - self._wall_start_s

@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import dataclasses
+import json
 import multiprocessing
 import os
 import random
@@ -36,10 +37,12 @@ from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
+from benchmark.running.orchestrator import largest_first
 from benchmark.running.worker_count import AUTO, auto_workers, hosting_for, parse_workers
 from swarm_agents.oracle import OracleAgent
 
 _SPAWN = multiprocessing.get_context("spawn")
+PROGRESS_EVERY_S = 60.0
 
 
 class ThinkingTools:
@@ -130,7 +133,8 @@ def main() -> None:
                              "--sessions")
     args = parser.parse_args()
     suite, args.task_limit = suite_paths(args.suite)
-    paths = [str(p) for p in suite if args.only in p.stem][: args.limit or None]
+    chosen = [p for p in suite if args.only in p.stem][: args.limit or None]
+    paths = [str(p) for p in largest_first(chosen)]  # as `bench run` starts them
     if args.workers is not None:
         at_once = (auto_workers("thinking", len(paths)) if args.workers == AUTO
                    else min(args.workers, len(paths)))
@@ -149,8 +153,16 @@ def main() -> None:
     errors: list[str] = []
     finished, peak_mb, base_mb = 0, 0.0, 0.0
     pids = [w.pid for w in workers if w.pid is not None]
+    counts = [len(json.loads(Path(p).read_text())["tasks"]) for p in paths]
+    planned = sum(c if args.task_limit is None else min(c, args.task_limit) for c in counts)
+    next_note = start + PROGRESS_EVERY_S
     while finished < len(workers):
         peak_mb = max(peak_mb, _rss_mb(pids))
+        if time.perf_counter() >= next_note:
+            next_note += PROGRESS_EVERY_S
+            print(f"  {time.perf_counter() - start:4.0f} s: {len(records)}/{planned} tasks, "
+                  f"{sum(r['passed'] for r in records)} passed, workers {peak_mb:.0f} MB at "
+                  f"most, load average {os.getloadavg()[0]:.1f}", flush=True)
         try:
             kind, value = queue.get(timeout=1.0)
         except Exception:

@@ -35,8 +35,8 @@ from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 from swarm_agents import plugins
 
-__all__ = ["AGENTS", "PlanWork", "RunOutcome", "RunPlan", "check_session_files", "make_agent",
-           "run_benchmark", "run_unit", "run_unit_async"]
+__all__ = ["AGENTS", "PlanWork", "RunOutcome", "RunPlan", "check_session_files",
+           "largest_first", "make_agent", "run_benchmark", "run_unit", "run_unit_async"]
 
 # The built-in agents; NAME:per-drone: one instance of NAME per drone
 # (swarm_agents.teams.per_drone).
@@ -284,6 +284,13 @@ def _session_head(path: Path) -> tuple[str | None, int, int]:
             len(drones) if isinstance(drones, list) else 0)
 
 
+def largest_first(sessions: Sequence[Path]) -> list[Path]:
+    """The order a run with several workers starts sessions in: the largest fleets first,
+    since a session's wall time grows with its drones and the run ends when its last
+    session does (results do not depend on the order)."""
+    return sorted(sessions, key=lambda p: -_session_head(p)[2])
+
+
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                   sink: ProgressSink | None = None,
                   on_record: Callable[[dict[str, Any]], None] | None = None,
@@ -326,9 +333,7 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         raise
     done = _done_by_unit(previous)
     heads = {p: _session_head(p) for p in plan.sessions}
-    # The largest fleets first: a session's wall time grows with its drones, and the run ends
-    # when its last session does (results do not depend on the order).
-    order = sorted(plan.sessions, key=lambda p: -heads[p][2]) if workers > 1 else plan.sessions
+    order = largest_first(plan.sessions) if workers > 1 else plan.sessions
     units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))
              for trial in range(plan.trials) for p in order]
     limit = plan.task_limit
