@@ -10,7 +10,11 @@ refuses it. A refusal is therefore taken as a refusal only when it answers the o
 otherwise the command's effect is looked for in fresh telemetry (`Acted`, see
 mavlink_gateway.effects): seen, the command
 succeeded; not seen, the refusal stands; where the effect cannot be seen, the outcome is
-unknown (NoAnswer), never a refusal.
+unknown (NoAnswer), never a refusal. A command that may be made again whatever an earlier
+copy did (`repeatable`: a mission upload, which replaces the plan with the same one) is made
+again instead, and a refusal of a fresh call of it is a refusal: the mission protocol's
+answer to a late copy of an earlier upload (MISSION_ACK carries no transfer id) can reach
+the next upload's transfer and end it.
 """
 
 from __future__ import annotations
@@ -54,15 +58,16 @@ class NoAnswer(Exception):
 
 async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[Any]], *,
                        goal: Goal | None, sent: Callable[[], None],
-                       refresh: Callable[[], Awaitable[bool]], acted: Acted | None = None
-                       ) -> None:
+                       refresh: Callable[[], Awaitable[bool]], acted: Acted | None = None,
+                       repeatable: bool = False) -> None:
     """Run a MAVSDK call (`call()` makes it; `sent()` is told before each try, and again
     once it is answered if a later copy than the first may have acted). A refusal by
     the autopilot becomes a Refusal with its reason, unless it may answer a copy sent after
     an earlier one acted (see the module docstring): then `acted(link)`, on telemetry sent
     after `refresh()` (False: none came, nothing can be seen), decides. A call that got no
-    answer is made again up to COMMAND_TRIES times in all, then raises NoAnswer. An
-    interrupted `goal` sends nothing more."""
+    answer is made again up to COMMAND_TRIES times in all, then raises NoAnswer; so is a
+    `repeatable` one whose refusal may answer a copy. An interrupted `goal` sends nothing
+    more."""
     tries = COMMAND_TRIES
     if link.silent_for_s() > SILENT_WALL_S:
         await link.wait_update(link.updates, SILENCE_CHECK_WALL_S)
@@ -96,13 +101,16 @@ async def send_command(link: DroneLink, what: str, call: Callable[[], Awaitable[
             await _refusal_text(link, texts)
             reason = next(iter(link.status_texts[texts:]), None)
             detail = reason or str(error)
-            if attempt > 1 or time.monotonic() - start >= RETRANSMITTED_AFTER_S:
+            slow = time.monotonic() - start >= RETRANSMITTED_AFTER_S
+            if slow or (attempt > 1 and not repeatable):
                 # Copies were sent: the refusal may answer one that came after another acted.
                 fresh = await refresh()
                 verdict = acted(link) if acted is not None and fresh else None
                 if verdict is True:
                     sent()  # it acted, at some time before now
                     return  # a repeat's refusal is the command's success
+                if verdict is None and repeatable and attempt < tries:
+                    continue
                 if verdict is None:
                     raise NoAnswer(f"{link.drone_id} refused a repeat of {what} ({detail}), "
                                    f"and an earlier copy may have acted") from None

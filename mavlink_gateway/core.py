@@ -181,15 +181,17 @@ class GatewayCore:
         return coordinate
 
     async def _mavsdk(self, link: DroneLink, what: str, call: Callable[[], Awaitable[Any]],
-                      acted: Acted | None = None) -> None:
+                      acted: Acted | None = None, *, repeatable: bool = False) -> None:
         """Send a command (see mavlink_gateway.command_send); `acted` tells whether fresh
-        telemetry shows its effect, for a refusal that may answer a repeat."""
+        telemetry shows its effect, for a refusal that may answer a repeat; a `repeatable`
+        one is made again instead."""
         def sent() -> None:
             # A budget starts when the command that counts was sent (the last try's).
             self._command_s[link.drone_id] = self.services.clock_s()
 
         await send_command(link, what, call, goal=self._goal(link), sent=sent,
-                           refresh=lambda: self._fresh_telemetry(link), acted=acted)
+                           refresh=lambda: self._fresh_telemetry(link), acted=acted,
+                           repeatable=repeatable)
 
     # ----------------------------------------------------------------- waits
     async def _wait(self, link: DroneLink, budget_s: float, what: str,

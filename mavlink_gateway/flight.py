@@ -230,7 +230,8 @@ class FlightPrimitives(GatewayCore):
     async def _fly_mission(self, link: DroneLink, items: list[MissionItem], what: str,
                            budget_s: float, goal: tuple[float, float, float]) -> Outcome:
         texts = len(link.status_texts)
-        await self._mavsdk(link, f"the {what} mission", lambda: link.mission.upload_mission(items))
+        await self._mavsdk(link, f"the {what} mission", lambda: link.mission.upload_mission(items),
+                           repeatable=True)  # the same plan again
         link.mission_progress = (0, len(items))
         await self._mavsdk(link, f"the {what} mission start", lambda: link.mission.start_mission())
         total = len(items)

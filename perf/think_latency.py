@@ -7,6 +7,7 @@ sessions at once spread as `bench run` spreads an agent that thinks, auto as it 
     ./dev perf think_latency --think-s 2 --workers auto --only extreme           # a subset
     ./dev perf think_latency --think-s 2 --processes 2 --sessions 12
     ./dev perf think_latency --think-s 2 --suite smoke --clock stepped          # the old clock
+    ./dev perf think_latency --think-s 2 --workers auto --out DIR   # records, for records_equal
 
 Prints wall time, pass rate, failed tasks, the peak memory of all workers together and the
 memory per hosted session (the peak less each worker's own before its first session, over
@@ -37,7 +38,7 @@ from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
-from benchmark.running.orchestrator import largest_first
+from benchmark.running.run_order import run_order
 from benchmark.running.worker_count import AUTO, auto_workers, hosting_for, parse_workers
 from swarm_agents.oracle import OracleAgent
 
@@ -131,10 +132,13 @@ def main() -> None:
     parser.add_argument("--workers", type=parse_workers, default=None,
                         help="sessions at once in all (or auto), instead of --processes and "
                              "--sessions")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="write the task records to OUT/results.jsonl (as `bench run "
+                             "--out` does, to compare with perf/records_equal.py)")
     args = parser.parse_args()
     suite, args.task_limit = suite_paths(args.suite)
     chosen = [p for p in suite if args.only in p.stem][: args.limit or None]
-    paths = [str(p) for p in largest_first(chosen)]  # as `bench run` starts them
+    paths = [str(p) for p in run_order(chosen, "thinking")]  # as `bench run` does
     if args.workers is not None:
         at_once = (auto_workers("thinking", len(paths)) if args.workers == AUTO
                    else min(args.workers, len(paths)))
@@ -185,6 +189,11 @@ def main() -> None:
           f"{peak_mb:.0f} MB ({base_mb:.0f} MB before their first session; "
           f"{(peak_mb - base_mb) / max(1, hosted):.1f} MB per hosted session, {hosted} at "
           f"once); {len(errors)} session errors; load average now {os.getloadavg()[0]:.1f}")
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        with (args.out / "results.jsonl").open("w", encoding="utf-8") as f:
+            for r in sorted(records, key=lambda r: r["key"]):
+                f.write(json.dumps(r, sort_keys=True) + "\n")
     for r in records:
         if not r["passed"]:
             failed = [c for c in r["checks"] if not c["passed"]]

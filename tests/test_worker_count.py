@@ -18,6 +18,7 @@ from benchmark.running.worker_count import (
     INSTANT_SESSIONS_PER_CORE,
     PROCESS_MB,
     SESSION_MB,
+    SESSIONS_PER_PROCESS,
     THINKING_SESSIONS_PER_CORE,
     auto_workers,
     hosting_for,
@@ -44,10 +45,17 @@ def test_auto_for_a_thinking_agent_follows_the_memory_and_the_cores() -> None:
     assert auto_workers("external", 125, cores=1, memory_mb=plenty) == THINKING_SESSIONS_PER_CORE
 
 
-def test_hosting_spreads_sessions_over_at_most_one_process_per_core() -> None:
+def test_hosting_spreads_sessions_over_one_process_per_core() -> None:
     assert (hosting_for(6, cores=2).processes, hosting_for(6, cores=2).per_process) == (2, 3)
     assert (hosting_for(5, cores=2).processes, hosting_for(5, cores=2).per_process) == (2, 3)
     assert (hosting_for(2, cores=4).processes, hosting_for(2, cores=4).per_process) == (2, 1)
+    # never more than SESSIONS_PER_PROCESS in one process: more processes instead
+    most = 2 * SESSIONS_PER_PROCESS
+    assert (hosting_for(most, cores=2).processes, hosting_for(most, cores=2).per_process) \
+        == (2, SESSIONS_PER_PROCESS)
+    assert hosting_for(most + 1, cores=2).processes == 3
+    assert hosting_for(64, cores=2).per_process <= SESSIONS_PER_PROCESS
+    assert hosting_for(125, cores=1).processes == -(-125 // SESSIONS_PER_PROCESS)
     assert hosting_for(6, cores=2, shared=False).processes == 6  # a process per session
     with pytest.raises(ValueError):
         hosting_for(0)

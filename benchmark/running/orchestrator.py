@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import os
 import time
 from collections.abc import Awaitable, Callable, Mapping, Sequence
@@ -30,13 +29,27 @@ from benchmark.running.live_channel import LiveChannel
 from benchmark.running.progress import LineProgress, ProgressSink, task_line
 from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.results import ResultsLog, read_task_records
-from benchmark.running.worker_count import AUTO, auto_workers, shares_processes
+from benchmark.running.run_order import run_order, session_head
+from benchmark.running.worker_count import (
+    AUTO,
+    auto_workers,
+    shares_processes,
+)
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 from swarm_agents import plugins
 
-__all__ = ["AGENTS", "PlanWork", "RunOutcome", "RunPlan", "check_session_files",
-           "largest_first", "make_agent", "run_benchmark", "run_unit", "run_unit_async"]
+__all__ = [
+    "AGENTS",
+    "PlanWork",
+    "RunOutcome",
+    "RunPlan",
+    "check_session_files",
+    "make_agent",
+    "run_benchmark",
+    "run_unit",
+    "run_unit_async",
+]
 
 # The built-in agents; NAME:per-drone: one instance of NAME per drone
 # (swarm_agents.teams.per_drone).
@@ -269,28 +282,6 @@ def _known_tasks(paths: Sequence[Path]) -> dict[str, frozenset[str]] | None:
     return known
 
 
-def _session_head(path: Path) -> tuple[str | None, int, int]:
-    """A session file's id, number of tasks and number of drones without validating it (an
-    unreadable file: None, 0, 0; the worker reports the problem)."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None, 0, 0
-    if not isinstance(data, dict):
-        return None, 0, 0
-    ident, tasks, drones = data.get("id"), data.get("tasks"), data.get("drones")
-    return (ident if isinstance(ident, str) else None,
-            len(tasks) if isinstance(tasks, list) else 0,
-            len(drones) if isinstance(drones, list) else 0)
-
-
-def largest_first(sessions: Sequence[Path]) -> list[Path]:
-    """The order a run with several workers starts sessions in: the largest fleets first,
-    since a session's wall time grows with its drones and the run ends when its last
-    session does (results do not depend on the order)."""
-    return sorted(sessions, key=lambda p: -_session_head(p)[2])
-
-
 def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
                   sink: ProgressSink | None = None,
                   on_record: Callable[[dict[str, Any]], None] | None = None,
@@ -332,8 +323,8 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         log.close()
         raise
     done = _done_by_unit(previous)
-    heads = {p: _session_head(p) for p in plan.sessions}
-    order = largest_first(plan.sessions) if workers > 1 else plan.sessions
+    heads = {p: session_head(p) for p in plan.sessions}
+    order = run_order(plan.sessions, plan.agent) if workers > 1 else plan.sessions
     units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))
              for trial in range(plan.trials) for p in order]
     limit = plan.task_limit

@@ -3,9 +3,10 @@
 `--workers N` is the number of sessions run at once. An agent that answers at once (the
 oracle, noop) gets a worker process per session: its sessions compute most of the time, and
 a session never waits on a neighbour's computation. Any other agent mostly thinks, so the
-local backend spreads its sessions over at most one worker process per core, each process
-hosting its share side by side in one event loop (a session then costs memory for its swarm
-and gateway only, not a process). `--workers auto` picks N from the machine:
+local backend spreads its sessions over one worker process per core, each process hosting
+its share side by side in one event loop (a session then costs memory for its swarm and
+gateway only, not a process), and over more processes where a core's share would pass
+SESSIONS_PER_PROCESS. `--workers auto` picks N from the machine:
 
 - an agent that answers at once (the oracle, noop) keeps a core busy with a few sessions, so
   N = INSTANT_SESSIONS_PER_CORE per core;
@@ -24,9 +25,22 @@ import math
 import os
 from dataclasses import dataclass
 
-__all__ = ["AUTO", "INSTANT_AGENTS", "INSTANT_SESSIONS_PER_CORE", "PROCESS_MB", "SESSION_MB",
-           "THINKING_SESSIONS_PER_CORE", "Hosting", "auto_workers", "available_memory_mb",
-           "hosting_for", "parse_workers", "shares_processes", "usable_cores"]
+__all__ = [
+    "AUTO",
+    "INSTANT_AGENTS",
+    "INSTANT_SESSIONS_PER_CORE",
+    "PROCESS_MB",
+    "SESSIONS_PER_PROCESS",
+    "SESSION_MB",
+    "THINKING_SESSIONS_PER_CORE",
+    "Hosting",
+    "auto_workers",
+    "available_memory_mb",
+    "hosting_for",
+    "parse_workers",
+    "shares_processes",
+    "usable_cores",
+]
 
 AUTO = "auto"
 INSTANT_AGENTS = frozenset({"oracle", "noop"})
@@ -39,11 +53,19 @@ MEMORY_SHARE = 0.5  # of the memory available when the run starts
 # Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
 # of its wall time (perf/task_spans.py), so three keep a core busy.
 INSTANT_SESSIONS_PER_CORE = 3
-# Sessions of an agent that thinks, per core: one hosted session costs 1.7-4.2 % of a core
+# Sessions of an agent that thinks, per core: one hosted session costs 0.9-2.6 % of a core
 # while its agent thinks (3 to 30 drones, perf/idle_sessions.py) and its share of the flying
-# besides; with 63 per core the whole suite's sessions kept both cores busy, thinking or not
-# (perf/think_latency.py), with 16 each worker had a third of its core to spare.
-THINKING_SESSIONS_PER_CORE = 16
+# besides. The whole suite with 2 s of thought before each call (perf/think_latency.py, 2
+# cores): 63 per core kept both cores busy for good and ran slower; 16 per core left a third
+# of each core idle while the sessions' chains of calls set the pace; 32 per core kept both
+# busy until the last sessions, the longest first, ran out.
+THINKING_SESSIONS_PER_CORE = 32
+# Sessions one worker process hosts at once, at most: each holds a MAVSDK instance, and a
+# process that held 20 or more at once (MAVSDK 4.1's C++ core) found its C heap corrupted
+# when it exited (glibc's "munmap_chunk(): invalid pointer" or "double free", the process
+# killed by SIGABRT): every one of 9 runs of 20-32 sessions at once, none of 4 runs of 16
+# at once (two of them 50 sessions in turn). So a run hosts more at once in more processes.
+SESSIONS_PER_PROCESS = 16
 
 
 def usable_cores() -> int:
@@ -108,14 +130,16 @@ class Hosting:
 
 
 def hosting_for(sessions: int, cores: int | None = None, *, shared: bool = True) -> Hosting:
-    """`sessions` at once: over at most one process per core when processes are `shared`,
-    else a process each."""
+    """`sessions` at once: over one process per core when processes are `shared` (fewer when
+    there are fewer sessions; more when a process would host more than
+    SESSIONS_PER_PROCESS), else a process each."""
     if sessions < 1:
         raise ValueError("workers must be >= 1")
     if not shared:
         return Hosting(sessions, sessions)
     cores = max(1, cores if cores is not None else usable_cores())
-    return Hosting(sessions, min(sessions, cores))
+    return Hosting(sessions, max(min(sessions, cores),
+                                 math.ceil(sessions / SESSIONS_PER_PROCESS)))
 
 
 def shares_processes(agent: str) -> bool:
