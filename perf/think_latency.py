@@ -38,6 +38,7 @@ from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
+from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.run_order import run_order
 from benchmark.running.worker_count import AUTO, auto_workers, hosting_for, parse_workers
 from swarm_agents.oracle import OracleAgent
@@ -133,7 +134,7 @@ def main() -> None:
                         help="sessions at once in all (or auto), instead of --processes and "
                              "--sessions")
     parser.add_argument("--out", type=Path, default=None,
-                        help="write the task records to OUT/results.jsonl (as `bench run "
+                        help="write the task records and replays to OUT (as `bench run "
                              "--out` does, to compare with perf/records_equal.py)")
     args = parser.parse_args()
     suite, args.task_limit = suite_paths(args.suite)
@@ -189,11 +190,16 @@ def main() -> None:
           f"{peak_mb:.0f} MB ({base_mb:.0f} MB before their first session; "
           f"{(peak_mb - base_mb) / max(1, hosted):.1f} MB per hosted session, {hosted} at "
           f"once); {len(errors)} session errors; load average now {os.getloadavg()[0]:.1f}")
-    if args.out is not None:
+    if args.out is not None:  # as `bench run --out` lays them out
         args.out.mkdir(parents=True, exist_ok=True)
+        by_id = {json.loads(Path(p).read_text())["id"]: Path(p) for p in paths}
         with (args.out / "results.jsonl").open("w", encoding="utf-8") as f:
             for r in sorted(records, key=lambda r: r["key"]):
-                f.write(json.dumps(r, sort_keys=True) + "\n")
+                record = {k: v for k, v in r.items() if k != "replay"}
+                if r.get("replay") is not None:
+                    world = session_world(json.loads(by_id[r["session"]].read_text()))
+                    write_task_replay(args.out, record, r["replay"], world)
+                f.write(json.dumps(record, sort_keys=True) + "\n")
     for r in records:
         if not r["passed"]:
             failed = [c for c in r["checks"] if not c["passed"]]
