@@ -60,11 +60,14 @@ INSTANT_SESSIONS_PER_CORE = 3
 # of each core idle while the sessions' chains of calls set the pace; 32 per core kept both
 # busy until the last sessions, the longest first, ran out.
 THINKING_SESSIONS_PER_CORE = 32
-# Sessions one worker process hosts at once, at most: each holds a MAVSDK instance, and a
-# process that held 20 or more at once (MAVSDK 4.1's C++ core) found its C heap corrupted
-# when it exited (glibc's "munmap_chunk(): invalid pointer" or "double free", the process
-# killed by SIGABRT): every one of 9 runs of 20-32 sessions at once, none of 4 runs of 16
-# at once (two of them 50 sessions in turn). So a run hosts more at once in more processes.
+# Sessions one worker process hosts at once, at most: each holds a swarm and a MAVSDK
+# instance, and processes that held 20-32 at once (MAVSDK 4.1's C++ core) found their C heap
+# corrupted when they exited (glibc's "munmap_chunk(): invalid pointer", "free(): invalid
+# size" or "double free", the process killed by SIGABRT): 20 of 20 runs with the suite's
+# first two sessions of every family and level, whether they ran tasks or only connected,
+# though not every mix did (25 three-drone sessions at once exited cleanly); none of 10 runs
+# with 16-18 at once, two of them the whole suite in 4 processes of 16. So a run hosts more
+# sessions at once in more processes.
 SESSIONS_PER_PROCESS = 16
 
 
