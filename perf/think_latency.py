@@ -39,7 +39,7 @@ from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
 from benchmark.running.replay_data import session_world, write_task_replay
-from benchmark.running.run_order import run_order
+from benchmark.running.run_order import run_order, session_heads
 from benchmark.running.worker_count import AUTO, auto_workers, hosting_for, parse_workers
 from swarm_agents.oracle import OracleAgent
 
@@ -139,7 +139,8 @@ def main() -> None:
     args = parser.parse_args()
     suite, args.task_limit = suite_paths(args.suite)
     chosen = [p for p in suite if args.only in p.stem][: args.limit or None]
-    paths = [str(p) for p in run_order(chosen, "thinking")]  # as `bench run` does
+    heads = session_heads(chosen)
+    paths = [str(p) for p in run_order(chosen, heads, "thinking")]  # as `bench run` does
     if args.workers is not None:
         at_once = (auto_workers("thinking", len(paths)) if args.workers == AUTO
                    else min(args.workers, len(paths)))
@@ -158,8 +159,8 @@ def main() -> None:
     errors: list[str] = []
     finished, peak_mb, base_mb = 0, 0.0, 0.0
     pids = [w.pid for w in workers if w.pid is not None]
-    counts = [len(json.loads(Path(p).read_text())["tasks"]) for p in paths]
-    planned = sum(c if args.task_limit is None else min(c, args.task_limit) for c in counts)
+    planned = sum(h.tasks if args.task_limit is None else min(h.tasks, args.task_limit)
+                  for h in heads.values())
     next_note = start + PROGRESS_EVERY_S
     while finished < len(workers):
         peak_mb = max(peak_mb, _rss_mb(pids))
@@ -192,13 +193,12 @@ def main() -> None:
           f"once); {len(errors)} session errors; load average now {os.getloadavg()[0]:.1f}")
     if args.out is not None:  # as `bench run --out` lays them out
         args.out.mkdir(parents=True, exist_ok=True)
-        by_id = {json.loads(Path(p).read_text())["id"]: Path(p) for p in paths}
+        worlds = {h.id: session_world(json.loads(p.read_text())) for p, h in heads.items()}
         with (args.out / "results.jsonl").open("w", encoding="utf-8") as f:
             for r in sorted(records, key=lambda r: r["key"]):
                 record = {k: v for k, v in r.items() if k != "replay"}
                 if r.get("replay") is not None:
-                    world = session_world(json.loads(by_id[r["session"]].read_text()))
-                    write_task_replay(args.out, record, r["replay"], world)
+                    write_task_replay(args.out, record, r["replay"], worlds[r["session"]])
                 f.write(json.dumps(record, sort_keys=True) + "\n")
     for r in records:
         if not r["passed"]:

@@ -5,7 +5,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from benchmark.running.run_order import run_order, session_head
+from benchmark.running.run_order import SessionHead, session_heads
+from benchmark.running.run_order import run_order as _run_order
+
+
+def run_order(paths: list[Path], agent: str) -> list[Path]:
+    return _run_order(paths, session_heads(paths), agent)
 
 
 def _session(folder: Path, name: str, drones: int, calls_per_task: list[int]) -> Path:
@@ -47,6 +52,7 @@ def test_unreadable_or_odd_files_sort_last_and_keep_their_order(tmp_path: Path) 
     real = _session(tmp_path, "real", 3, [5])
     assert run_order([broken, odd, missing, real], "react") == [real, broken, odd, missing]
     assert run_order([broken, odd, missing, real], "oracle") == [real, broken, odd, missing]
-    assert session_head(broken) == (None, 0, 0)
-    assert session_head(odd) == (None, 3, 0)
-    assert session_head(real) == ("real", 1, 3)
+    heads = session_heads([broken, odd, real])
+    assert heads[broken] == SessionHead(None, 0, 0, 0)
+    assert heads[odd] == SessionHead(None, 3, 0, 0)
+    assert heads[real] == SessionHead("real", 1, 3, 5)

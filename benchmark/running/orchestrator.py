@@ -29,12 +29,8 @@ from benchmark.running.live_channel import LiveChannel
 from benchmark.running.progress import LineProgress, ProgressSink, task_line
 from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.results import ResultsLog, read_task_records
-from benchmark.running.run_order import run_order, session_head
-from benchmark.running.worker_count import (
-    AUTO,
-    auto_workers,
-    shares_processes,
-)
+from benchmark.running.run_order import run_order, session_heads
+from benchmark.running.worker_count import AUTO, auto_workers, shares_processes
 from emulator.reference_mapping import notes_to_show
 from mavlink_gateway import set_mavsdk_log
 from swarm_agents import plugins
@@ -323,12 +319,12 @@ def run_benchmark(plan: RunPlan, progress: Callable[[str], None] = print, *,
         log.close()
         raise
     done = _done_by_unit(previous)
-    heads = {p: session_head(p) for p in plan.sessions}
-    order = run_order(plan.sessions, plan.agent) if workers > 1 else plan.sessions
-    units = [Unit(str(p), trial, done.get((heads[p][0] or "", trial), {}))
+    heads = session_heads(plan.sessions)
+    order = run_order(plan.sessions, heads, plan.agent) if workers > 1 else plan.sessions
+    units = [Unit(str(p), trial, done.get((heads[p].id or "", trial), {}))
              for trial in range(plan.trials) for p in order]
     limit = plan.task_limit
-    planned = plan.trials * sum(heads[p][1] if limit is None else min(heads[p][1], limit)
+    planned = plan.trials * sum(heads[p].tasks if limit is None else min(heads[p].tasks, limit)
                                 for p in plan.sessions)
     passed = {r["key"]: r.get("passed") is True for r in previous}
     already = [key for unit in units for key in unit.done]
