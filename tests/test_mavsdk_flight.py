@@ -268,14 +268,16 @@ async def test_landed_state_in_air_after_goto_during_takeoff(swarm_factory,
 
 async def test_landed_state_in_air_after_hold_interrupts_landing(swarm_factory,
                                                                  mavsdk_client) -> None:
-    swarm = await swarm_factory(1)
+    # 5x real time: the final descent from 3 m takes about 0.9 s of wall time, room for the
+    # hold to arrive on a loaded machine (at 20x it had 0.2 s and sometimes came too late)
+    swarm = await swarm_factory(1, speed=5.0)
     async with mavsdk_client(swarm.ports.api_port, 1) as systems:
         action, telemetry = ActionAsync(systems[0]), TelemetryAsync(systems[0])
         await take_off(swarm, systems[0], 1, 6.0)
         await action.land()
         await eventually(lambda: truth_pos(swarm, 1)[2] < 3.0, 10.0, "final descent")
         await action.hold()
-        await asyncio.sleep(0.2)  # 4 s simulated: braked and hovering
+        await asyncio.sleep(0.8)  # 4 s simulated: braked and hovering
         assert swarm.fleet.autopilots[0].in_air
         z = truth_pos(swarm, 1)[2]
         assert z > 0.5
