@@ -47,6 +47,11 @@ IDLE_TICK_S = 0.25
 TELEMETRY_TICK_S = 0.02
 TELEMETRY_TICK_MAX_S = 0.1
 TICKS_PER_PERIOD = 5
+# A lockstep clock's streams only keep links alive and caches roughly current (outcomes are
+# read from the bursts sent where the clock stops), so they are gathered once per shortest
+# period, at most this far apart: a vehicle's message goes out up to a tick late, and an idle
+# hosted session wakes twice a second instead of ten times.
+QUIET_TELEMETRY_TICK_MAX_S = 0.5
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
@@ -54,8 +59,11 @@ MAX_STEPS_PER_RUN = 2000
 log = logging.getLogger("mavswarm.swarm")
 
 
-def telemetry_tick_s(shortest_period_s: float) -> float:
-    """How often due telemetry is gathered, given the shortest stream period (see above)."""
+def telemetry_tick_s(shortest_period_s: float, *, quiet: bool = False) -> float:
+    """How often due telemetry is gathered, given the shortest stream period (see above);
+    quiet: the streams of a lockstep clock (emulator.quiet_streams), gathered once a period."""
+    if quiet:
+        return min(shortest_period_s, max(TELEMETRY_TICK_S, QUIET_TELEMETRY_TICK_MAX_S))
     slow = min(TELEMETRY_TICK_MAX_S, shortest_period_s / TICKS_PER_PERIOD)
     return min(shortest_period_s, max(TELEMETRY_TICK_S, slow))
 
@@ -404,7 +412,8 @@ class Swarm:
                 self._release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:
-                tick = telemetry_tick_s(self.streams.shortest_period_s())
+                tick = telemetry_tick_s(self.streams.shortest_period_s(),
+                                        quiet=self.quiet is not None)
                 next_telemetry += tick
                 if next_telemetry <= wall:  # late (or the first turn): keep the cadence from now
                     next_telemetry = wall + tick

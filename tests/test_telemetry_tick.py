@@ -1,5 +1,6 @@
 """How often the swarm gathers due telemetry: every 20 ms, or at a fifth of the shortest stream
-period when every stream is slower (at most 0.1 s apart), and the streams keep their rates."""
+period when every stream is slower (at most 0.1 s apart); a lockstep clock's quiet streams once
+per shortest period (at most 0.5 s apart). The streams keep their rates."""
 
 from __future__ import annotations
 
@@ -7,7 +8,12 @@ import numpy as np
 import pytest
 
 from emulator.mavlink.streams import StreamSchedule
-from emulator.swarm import TELEMETRY_TICK_MAX_S, TELEMETRY_TICK_S, telemetry_tick_s
+from emulator.swarm import (
+    QUIET_TELEMETRY_TICK_MAX_S,
+    TELEMETRY_TICK_MAX_S,
+    TELEMETRY_TICK_S,
+    telemetry_tick_s,
+)
 
 
 @pytest.mark.parametrize(("shortest_s", "tick_s"), [
@@ -23,10 +29,22 @@ def test_tick_follows_the_shortest_period(shortest_s: float, tick_s: float) -> N
     assert telemetry_tick_s(shortest_s) == pytest.approx(tick_s)
 
 
-def test_streams_keep_their_rates_at_the_slow_tick() -> None:
+@pytest.mark.parametrize(("shortest_s", "tick_s"), [
+    (0.01, 0.01),                          # a client asked a lockstep swarm for 100 Hz
+    (0.05, 0.05),
+    (0.5, QUIET_TELEMETRY_TICK_MAX_S),     # a lockstep run's 2 Hz
+    (2.0, QUIET_TELEMETRY_TICK_MAX_S),
+    (float("inf"), QUIET_TELEMETRY_TICK_MAX_S),
+])
+def test_quiet_streams_are_gathered_once_a_period(shortest_s: float, tick_s: float) -> None:
+    assert telemetry_tick_s(shortest_s, quiet=True) == pytest.approx(tick_s)
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_streams_keep_their_rates_at_the_slow_tick(quiet: bool) -> None:
     rates = {"GLOBAL_POSITION_INT": 2.0, "HEARTBEAT": 1.0, "HOME_POSITION": 0.5}
     schedule = StreamSchedule(7, 0.0, rates)
-    tick = telemetry_tick_s(schedule.shortest_period_s())
+    tick = telemetry_tick_s(schedule.shortest_period_s(), quiet=quiet)
     sent: dict[int, np.ndarray] = {}
     for turn in range(1, int(60.0 / tick) + 1):
         for msg_id, ks in schedule.due(turn * tick):
