@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Final, Protocol
 
 import numpy as np
 
@@ -32,22 +32,22 @@ __all__ = [
     "along_line_limit",
 ]
 
-CONTROL_NONE = 0  # resting on the ground: no motion
-CONTROL_POSITION = 1  # fly to `goal_m`
-CONTROL_VELOCITY = 2  # follow `velocity_sp_m_s`
+CONTROL_NONE: Final = 0  # resting on the ground: no motion
+CONTROL_POSITION: Final = 1  # fly to `goal_m`
+CONTROL_VELOCITY: Final = 2  # follow `velocity_sp_m_s`
 
-TRACK_NONE = 0  # no arrival report wanted
-TRACK_PASS = 1  # report once inside the acceptance radius
-TRACK_SETTLE = 2  # report once inside the acceptance radius and settled
+TRACK_NONE: Final = 0  # no arrival report wanted
+TRACK_PASS: Final = 1  # report once inside the acceptance radius
+TRACK_SETTLE: Final = 2  # report once inside the acceptance radius and settled
 
-SETTLED_SPEED_M_S = 0.3
+SETTLED_SPEED_M_S: Final = 0.3
 # A settled arrival is also this close to the goal. Flown in, the braking profile is well
 # inside it by the time the speed drops below SETTLED_SPEED_M_S; the bound matters for a
 # vehicle at rest when a goal is set within the acceptance radius (a 1 m take-off, a 1.5 m
 # move), which would otherwise count as arrived before it moved.
-SETTLED_GOAL_M = 0.1
-BRAKING_SHARE = 0.8
-YAW_REACHED_DEG = 1.0
+SETTLED_GOAL_M: Final = 0.1
+BRAKING_SHARE: Final = 0.8
+YAW_REACHED_DEG: Final = 1.0
 _EMPTY = np.empty(0, dtype=np.intp)
 
 

@@ -7,17 +7,11 @@ import math
 import numpy as np
 
 from emulator.flight.arrays import any_true as _any
-from emulator.flight.arrays import count_nonzero as _count
 from emulator.flight.arrays import indices as _indices
 from emulator.flight.autopilot import Autopilot
-from emulator.flight.battery import (
-    CLIMB_POWER_PER_M_S,
-    GROUND_IDLE_POWER,
-    SPEED_POWER_PER_M2_S2,
-    FleetBattery,
-)
+from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
-from emulator.flight.cruise import CruisePlan, cruise_plan
+from emulator.flight.cruise import CruisePlan
 from emulator.flight.dynamics import (
     CONTROL_NONE,
     CONTROL_VELOCITY,
@@ -25,13 +19,18 @@ from emulator.flight.dynamics import (
     StepEvents,
     StepGuard,
 )
+from emulator.flight.native import (  # compiled where built (build_native.py)
+    SoloBattery,
+    SoloVehicle,
+    cruise_plan,
+    run_solo_steps,
+)
 from emulator.flight.solo import (
     ARRIVED,
     OBSTACLE_STOP,
-    STEADY,
+    SOLO_EVENTS,
     TOUCHED_DOWN,
     YAW_REACHED,
-    SoloVehicle,
 )
 from emulator.perception import Sensor
 from emulator.scenario import Scenario
@@ -46,7 +45,6 @@ LEAP_RETRY_STEPS = 4  # after a failed fast-forward check, step normally this ma
 # At most this many vehicles are stepped one by one while the others cruise (see
 # emulator.flight.cruise); with more, a plain step of the whole fleet costs less.
 MAX_SOLO = 12
-_SOLO_EVENTS = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
 _NO_EVENTS = StepEvents(_NO_LEVELS, _NO_LEVELS, _NO_LEVELS, _NO_LEVELS)
 
 
@@ -263,76 +261,17 @@ class Fleet:
         guard = _SoloGuard(self) if self.guard.enabled else None
         rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
         solos = [SoloVehicle(dyn, k, dt, guard, rows) for k in plan.solo.tolist()]
-        stepping = [solo.step for solo in solos]
         moving = self._moving_mask()
         start = self.step_count
-        charging = bat.charge_rate_pct_s > 0.0
-        any_charging = _any(charging)
-        charging_k = _indices(charging).tolist()
-        # The battery in Python floats while the solo vehicles are stepped (the operations of
-        # FleetBattery.deltas and apply); the levels are worked out by the battery itself
-        # unless every charge lies above every level and every level is OK.
-        deltas: list[float] | None = None  # per battery step (the same for the cruising ones)
-        pct = bat.pct.tolist()
-        floor_pct = float(bat.levels_pct.max())
-        # airborne, armed, full charge per s of hover (%/s) and charge rate of each solo vehicle
-        flags: list[tuple[bool, bool, float, float]] = []
-        bat_dt = dt * BATTERY_EVERY_STEPS
-        wind_x, wind_y = dyn.wind_m_s.tolist()
+        battery = SoloBattery(self, plan.solo, dt * BATTERY_EVERY_STEPS)
         charge: list[list[float]] = []
         bits = [0] * len(solos)
-        settling = False  # whether some solo vehicle sped up, braked or turned in this run
-        levels = _NO_LEVELS
-        battery_step = battery_ran = False
-        battery_j = BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS  # the first battery step
-        j = 0
-        while j < plan.steps:
-            t_guard = (start + j) * dt + dt  # the plain step's now_s + dt_s
-            j += 1
-            happened, steady = 0, STEADY
-            for i, step in enumerate(stepping):
-                bits[i] = b = step(t_guard)
-                happened |= b
-                steady &= b
-            battery_step = j == battery_j
-            if battery_step:
-                battery_j += BATTERY_EVERY_STEPS
-                battery_ran = True
-                if deltas is None:
-                    deltas = bat.deltas(bat_dt, self.airborne, self.armed, dyn.airspeed_m_s(),
-                                        dyn.velocity_m_s[:, 2]).tolist()
-                    flags = list(zip(self.airborne[plan.solo].tolist(),
-                                     self.armed[plan.solo].tolist(),
-                                     (100.0 / bat.hover_endurance_s[plan.solo]).tolist(),
-                                     bat.charge_rate_pct_s[plan.solo].tolist(), strict=True))
-                for solo, (airborne, armed, full_pct_s, charge_pct_s) in zip(
-                        solos, flags, strict=True):
-                    # FleetBattery.delta, written out
-                    if airborne:
-                        air = _hypot(solo.vx - wind_x, solo.vy - wind_y)
-                        power = (1.0 + SPEED_POWER_PER_M2_S2 * (air * air)
-                                 + CLIMB_POWER_PER_M_S * max(solo.vz, 0.0))
-                    else:
-                        power = GROUND_IDLE_POWER if armed else 0.0
-                    deltas[solo.k] = (charge_pct_s - full_pct_s * power) * bat_dt
-                pct = [p + d for p, d in zip(pct, deltas, strict=True)]
-                if min(pct) < 0.0 or max(pct) > 100.0:
-                    pct = [_clip_pct(p) for p in pct]
-                if min(pct) > floor_pct and not _count(bat.level):
-                    levels = _NO_LEVELS
-                else:
-                    levels = bat.set_pct(np.array(pct))
-                if levels.size or (any_charging and any(pct[k] >= 100.0 for k in charging_k)):
-                    happened |= ARRIVED  # not an arrival: just stop here for the autopilots
-            charge.append(pct)
-            if happened & _SOLO_EVENTS:
-                break
-            if not steady:
-                settling = True
-            elif settling and j >= LEAP_RETRY_STEPS:
-                break  # every solo vehicle cruises now: the whole fleet may leap
-        if battery_ran:
-            bat.pct = np.array(pct)
+        j, battery_step = run_solo_steps(
+            solos, bits, plan.steps, start, dt,
+            BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS, BATTERY_EVERY_STEPS, battery,
+            charge, LEAP_RETRY_STEPS)
+        if battery.ran:
+            bat.pct = np.array(battery.pct)
         steps = np.arange(start + 1, start + j + 1)
         positions = dyn.position_m + dyn.velocity_m_s * ((steps - start)[:, None, None] * dt)
         solo_rows = np.array(rows).reshape(j, len(solos), 5)
@@ -356,11 +295,12 @@ class Fleet:
         self.recorder.record_fleet_steps(steps * dt, positions, yaw, np.array(charge),
                                          moving_rows)
         events = _NO_EVENTS
-        if any(b & _SOLO_EVENTS for b in bits):
+        if any(b & SOLO_EVENTS for b in bits):
             events = StepEvents(*(np.array([s.k for s, b in zip(solos, bits, strict=True)
                                             if b & bit], dtype=np.intp)
                                   for bit in (ARRIVED, YAW_REACHED, TOUCHED_DOWN, OBSTACLE_STOP)))
-        self._acted = self._react(events, levels if battery_step else _NO_LEVELS, battery_step)
+        self._acted = self._react(events, battery.levels if battery_step else _NO_LEVELS,
+                                  battery_step)
         return j
 
     def _moving_mask(self) -> np.ndarray:
@@ -371,15 +311,6 @@ class Fleet:
         dyn = self.dyn
         self.recorder.record_fleet_step(self.now_s, dyn.position_m, dyn.yaw_deg, self.bat.pct,
                                         self._moving_mask())
-
-
-def _clip_pct(pct: float) -> float:
-    """np.minimum(np.maximum(pct, 0.0), 100.0) for one float (FleetBattery.apply)."""
-    pct = 0.0 if pct < 0.0 else pct
-    return 100.0 if pct > 100.0 else pct
-
-
-_hypot = math.hypot
 
 
 class _SoloGuard:

@@ -6,12 +6,16 @@ less than numpy's calls on whole arrays. `SoloVehicle.step` applies to one vehic
 `FleetDynamics.step` applies to every row, in the same order and with the same operations
 (only `math.hypot` and `math.atan2` may round their last bit differently from numpy's).
 Vehicles under velocity control are never stepped here.
+
+The module is plain, typed Python that mypyc compiles as well (build_native.py,
+emulator.flight.native): the attributes' declared types and the `Final` constants let the
+compiled step run on C doubles, with the same operations and so the same results.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import Final, Protocol
 
 from emulator.flight.dynamics import (
     BRAKING_SHARE,
@@ -26,18 +30,33 @@ from emulator.flight.dynamics import (
     FleetDynamics,
 )
 
-__all__ = ["ARRIVED", "OBSTACLE_STOP", "STEADY", "TOUCHED_DOWN", "YAW_REACHED", "SoloVehicle"]
+__all__ = [
+    "ARRIVED",
+    "OBSTACLE_STOP",
+    "STEADY",
+    "TOUCHED_DOWN",
+    "YAW_REACHED",
+    "SoloBattery",
+    "SoloVehicle",
+    "run_solo_steps",
+    "step_all",
+]
 
 # What happened to a solo vehicle in its step (bits of `SoloVehicle.step`'s result).
-ARRIVED, YAW_REACHED, TOUCHED_DOWN, OBSTACLE_STOP = 1, 2, 4, 8
-STEADY = 16  # no acceleration and no yaw change: it may cruise from here
+ARRIVED: Final = 1
+YAW_REACHED: Final = 2
+TOUCHED_DOWN: Final = 4
+OBSTACLE_STOP: Final = 8
+STEADY: Final = 16  # no acceleration and no yaw change: it may cruise from here
 
-ACCEL_STEADY_M_S2 = 1e-6  # emulator.flight.cruise's bounds
-YAW_STEADY_DEG = 1e-9
-_SETTLED_SPEED2 = SETTLED_SPEED_M_S**2
-_SETTLED_GOAL2 = SETTLED_GOAL_M**2
-_INF = math.inf
-_hypot, _sqrt, _atan2, _degrees = math.hypot, math.sqrt, math.atan2, math.degrees
+ACCEL_STEADY_M_S2: Final = 1e-6  # emulator.flight.cruise's bounds
+YAW_STEADY_DEG: Final = 1e-9
+_SETTLED_SPEED2: Final = SETTLED_SPEED_M_S**2
+_SETTLED_GOAL2: Final = SETTLED_GOAL_M**2
+_INF: Final = math.inf
+
+
+SOLO_EVENTS: Final = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
 
 
 class Guard(Protocol):
@@ -57,11 +76,50 @@ class SoloVehicle:
 
     __slots__ = (
         "_accel_xy", "_accel_z", "_acceptance2", "_active", "_airspeed", "_check_at", "_climb",
-        "_descent", "_dt", "_dv_xy_max", "_dv_z_max", "_goal", "_goal_yaw", "_guard", "_inv_dt",
-        "_landing", "_position", "_rows", "_speed_xy", "_wind", "_yaw_step_max", "ax", "ay",
-        "az", "k", "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw", "yaw_step",
-        "yaw_tracking",
+        "_descent", "_dt", "_dv_xy_max", "_dv_z_max", "_goal_yaw", "_guard", "_gx", "_gy", "_gz",
+        "_inv_dt", "_landing", "_position", "_rows", "_speed_xy", "_wind", "_yaw_step_max", "ax",
+        "ay", "az", "k", "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw",
+        "yaw_step", "yaw_tracking",
     )
+
+    k: int
+    px: float
+    py: float
+    pz: float
+    vx: float
+    vy: float
+    vz: float
+    ax: float
+    ay: float
+    az: float
+    yaw: float
+    yaw_step: float
+    tracking: int
+    yaw_tracking: bool
+    moving: bool
+    _active: bool
+    _position: bool
+    _landing: bool
+    _gx: float
+    _gy: float
+    _gz: float
+    _goal_yaw: float
+    _speed_xy: float
+    _accel_xy: float
+    _accel_z: float
+    _airspeed: float
+    _climb: float
+    _descent: float
+    _dv_xy_max: float
+    _dv_z_max: float
+    _yaw_step_max: float
+    _acceptance2: float
+    _dt: float
+    _inv_dt: float
+    _check_at: float
+    _rows: list[float]
+    _wind: list[float] | None
+    _guard: Guard | None
 
     def __init__(self, dyn: FleetDynamics, k: int, dt_s: float, guard: Guard | None,
                  rows: list[float] | None = None) -> None:
@@ -79,8 +137,8 @@ class SoloVehicle:
         control = int(dyn.control[k])
         self._active = control != CONTROL_NONE
         self._position = control == CONTROL_POSITION
-        self._goal = dyn.goal_m[k].tolist()
-        self._landing = self._active and self._goal[2] < 0.0
+        self._gx, self._gy, self._gz = dyn.goal_m[k].tolist()
+        self._landing = self._active and self._gz < 0.0
         self._goal_yaw = float(dyn.goal_yaw_deg[k])
         self._speed_xy = float(dyn.speed_xy_m_s[k])
         self._accel_xy = float(dyn.accel_xy_m_s2[k])
@@ -104,13 +162,13 @@ class SoloVehicle:
         """Advance by one step ending at t_s; returns the bits of what happened."""
         px, py, pz = self.px, self.py, self.pz
         vx, vy, vz = self.vx, self.vy, self.vz
-        gx, gy, gz = self._goal
+        gx, gy, gz = self._gx, self._gy, self._gz
         dt = self._dt
         ex, ey, ez = gx - px, gy - py, gz - pz
-        d_xy = _hypot(ex, ey)
+        d_xy = math.hypot(ex, ey)
         active = self._active
         if active:
-            dist = _sqrt(d_xy * d_xy + ez * ez)
+            dist = math.sqrt(d_xy * d_xy + ez * ez)
             inv = 1.0 / (dist if dist > 1e-9 else 1e-9)
             h = d_xy * inv
             w = abs(ez) * inv
@@ -131,7 +189,7 @@ class SoloVehicle:
             a_eff = accel_v if accel_v < accel_h else accel_h
             if a_eff == _INF:
                 a_eff = accel_z if accel_z < accel_xy else accel_xy
-            speed = _sqrt(2.0 * BRAKING_SHARE * a_eff * dist)
+            speed = math.sqrt(2.0 * BRAKING_SHARE * a_eff * dist)
             if s_max < speed:
                 speed = s_max
             reach = dist * self._inv_dt
@@ -139,7 +197,7 @@ class SoloVehicle:
                 speed = reach
             f = speed * inv
             dvx, dvy, dvz = ex * f - vx, ey * f - vy, ez * f - vz
-            dv_xy = _hypot(dvx, dvy)
+            dv_xy = math.hypot(dvx, dvy)
             scale = self._dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
             if scale < 1.0:
                 nvx, nvy = vx + dvx * scale, vy + dvy * scale
@@ -149,13 +207,13 @@ class SoloVehicle:
             nvz = vz + (-lim_z if dvz < -lim_z else lim_z if dvz > lim_z else dvz)
             wind = self._wind
             if wind is None:
-                air = _hypot(nvx, nvy)
+                air = math.hypot(nvx, nvy)
                 if air > self._airspeed:
                     ratio = self._airspeed / air
                     nvx, nvy = nvx * ratio, nvy * ratio
             else:
                 airx, airy = nvx - wind[0], nvy - wind[1]
-                air = _hypot(airx, airy)
+                air = math.hypot(airx, airy)
                 if air > self._airspeed:
                     ratio = self._airspeed / air
                     nvx, nvy = airx * ratio + wind[0], airy * ratio + wind[1]
@@ -188,7 +246,7 @@ class SoloVehicle:
         if goal_yaw == goal_yaw:
             desired = goal_yaw
         elif self._position and d_xy > 2.0:
-            desired = _degrees(_atan2(ex, ey))
+            desired = math.degrees(math.atan2(ex, ey))
         else:
             desired = yaw
         if desired == yaw:
@@ -232,3 +290,58 @@ class SoloVehicle:
         dyn.yaw_deg[k] = self.yaw
         dyn.tracking[k] = self.tracking
         dyn.yaw_tracking[k] = self.yaw_tracking
+
+
+def step_all(solos: list[SoloVehicle], t_s: float, bits: list[int]) -> int:
+    """Step every vehicle of `solos` once (the step ending at t_s); bits[i] gets solos[i]'s
+    result. Returns what happened to any of them, with STEADY only if every one is steady."""
+    happened = 0
+    steady = STEADY
+    for i, solo in enumerate(solos):
+        b = solo.step(t_s)
+        bits[i] = b
+        happened |= b
+        steady &= b
+    return (happened & ~STEADY) | steady
+
+
+class SoloBattery(Protocol):
+    """The fleet's batteries during a run of solo steps (emulator.flight.solo_battery)."""
+
+    pct: list[float]  # every vehicle's charge after the last battery step
+
+    def step(self, solos: list[SoloVehicle]) -> bool:
+        """One battery step; whether the autopilots must look at the fleet after it."""
+
+
+def run_solo_steps(solos: list[SoloVehicle], bits: list[int], steps: int, start: int,
+                   dt_s: float, first_battery_step: int, battery_every: int,
+                   battery: SoloBattery, charge: list[list[float]],
+                   settle_steps: int) -> tuple[int, bool]:
+    """Up to `steps` steps of `solos` from step `start` (emulator.flight.fleet's cruise):
+    a battery step at step first_battery_step and every battery_every after it, each step's
+    charges appended to `charge`. Ends after a step in which something happened to a solo
+    vehicle (bits[i]: solos[i]'s last step), or in which every one of them flies steadily
+    again after speeding up, braking or turning (at settle_steps or later). Returns the
+    steps run and whether the last one was a battery step."""
+    settling = False
+    battery_step = False
+    battery_j = first_battery_step
+    j = 0
+    while j < steps:
+        t_s = (start + j) * dt_s + dt_s  # a plain step's now_s + dt_s
+        j += 1
+        happened = step_all(solos, t_s, bits)
+        battery_step = j == battery_j
+        if battery_step:
+            battery_j += battery_every
+            if battery.step(solos):
+                happened |= ARRIVED  # not an arrival: just stop here for the autopilots
+        charge.append(battery.pct)
+        if happened & SOLO_EVENTS:
+            break
+        if not happened & STEADY:
+            settling = True
+        elif settling and j >= settle_steps:
+            break
+    return j, battery_step
