@@ -37,6 +37,7 @@ from _common import machine_line
 from agent_contract import AgentTask, AgentTools
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SUITES, suite_paths
+from benchmark.running.backends import FOLLOWER_NICE
 from benchmark.running.episode import CLOCKS, EpisodeOptions, run_session
 from benchmark.running.replay_data import session_world, write_task_replay
 from benchmark.running.run_order import run_order, session_heads
@@ -97,7 +98,8 @@ async def _sessions(paths: list[str], args: argparse.Namespace, out: Any) -> Non
     await asyncio.gather(*(one(p) for p in paths))
 
 
-def _worker(paths: list[str], args: argparse.Namespace, out: Any) -> None:
+def _worker(paths: list[str], args: argparse.Namespace, out: Any, nice: int = 0) -> None:
+    os.nice(nice)
     import logging
     logging.disable(logging.WARNING)
     import benchmark.running.orchestrator  # noqa: F401  (what a worker of `bench run` holds)
@@ -150,8 +152,17 @@ def main() -> None:
     print(f"{len(paths)} sessions, think {args.think_s:g} s (+{args.jitter_s:g}) per call, "
           f"clock {args.clock}, {args.processes} processes x {args.sessions} sessions")
     queue = _SPAWN.Queue()
-    chunks = [paths[i::args.processes] for i in range(args.processes)]
-    workers = [_SPAWN.Process(target=_worker, args=(c, args, queue)) for c in chunks if c]
+    # as `bench run` spreads them (benchmark.running.backends): with several processes the
+    # first hosts the head of the run order at the machine's priority, the others the rest
+    # at FOLLOWER_NICE
+    if args.processes > 1:
+        head, rest = paths[:args.sessions], paths[args.sessions:]
+        chunks = [head] + [rest[i::args.processes - 1] for i in range(args.processes - 1)]
+    else:
+        chunks = [paths]
+    workers = [_SPAWN.Process(target=_worker,
+                              args=(c, args, queue, FOLLOWER_NICE if k > 0 else 0))
+               for k, c in enumerate(chunks) if c]
     start = time.perf_counter()
     for w in workers:
         w.start()

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from benchmark.running.backends import Handle, LocalBackend, Unit
+from benchmark.running.backends import FOLLOWER_NICE, Handle, LocalBackend, Unit
 from benchmark.running.worker_count import (
     INSTANT_SESSIONS_PER_CORE,
     PROCESS_MB,
@@ -83,7 +83,7 @@ class SleepyWork:
         asyncio.run(self.hosted(unit, send))
 
     async def hosted(self, unit: Unit, send: Handle) -> None:
-        send(("note", (os.getpid(), unit.path, "start", time.monotonic())))
+        send(("note", (os.getpid(), unit.path, "start", time.monotonic(), os.nice(0))))
         await asyncio.sleep(0.5)
         send(("note", (os.getpid(), unit.path, "end", time.monotonic())))
         if unit.path == "boom":
@@ -108,6 +108,22 @@ def test_a_worker_process_hosts_several_units_at_once_and_survives_a_failing_one
             running += 1 if kind == "start" else -1
             overlap[pid] = max(overlap[pid], running)
     assert max(overlap.values()) == 2, overlap  # 6 units, 2 processes: one ran 3 or more
+
+
+def test_the_head_of_the_run_order_leads_at_the_machines_priority() -> None:
+    """Several hosting processes: the first hosts the run order's first units (those with the
+    longest chains of calls) as it starts, the others run the rest at FOLLOWER_NICE."""
+    messages: list[tuple[str, Any]] = []
+    units = [Unit(p, 0) for p in ("long1", "long2", "c", "d", "e", "f")]
+    LocalBackend(4, cores=2, shared=True).run(SleepyWork(), units, messages.append)
+    starts = [m[1] for m in messages if m[0] == "note" and m[1][2] == "start"]
+    assert sorted(s[1] for s in starts) == ["c", "d", "e", "f", "long1", "long2"]
+    lead = {s[0] for s in starts if s[1].startswith("long")}
+    assert len(lead) == 1  # both head units in one process, side by side at the start
+    base = os.nice(0)
+    for pid, path, _, _, nice in starts:
+        assert nice == (base if pid in lead else min(19, base + FOLLOWER_NICE)), (path, nice)
+    assert len({s[0] for s in starts}) == 2
 
 
 def test_an_instant_agent_gets_a_process_per_session_a_thinking_one_shares() -> None:

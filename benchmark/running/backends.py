@@ -111,11 +111,25 @@ class LocalBackend:
             _run_processes(work, list(units), handle, hosting.processes, hosting.per_process)
 
 
-def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1) -> None:
+# Hosting several processes of units that mostly think, the first worker runs the head of the
+# run order (the units whose tasks allow the longest chains of calls, which set the run's
+# length: benchmark.running.run_order) at the machine's priority, and the others at this
+# niceness, so that on a busy machine those chains get a core whenever they need one and the
+# shorter units fill in the rest.
+FOLLOWER_NICE = 10
+
+
+def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1,
+            head: Sequence[Unit] = (), nice: int = 0) -> None:
+    import os
+
     from benchmark.running.worker_heap import return_large_blocks
     return_large_blocks()  # what a finished task frees leaves the worker
+    if nice:
+        os.nice(nice)
     if per_process > 1:
-        asyncio.run(_host(work.hosted, units, results, per_process))  # type: ignore[attr-defined]
+        asyncio.run(_host(work.hosted, units, results, per_process,  # type: ignore[attr-defined]
+                          list(head)))
         return
     while True:
         unit = units.get()
@@ -125,14 +139,17 @@ def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1) -> N
         results.put(("unit_done", (unit.path, unit.trial)))
 
 
-async def _host(hosted: HostedWork, units: Any, results: Any, per_process: int) -> None:
-    """Up to `per_process` units at once in this loop, each lane taking the next unit from
-    the queue as its last one ends, until it takes the end mark."""
+async def _host(hosted: HostedWork, units: Any, results: Any, per_process: int,
+                head: list[Unit] | None = None) -> None:
+    """Up to `per_process` units at once in this loop, each lane taking the next unit (from
+    `head` while it lasts, then from the queue) as its last one ends, until it takes the end
+    mark."""
     loop = asyncio.get_running_loop()
+    head = head or []
     with concurrent.futures.ThreadPoolExecutor(per_process, "unit-queue") as takers:
         async def lane() -> None:
             while True:
-                unit = await loop.run_in_executor(takers, units.get)
+                unit = head.pop(0) if head else await loop.run_in_executor(takers, units.get)
                 if unit is None:
                     return
                 try:
@@ -149,11 +166,16 @@ def _run_processes(work: UnitWork, units: list[Unit], handle: Handle, processes:
                    per_process: int) -> None:
     ctx = multiprocessing.get_context("spawn")
     unit_q, result_q = ctx.Queue(), ctx.Queue()
-    for unit in units:
+    count = min(processes, len(units))
+    # see FOLLOWER_NICE: several hosting processes, the first leads with the run order's head
+    head = units[:per_process] if per_process > 1 and count > 1 else []
+    for unit in units[len(head):]:
         unit_q.put(unit)
-    procs = [ctx.Process(target=_worker, args=(work, unit_q, result_q, per_process),
+    procs = [ctx.Process(target=_worker,
+                         args=(work, unit_q, result_q, per_process, head if k == 0 else [],
+                               FOLLOWER_NICE if head and k > 0 else 0),
                          daemon=True, name=f"bench-worker-{k}")
-             for k in range(min(processes, len(units)))]
+             for k in range(count)]
     for p in procs:
         for _ in range(per_process):
             unit_q.put(None)
