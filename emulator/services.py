@@ -83,6 +83,13 @@ class SwarmServices:
         client wants the state it stopped in, whatever the stream rates)."""
         self._swarm.send_telemetry_of(drone_id)
 
+    def repeat_status_texts(self, drone_id: str) -> int:
+        """Send again the STATUSTEXTs drone_id sent at the present simulated time (the clock
+        is stopped at a halt and the client saw nothing explain it: texts are not periodic,
+        and one lost on the way, or dropped by the client under load, is otherwise gone).
+        Returns how many were sent again."""
+        return self._swarm.repeat_status_texts(drone_id)
+
     def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
               advance: bool = False, message_for: str | None = None) -> Watch:
         """Wait on the world (see emulator.lockstep.Watch)."""

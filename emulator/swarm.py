@@ -333,6 +333,10 @@ class Swarm:
         self.bursts.first(self.fleet.index_by_id[drone_id], 2)
         self._wake.set()
 
+    def repeat_status_texts(self, drone_id: str) -> int:
+        """drone_id's STATUSTEXTs of the present simulated time, sent again now (how many)."""
+        return self.links[self.fleet.index_by_id[drone_id]].repeat_texts_now()
+
     def wake(self) -> None:
         """Have the scheduler look at the fleet again now (it changed between steps)."""
         self._wake.set()

@@ -120,6 +120,10 @@ class DroneLink:
         # complete even when the one MISSION_ITEM_REACHED of its last item was lost
         self.mission_state: tuple[int, int] = (0, 0)
         self.status_texts: list[str] = []
+        # while set, a STATUSTEXT equal to one of status_texts[this:] is a repeat asked for
+        # (`lockstep_wait`): not recorded again
+        self.repeats_since: int | None = None
+        self.texts_received = 0  # STATUSTEXTs that came, repeats included
         self.captures: list[Capture] = []  # CAMERA_IMAGE_CAPTURED as they came
         self.updates = 0  # telemetry messages seen; lets waits know fresh data arrived
         self.seen: dict[str, int] = {}  # telemetry messages seen per stream
@@ -219,6 +223,9 @@ class DroneLink:
                 self._update_waiters.remove(waiter)
 
     def _on_status_text(self, s: Any) -> None:
+        self.texts_received += 1
+        if self.repeats_since is not None and s.text in self.status_texts[self.repeats_since:]:
+            return
         self.status_texts.append(s.text)
         message = parse_statustext(s.text)
         if isinstance(message, OUT_OF_TASK_MESSAGES) and self.failure is None:

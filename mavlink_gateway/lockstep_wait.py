@@ -121,11 +121,10 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
                 await _text_grace(link)
                 outcome = judge_stop(link, what, texts, watch_obstacles)
             for _ in range(REJUDGE_ROUNDS if outcome is None and not watch.at_deadline else 0):
-                # Telemetry that showed nothing may be stale (messages lost on the way): the
-                # clock stands still, so ask for the state again before letting it run on.
-                services.refresh_telemetry(link.drone_id)
-                await settle_telemetry(link, services)
-                outcome = await _done(done) or judge_stop(link, what, texts, watch_obstacles)
+                # Telemetry that showed nothing may be stale (messages lost on the way, or
+                # dropped by a client under load): the clock stands still, so ask for the
+                # state again, and for the texts of this instant, before letting it run on.
+                outcome = await _ask_again(services, link, texts, done, what, watch_obstacles)
                 if outcome is not None:
                     break
             if outcome is not None:
@@ -144,6 +143,24 @@ async def wait_lockstep(services: Services, link: DroneLink, budget_s: float, wh
         if thinker is not None:
             thinker.think()  # at the halt's time, before the watch lets the clock go
         watch.close()
+
+
+async def _ask_again(services: Services, link: DroneLink, texts: int, done: Done, what: str,
+                     watch_obstacles: bool) -> Outcome | None:
+    """The halted drone's telemetry and STATUSTEXTs sent again (a text already here is not
+    recorded twice), then judged."""
+    link.repeats_since = texts
+    try:
+        received = link.texts_received
+        services.refresh_telemetry(link.drone_id)
+        repeated = services.repeat_status_texts(link.drone_id)
+        await settle_telemetry(link, services)
+        deadline = time.monotonic() + TEXT_GRACE_S
+        while link.texts_received < received + repeated and time.monotonic() < deadline:
+            await link.wait_update(link.updates, POLL_S)
+        return await _done(done) or judge_stop(link, what, texts, watch_obstacles)
+    finally:
+        link.repeats_since = None
 
 
 async def _halted_or_stopped(halted: Awaitable[float], goal: Goal | None) -> None:

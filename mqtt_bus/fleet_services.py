@@ -50,6 +50,9 @@ class WallClockServices:
     def refresh_telemetry(self, drone_id: str) -> None:
         pass
 
+    def repeat_status_texts(self, drone_id: str) -> int:
+        return 0
+
     def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
               advance: bool = False, message_for: str | None = None) -> WorldWatch:
         raise RuntimeError("a bridged fleet has no lockstep clock to watch")

@@ -54,6 +54,9 @@ class RadioTap:
     def refresh_telemetry(self, drone_id: str) -> None:
         self.inner.refresh_telemetry(drone_id)
 
+    def repeat_status_texts(self, drone_id: str) -> int:
+        return self.inner.repeat_status_texts(drone_id)
+
     def watch(self, drone_id: str | None = None, *, until_s: float = math.inf,
               advance: bool = False, message_for: str | None = None) -> WorldWatch:
         return self.inner.watch(drone_id, until_s=until_s, advance=advance,

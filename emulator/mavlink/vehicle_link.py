@@ -72,6 +72,9 @@ class VehicleLink:
         self.warned: set[str] = set()  # problems already reported once by STATUSTEXT
         self.dedup = CommandDedup()
         self.last_reached: int | None = None  # the last MISSION_ITEM_REACHED of this mission
+        # the autopilot's STATUSTEXTs at one simulated time, the latest (`repeat_texts_now`)
+        self._texts_at_s = -1.0
+        self._texts_now: list[tuple[int, str]] = []
         # told when this vehicle's MAVLink goes off or comes back (the swarm's link faults)
         self.on_mavlink_signal: Callable[[Autopilot], None] | None = None
         # told (with k) whenever this link may have gained a wall-clock duty (`needs_tick`):
@@ -139,7 +142,19 @@ class VehicleLink:
     def on_statustext(self, severity: int, text: str) -> None:
         self._changed()
         self.dedup.on_vehicle_text(severity, text)
+        now_s = self.ap.now_s
+        if now_s != self._texts_at_s:
+            self._texts_at_s, self._texts_now = now_s, []
+        self._texts_now.append((severity, text))
         self.statustext(severity, text)
+
+    def repeat_texts_now(self) -> int:
+        """The autopilot's STATUSTEXTs of the present simulated time, sent again (how many)."""
+        if self._texts_at_s != self.ap.now_s:
+            return 0
+        for severity, text in self._texts_now:
+            self.statustext(severity, text)
+        return len(self._texts_now)
 
     def on_mission_item_reached(self, seq: int) -> None:
         self._changed()
