@@ -74,3 +74,26 @@ def test_a_repeat_asked_for_is_recorded_once() -> None:
     assert link.status_texts == ["Takeoff detected", "Critical battery 7%: returning home",
                                  "Takeoff detected", "Landing", "Landing"]
     assert link.texts_received == 5
+
+
+def test_a_motor_failure_tells_one_report_and_keeps_telling_it_while_it_holds() -> None:
+    """The report a halt's burst repeats is the one the failure began with while it holds, so
+    whichever copy a client gets first, it reads the same words."""
+    from emulator.flight.fleet import Fleet
+    from tests.scenario_fixtures import tiny_scenario, vehicle
+
+    fleet = Fleet(tiny_scenario([vehicle(1)]))
+    ap = fleet.autopilots[0]
+    said: list[str] = []
+    ap.listener.on_statustext = lambda _severity, text: said.append(text)
+    ap.arm()
+    ap.takeoff(10.0)
+    while fleet.any_busy:
+        fleet.run(50)
+    ap.failures.fail("motor", "test")
+    assert [t for t in said if t.startswith("Motor failure")] == [
+        "Motor failure: vehicle going down"]
+    assert ap.failures.standing_report()[1] == "Motor failure: vehicle going down"
+    while ap.in_air:
+        fleet.run(50)
+    assert ap.failures.standing_report()[1] == "Motor failure: vehicle out of service"

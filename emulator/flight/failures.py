@@ -62,10 +62,11 @@ class VehicleFailures:
         the vehicle's telemetry at a halt, so a report lost on the way still reaches the
         client); None when no such failure is in force."""
         report: MotorFailure | GpsLost
+        in_air = self._ap.in_air  # the report the failure began with, while that still holds
         if self.motor_off:
-            report = MotorFailure(falling=False)
+            report = MotorFailure(falling=in_air)
         elif self.gps_off:
-            report = GpsLost(landing=False)
+            report = GpsLost(landing=in_air)
         else:
             return None
         return report.severity, build_statustext(report)
@@ -111,9 +112,10 @@ class VehicleFailures:
                 ap.fly_to((x, y, GROUND_GOAL_Z_M), phase=Phase.FALLING, tracking=dy.TRACK_NONE,
                           descent_m_s=MOTOR_DESCENT_M_S)
                 ap.state.landed_state = LandedState.LANDING
-            elif ap.armed:
-                ap.disarm()
-            ap.announce(MotorFailure(falling=False))
+            else:  # one report of the failure, as it stands (see standing_report)
+                if ap.armed:
+                    ap.disarm()
+                ap.announce(MotorFailure(falling=False))
         elif kind == "battery":
             bat, k = ap.fleet.bat, ap.k
             bat.pct[k] = max(0.0, min(float(bat.pct[k]),
