@@ -172,12 +172,11 @@ class Emulator(_Child):
 
 def _emulator_main(conn, n, api_port, clock, telemetry_hz, profile_to) -> None:
     prof = None
-    if profile_to:
+    if profile_to:  # enabled and disabled by the parent's "profile_on" / "profile_off"
         import cProfile
         prof = cProfile.Profile()
-        prof.enable()
     try:
-        asyncio.run(_emulator_serve(conn, n, api_port, clock, telemetry_hz))
+        asyncio.run(_emulator_serve(conn, n, api_port, clock, telemetry_hz, prof))
     except Exception as error:  # report start-up failures to the parent
         conn.send(("error", repr(error)))
         raise
@@ -187,7 +186,7 @@ def _emulator_main(conn, n, api_port, clock, telemetry_hz, profile_to) -> None:
             prof.dump_stats(profile_to)
 
 
-async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
+async def _emulator_serve(conn, n, api_port, clock, telemetry_hz, prof=None) -> None:
     from emulator.scenario import default_scenario
     from emulator.swarm import PortPlan, Swarm
 
@@ -210,9 +209,16 @@ async def _emulator_serve(conn, n, api_port, clock, telemetry_hz) -> None:
         return [(swarm.fleet.index_by_id[e.vehicle_id], e.kind, e.t_s)
                 for e in swarm.recorder.events(kinds=kinds)]
 
+    def profile(on: bool) -> bool:
+        if prof is not None:
+            (prof.enable if on else prof.disable)()
+        return prof is not None
+
+    extra = {"events": events, "profile_on": lambda: profile(True),
+             "profile_off": lambda: profile(False)}
     async with swarm:
         conn.send(("ready", swarm.endpoints[0].local_address[1]))
-        _serve_commands(conn, snap, stop, {"events": events})
+        _serve_commands(conn, snap, stop, extra)
         await stop.wait()
 
 

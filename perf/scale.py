@@ -202,11 +202,13 @@ def profile(n: int, path: str, args) -> None:
     port = free_udp_port()
     with Client(port, n, api=args.api) as client, Emulator(n, port, profile_to=path) as emu:
         client.ready(60)
+        emu.ask("profile_on")
         measure([emu], [client], args.warmup, args.window)
+        emu.ask("profile_off")
     st = pstats.Stats(path)
     total = st.total_tt
-    print(f"\ncProfile of the N={n} emulator with a client ({total:.1f} s profiled, incl. idle "
-          f"epoll), top 20 by own time:")
+    print(f"\ncProfile of the N={n} emulator with a client ({total:.1f} s profiled: warm-up and "
+          f"window, incl. idle epoll), top 20 by own time:")
     st.sort_stats("tottime").print_stats(20)
 
 

@@ -140,6 +140,8 @@ async def fly(n: int, hz: float, prflt: float | None, timeout_s: float,
             done = [asyncio.create_task(finished(m)) for m in missions]
             await asyncio.sleep(0.2)  # let the progress subscriptions settle
             s0 = await asyncio.to_thread(emu.snap)
+            if profile_to:
+                await asyncio.to_thread(emu.ask, "profile_on")
             w0, h0 = time.monotonic(), host_busy_s()
             calls = await asyncio.gather(
                 *(start(m, t) for m, t in zip(missions, telemetry, strict=True)),
@@ -150,6 +152,8 @@ async def fly(n: int, hz: float, prflt: float | None, timeout_s: float,
             host = 100 * (host_busy_s() - h0) / (time.monotonic() - w0)
             for t in done:
                 t.cancel()
+            if profile_to:
+                await asyncio.to_thread(emu.ask, "profile_off")
             s1 = await asyncio.to_thread(emu.snap)
             events = await asyncio.to_thread(emu.events)
     first: dict[tuple[int, str], float] = {}
@@ -267,7 +271,8 @@ def main() -> None:
     p.add_argument("--timeout", type=float, default=60.0, help="wall s to wait per run")
     p.add_argument("--profile", metavar="FILE",
                    help="then fly once more at the first physics Hz under cProfile and print "
-                        "the emulator's top functions")
+                        "the emulator's top functions from the first start_mission to the last "
+                        "finish seen")
     p.add_argument("--core", action="store_true",
                    help="fly the missions on the pure core (no MAVLink): physics speed and a "
                         "digest of the ground truth")
@@ -319,8 +324,8 @@ def main() -> None:
     if args.profile:
         asyncio.run(fly(args.drones, hzs[0], prflt, args.timeout, args.profile))
         st = pstats.Stats(args.profile)
-        print(f"\ncProfile of the emulator over one run at {hzs[0]:g} Hz (whole process life, "
-              f"incl. discovery, upload and idle epoll), top 25 by own time:")
+        print(f"\ncProfile of the emulator over one run at {hzs[0]:g} Hz (from the first "
+              f"start_mission to the last finish seen), top 25 by own time:")
         st.sort_stats("tottime").print_stats(25)
 
 
