@@ -89,14 +89,24 @@ def obstacle_entry(obstacles: Sequence[object]) -> EntryFn:
     already hold `a` are left alone (a target inside one may leave it). `obstacles` are
     `emulator.world.Obstacle`s (footprint, blocks_altitude)."""
     items: list[tuple[Any, Any]] = [(o.footprint, o) for o in obstacles]  # type: ignore[attr-defined]
+    # Footprint bounds (minx, miny, maxx, maxy): a footprint whose box misses the move's box
+    # neither holds `a` nor meets the move, so only the others are tested one by one.
+    bounds = shapely.bounds(np.array([f for f, _ in items], dtype=object)).reshape(-1, 4)
 
     def entry(a: np.ndarray, b: np.ndarray) -> float | None:
         if not items or np.allclose(a[:2], b[:2]):
             return None
+        x0, x1 = (a[0], b[0]) if a[0] <= b[0] else (b[0], a[0])
+        y0, y1 = (a[1], b[1]) if a[1] <= b[1] else (b[1], a[1])
+        near = np.flatnonzero((bounds[:, 0] <= x1) & (bounds[:, 2] >= x0)
+                              & (bounds[:, 1] <= y1) & (bounds[:, 3] >= y0))
+        if near.size == 0:
+            return None
         line = shapely.LineString([a[:2], b[:2]])
         length = line.length
         best: float | None = None
-        for footprint, obstacle in items:
+        for i in near.tolist():
+            footprint, obstacle = items[i]
             if not obstacle.blocks_altitude(float(max(a[2], b[2]))):
                 continue
             if shapely.intersects_xy(footprint, float(a[0]), float(a[1])):

@@ -291,8 +291,15 @@ class TruthRecorder(TruthHistory):
             self._flush()
         chunks, fill = self._chunks[index], self._fill[index]
         if len(chunks) > 1:
-            chunks[:] = [np.concatenate([*chunks[:-1], chunks[-1][:fill]])]
-            fill = self._fill[index] = chunks[0].shape[0]
+            # One chunk again, with room for the rows to come: the next read is a view, not
+            # a copy of the whole history.
+            parts = [*chunks[:-1], chunks[-1][:fill]]
+            total = sum(part.shape[0] for part in parts)
+            room = min(max(total // 2, _FIRST_CHUNK_ROWS), _MAX_CHUNK_ROWS)
+            whole = np.empty((total + room, _N_COLS))
+            np.concatenate(parts, out=whole[:total])
+            chunks[:] = [whole]
+            fill = self._fill[index] = total
         return chunks[0][:fill]
 
     def _flush(self) -> None:

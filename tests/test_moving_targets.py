@@ -183,3 +183,41 @@ def test_multiuav_plat_target_records_give_a_moving_target_where_it_is_now() -> 
     assert record["velocity"] == {"x": 0.0, "y": 4.0, "z": 0.0}
     assert record["tracking_status"] == "never_tracked"  # the drone stayed 52 m away
     assert data["targets"][0]["position"]["y"] == 0.0  # the session file is left alone
+
+
+def _entry_against_every_obstacle(obstacles: list[Obstacle], a: np.ndarray, b: np.ndarray
+                                  ) -> float | None:
+    """Reference: every obstacle tested, the earliest entry kept."""
+    import shapely
+    if np.allclose(a[:2], b[:2]):
+        return None
+    line = shapely.LineString([a[:2], b[:2]])
+    best = None
+    for o in obstacles:
+        if not o.blocks_altitude(float(max(a[2], b[2]))):
+            continue
+        if shapely.intersects_xy(o.footprint, float(a[0]), float(a[1])):
+            continue
+        if not line.intersects(o.footprint):
+            continue
+        coords = shapely.get_coordinates(line.intersection(o.footprint))
+        f = min(line.project(shapely.Point(c)) for c in coords) / line.length
+        best = f if best is None or f < best else best
+    return best
+
+
+def test_entry_tests_only_obstacles_near_the_move_and_finds_the_same() -> None:
+    rng = np.random.default_rng(11)
+    obstacles = [Obstacle.disc(f"d{i}", "disc", tuple(rng.uniform(-300, 300, 2).tolist()),
+                               float(rng.uniform(3, 25)), height_m=float(rng.choice([0, 10, 40])))
+                 for i in range(40)]
+    obstacles.append(Obstacle.polygon("w", "Wall", [(0, -50), (4, -50), (4, 50), (0, 50)]))
+    entry = obstacle_entry(obstacles)
+    hits = 0
+    for _ in range(600):
+        a = np.array([*rng.uniform(-320, 320, 2), rng.uniform(0, 50)])
+        b = a + np.array([*rng.uniform(-150, 150, 2), 0.0])
+        want = _entry_against_every_obstacle(obstacles, a, b)
+        assert entry(a, b) == want
+        hits += want is not None
+    assert 50 < hits < 550  # both kinds of moves were tried

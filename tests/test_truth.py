@@ -251,6 +251,27 @@ def test_snapshot_is_independent_of_later_steps() -> None:
     assert rec.trajectory("a").shape == (2, 6)
 
 
+def test_reads_between_steps_see_every_row_and_keep_what_they_returned() -> None:
+    n = 3
+    rec, ref = TruthRecorder(_ids(n)), NaiveTruth(n, 1.0)
+    moving = np.array([True, False, True])
+    earlier: list[tuple[np.ndarray, np.ndarray]] = []
+    for step in range(3000):
+        state = _state(n, step)
+        rec.record_step(step * DT_S, *state, moving)
+        ref.step(step * DT_S, *state, moving.tolist())
+        if step % 37 == 0:
+            got = rec.trajectory("uav0")
+            np.testing.assert_array_equal(got, ref.window(0, None, None))
+            earlier.append((got, got.copy()))
+    for got, copy in earlier:  # later steps never change a trajectory already read
+        np.testing.assert_array_equal(got, copy)
+    for i, vehicle_id in enumerate(rec.vehicle_ids):
+        np.testing.assert_array_equal(rec.trajectory(vehicle_id), ref.window(i, None, None))
+    # the room kept for later rows stays within half the history (plus a first chunk)
+    assert rec.nbytes < 1.6 * rec.stored_rows * 6 * 8 + 2**20
+
+
 def test_event_equality_survives_json() -> None:
     event = TruthEvent(1.5, "a", "failsafe", {"fence": {"ids": [1, 2]}, "ok": True})
     assert TruthEvent(**event.to_json()) == event
