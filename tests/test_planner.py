@@ -145,10 +145,25 @@ def test_routing_grids_kept_are_bounded_and_rebuilt_alike() -> None:
     queries = [((-50.0, 0.0, z), (450.0, 0.0, z)) for z in (5.0, 15.0, 25.0, 35.0, 45.0)]
     first = [planner.plan(start, goal) for start, goal in queries]
     assert len(planner._grids) <= GRIDS_KEPT < len(queries)
+    planner._routes.clear()  # plan again, through grids built again
     for (start, goal), route in zip(queries, first, strict=True):
         _assert_flyable(world, start, goal, route)
         assert planner.plan(start, goal) == route == PathPlanner(world).plan(start, goal)
     assert len(planner._grids) <= GRIDS_KEPT
+
+
+def test_a_route_asked_again_is_remembered_and_handed_out_anew() -> None:
+    world = World(obstacles=[DISC])
+    planner = PathPlanner(world)
+    start, goal = (-100.0, 0.0, 10.0), (100.0, 0.0, 10.0)
+    route = planner.plan(start, goal)
+    assert len(route) > 1  # around the disc
+    route.append((0.0, 0.0, 0.0))  # the caller's list is its own
+    again = planner.plan(start, goal)
+    assert again == PathPlanner(world).plan(start, goal) == route[:-1]
+    assert len(planner._routes) == 1
+    # -0.0 is another key (a route ends exactly at its goal, sign of zero included)
+    assert math.copysign(1.0, planner.plan(start, (100.0, -0.0, 10.0))[-1][1]) == -1.0
 
 
 def test_clearance_checks_alone_build_no_grid() -> None:

@@ -10,6 +10,7 @@ tracking errors do not trip collision prevention.
 from __future__ import annotations
 
 import math
+import struct
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -47,6 +48,9 @@ DETOUR_EXTRA_CELLS = 25
 _ATTACH_MAX_TRIES = 96
 _QUAD_SEGS = 8
 _EPS_M = 1e-6
+# Routes remembered by (start, goal): a route is a function of the world and its ends, and
+# an oracle asks some again (a tracking session: about one in ten).
+ROUTES_KEPT = 256
 
 
 class NoPath(Exception):
@@ -114,6 +118,7 @@ class PathPlanner:
         self._top_m = np.where(heights == 0.0, np.inf, heights + margin_m)
         self._bands: dict[tuple[int, ...], _Band] = {}
         self._grids: OrderedDict[tuple[int, ...], _Grid] = OrderedDict()
+        self._routes: OrderedDict[bytes, tuple[Point3, ...]] = OrderedDict()
 
     # ------------------------------------------------------------------ public
     def leg_clear(self, a_m: Sequence[float], b_m: Sequence[float]) -> bool:
@@ -130,6 +135,17 @@ class PathPlanner:
         route flown at the start's altitude with a vertical change at the goal.
         """
         start, goal = _point3(start_m, "start_m"), _point3(goal_m, "goal_m")
+        key = struct.pack("6d", *start, *goal)  # every bit: -0.0 is not 0.0
+        route = self._routes.get(key)
+        if route is None:
+            route = self._routes[key] = tuple(self._plan(start, goal))
+            while len(self._routes) > ROUTES_KEPT:
+                self._routes.popitem(last=False)
+        else:
+            self._routes.move_to_end(key)
+        return list(route)
+
+    def _plan(self, start: Point3, goal: Point3) -> list[Point3]:
         direct = self.world.first_blockage(start, goal) is None
         if direct and self._soft_ok(start, goal):
             return [goal]
