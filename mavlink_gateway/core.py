@@ -10,7 +10,7 @@ from collections.abc import Awaitable, Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from mavlink_gateway.command_send import Acted, NoAnswer, Refusal, send_command
-from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.drone_link import PERIODIC, DroneLink
 from mavlink_gateway.effects import holding
 from mavlink_gateway.goals import Goal, Interrupted
 from mavlink_gateway.interfaces import Services
@@ -197,11 +197,13 @@ class GatewayCore:
     async def _wait(self, link: DroneLink, budget_s: float, what: str,
                     done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
                     watch_obstacles: bool = True, texts_from: int | None = None,
-                    instant: bool = False) -> Outcome:
+                    instant: bool = False, fresh: tuple[str, ...] = PERIODIC) -> Outcome:
         """Wait for an outcome (see `_wait_for_outcome`); a stepped clock is held at the
         budget's end, so a time-out happens at exactly `budget_s` of simulated time. With a
         lockstep clock, the outcome is judged where the clock stops (see
-        mavlink_gateway.lockstep_wait). `instant`: the outcome needs no simulated time."""
+        mavlink_gateway.lockstep_wait). `instant`: the outcome needs no simulated time.
+        `fresh`: the telemetry streams judged anew once the budget has run out (a stepped
+        clock: see `_wait_for_outcome`)."""
         try:
             if self.services.lockstep:
                 if instant:
@@ -215,7 +217,8 @@ class GatewayCore:
             with self.services.clock_limit(start + budget_s):
                 return await self._wait_for_outcome(link, budget_s, what, done,
                                                     watch_obstacles=watch_obstacles,
-                                                    texts_from=texts_from, start_s=start)
+                                                    texts_from=texts_from, start_s=start,
+                                                    fresh=fresh)
         except Interrupted:
             # No command is in flight here: HOLD at once, then judge once more on telemetry
             # sent after it (telemetry lags the vehicle: the goal may have been reached
@@ -259,7 +262,7 @@ class GatewayCore:
         self, link: DroneLink, budget_s: float, what: str,
         done: Callable[[], Outcome | Awaitable[Outcome | None] | None], *,
         watch_obstacles: bool = True, texts_from: int | None = None,
-        start_s: float | None = None,
+        start_s: float | None = None, fresh: tuple[str, ...] = PERIODIC,
     ) -> Outcome:
         """Look at telemetry until `done` gives an outcome, an obstacle or failsafe stops the
         drone, or `budget_s` of simulated time has passed. Looks again as soon as a new
@@ -314,7 +317,8 @@ class GatewayCore:
                 # clock running, seconds of wall time are minutes of simulated time): the goal
                 # may have been reached long ago. Judge again on telemetry sent from now on.
                 mark, fresh_deadline = dict(link.seen), time.monotonic() + FRESH_WAIT_S
-                while not link.refreshed_since(mark) and time.monotonic() < fresh_deadline:
+                while not link.refreshed_since(mark, fresh) and \
+                        time.monotonic() < fresh_deadline:
                     await link.wait_update(link.updates, POLL_S)
                 outcome = done()
                 if inspect.isawaitable(outcome):

@@ -17,7 +17,7 @@ from mavsdk.asyncio.plugins.mission_raw import MissionItem
 
 from mavlink_gateway import effects
 from mavlink_gateway.core import GatewayCore, Refusal, _number, _short
-from mavlink_gateway.drone_link import DroneLink
+from mavlink_gateway.drone_link import PERIODIC, DroneLink
 from mavlink_gateway.interfaces import wrap_heading_deg
 from mavlink_gateway.outcomes import Outcome, Status
 from mavlink_vocabulary import FlightState, MavCmd, MavFrame
@@ -254,7 +254,10 @@ class FlightPrimitives(GatewayCore):
                 return Outcome(Status.OK, "", link.state())
             return None
 
-        return await self._wait(link, budget_s, what, done, texts_from=texts)
+        # Once the budget has run out, a MISSION_CURRENT sent after it also tells whether the
+        # mission ended (its MISSION_ITEM_REACHED and progress may have been lost).
+        return await self._wait(link, budget_s, what, done, texts_from=texts,
+                                fresh=(*PERIODIC, "mission_current"))
 
     async def move_along_path(self, drone: str, waypoints: Sequence[Sequence[float]]
                               ) -> Outcome:
