@@ -10,6 +10,13 @@ the flight they wait on), play-out (goals still under way at the end, then settl
 evaluate (the hidden checks), replay (the window's replay data and the end state), and close.
 Prints per session the seconds of each phase, the process's CPU seconds and the share of wall
 time the event loop spent waiting (idle). Writing records happens in the driver, not here.
+
+The process's CPU is then split by thread (Linux /proc/self/task), start-up included: the
+event loop (this script's main thread: the swarm, the gateway, the oracle's tool calls and
+the evaluation), the oracle's planning threads, MAVSDK's own threads (its receiving, parsing
+and timers, and the Python callbacks it runs there to hand each subscribed message to the
+event loop) and the rest (other Python threads, and threads that ended before the session
+did).
 """
 
 from __future__ import annotations
@@ -18,23 +25,26 @@ import argparse
 import asyncio
 import os
 import sys
+import threading
 import time
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import machine_line, table
+from _common import machine_line, table, thread_cpu_s
 
 from benchmark.authoring.session_file import load_session
 from benchmark.authoring.suite import SESSIONS_DIR
 from benchmark.running import episode
 from swarm_agents.oracle import OracleAgent
+from swarm_agents.oracle.agent import PLANNING_THREAD
 
 DEFAULT = ("area_search-easy-1", "target_assignment-moderate-1", "resilience-hard-1",
            "area_assignment_and_patrol-intermediate-1", "target_tracking-extreme-1",
            "area_search-extreme-1")
 PHASES = ("start", "reset", "agent", "play_out", "evaluate", "replay", "close")
+ROLES = ("loop", "planning", "MAVSDK", "other")
 SPANS: defaultdict[str, float] = defaultdict(float)
 
 
@@ -90,7 +100,7 @@ async def _fly(path: Path, limit: int | None, idle: _IdleMeter) -> list[object]:
     plans = {t.id: t.oracle for t in session.tasks if t.oracle is not None}
     agent = OracleAgent(session.scenario, plans)
     SPANS.clear()
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+    wall0, cpu0, threads0 = time.perf_counter(), time.process_time(), thread_cpu_s()
     context = episode.session_swarm(session, episode.EpisodeOptions())
     swarm, services, gateway = await context.__aenter__()
     SPANS["start"] = time.perf_counter() - wall0
@@ -98,14 +108,35 @@ async def _fly(path: Path, limit: int | None, idle: _IdleMeter) -> list[object]:
     for task in tasks:
         await episode.run_task(session, task, agent, swarm, services, gateway,
                                episode.EpisodeOptions())
+    threads = _cpu_by_role({tid: cpu_s - threads0.get(tid, 0.0)
+                            for tid, cpu_s in thread_cpu_s().items()})
     t_close = time.perf_counter()
     await context.__aexit__(None, None, None)
     SPANS["close"] = time.perf_counter() - t_close
     wall = time.perf_counter() - wall0
     n = len(tasks)
+    cpu = time.process_time() - cpu0
+    threads["other"] = cpu - sum(threads.values())
     return [path.stem, n, f"{wall:.1f}", f"{wall / n:.3f}",
             *(f"{SPANS[p]:.2f}" for p in PHASES),
-            f"{time.process_time() - cpu0:.1f}", f"{100 * idle.idle_s / wall:.0f} %"]
+            f"{cpu:.1f}", f"{100 * idle.idle_s / wall:.0f} %",
+            *(f"{100 * threads[r] / cpu:.0f} %" for r in ROLES)]
+
+
+def _cpu_by_role(by_thread: dict[int, float]) -> dict[str, float]:
+    """CPU seconds of the live threads by role (see the module's docstring)."""
+    names = {t.native_id: t.name for t in threading.enumerate()}
+    main = threading.main_thread().native_id
+    roles = dict.fromkeys(ROLES[:-1], 0.0)
+    for tid, cpu_s in by_thread.items():
+        name = names.get(tid)
+        if tid == main:
+            roles["loop"] += cpu_s
+        elif name is None:
+            roles["MAVSDK"] += cpu_s  # threads Python did not start
+        elif name.startswith(PLANNING_THREAD):
+            roles["planning"] += cpu_s
+    return roles
 
 
 def main() -> None:
@@ -121,8 +152,8 @@ def main() -> None:
     for ident in args.sessions:
         rows.append(asyncio.run(_fly(SESSIONS_DIR / f"{ident}.json", args.tasks, _IdleMeter())))
         print("  ", rows[-1], flush=True)
-    print("\n" + table(["session", "tasks", "wall s", "s/task", *PHASES, "CPU s", "idle"],
-                       rows))
+    print("\n" + table(["session", "tasks", "wall s", "s/task", *PHASES, "CPU s", "idle",
+                        *(f"CPU {r}" for r in ROLES)], rows))
     print(f"load average after: {Path('/proc/loadavg').read_text().strip()}")
 
 

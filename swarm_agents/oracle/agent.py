@@ -62,6 +62,7 @@ PLAN_CLEARANCE_M = 8.0
 # Meeting a moving target: the share of top speed assumed and the slack added to a flight.
 MEET_SPEED_SHARE = 0.8
 MEET_SLACK_S = 8.0
+PLANNING_THREAD = "oracle-planning"  # the name (prefix) of the oracle's planning thread
 CRUISE_M_S = 8.0  # the autopilot's MPC_XY_CRUISE: move_to flies at most this fast
 MIN_HOVER_S = 0.2
 HOP_S = 4.0  # following: aim this far ahead of the target
@@ -136,7 +137,7 @@ class OracleAgent:
         # Paths and meeting points are worked out on a thread of their own, one at a time:
         # the event loop (the swarm, the gateway, the other drones' threads) keeps running
         # meanwhile, so no wall-clock wait elsewhere sees a stalled loop as a silent drone.
-        self._planning = concurrent.futures.ThreadPoolExecutor(1, "oracle-planning")
+        self._planning = concurrent.futures.ThreadPoolExecutor(1, PLANNING_THREAD)
         self.failures: list[str] = []
 
     def set_plan(self, task_id: str, plan: Sequence[Sequence[Op]] | None) -> None:
