@@ -27,6 +27,7 @@ from emulator.port_plan import PortPlan
 from emulator.quiet_streams import QuietStreams
 from emulator.scenario import Scenario
 from emulator.scenario_export import scenario_to_dict
+from emulator.stepped_clock import SteppedClock
 from emulator.swarm_faults import SwarmFaults
 from emulator.telemetry_bursts import TelemetryBursts
 from emulator.telemetry_out import TelemetryOut
@@ -55,7 +56,6 @@ QUIET_TELEMETRY_TICK_MAX_S = 0.5
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
 STEPS_PER_SLICE = 50
 LINK_TICK_S = 0.05
-MAX_STEPS_PER_RUN = 2000
 log = logging.getLogger("mavswarm.swarm")
 
 
@@ -154,13 +154,10 @@ class Swarm:
         self.endpoints: list[UdpEndpoint] = []
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
-        self._advance_to_s = 0.0
-        self._advance_waiters: list[tuple[float, asyncio.Future[None]]] = []
-        self._idle_waiters: list[asyncio.Future[None]] = []
+        self._clock = SteppedClock(self.fleet, self._wake.set)
         self._pacer: RealTimePacer | None = None
         self._wall_start_s = wall
         self._sim_start_s = 0.0
-        self._clock_holds: dict[object, float] = {}
         self.watches = WatchBoard(self.fleet, self.hold_clock_at, self.release_clock,
                                   self._request_burst)
 
@@ -207,12 +204,7 @@ class Swarm:
             self._task = None
         for endpoint in self.endpoints:
             endpoint.close()
-        for _, fut in self._advance_waiters:
-            if not fut.done():
-                fut.cancel()
-        for fut in self._idle_waiters:
-            if not fut.done():
-                fut.cancel()
+        self._clock.cancel_waiters()
 
     def hook_link(self, link: VehicleLink) -> None:
         """Hear what a vehicle's link tells the swarm (its MAVLink signal, its duties)."""
@@ -271,36 +263,23 @@ class Swarm:
         """Advance simulated time by `seconds` (stepped mode; in real time, just wait)."""
         if not (math.isfinite(seconds) and seconds >= 0.0):
             raise ValueError(f"cannot advance by {seconds!r} s")
-        target = self.fleet.now_s + seconds
         if not self.clock.stepped:
             await asyncio.sleep(seconds / self.clock.speed)
             return
-        self._advance_to_s = max(self._advance_to_s, target)
-        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
-        self._advance_waiters.append((target, fut))
-        self._wake.set()
-        await fut
+        await self._clock.advance_to(self.fleet.now_s + seconds)
 
     async def wait_idle(self) -> None:
         """Return once no vehicle is executing a goal (stepped mode: the clock stops)."""
-        if not self.fleet.any_busy:
-            return
-        fut: asyncio.Future[None] = asyncio.get_running_loop().create_future()
-        self._idle_waiters.append(fut)
-        self._wake.set()
-        await fut
+        await self._clock.wait_idle()
 
     def hold_clock_at(self, t_s: float) -> object:
         """Stepped mode: never step past t_s until `release_clock(token)`. A caller waiting
         for an outcome with a simulated-time budget uses it, so a time-out happens at exactly
         its budget whatever the wall-clock delays. Real-time mode ignores it."""
-        token = object()
-        self._clock_holds[token] = t_s
-        return token
+        return self._clock.hold_at(t_s)
 
     def release_clock(self, token: object) -> None:
-        if self._clock_holds.pop(token, None) is not None:
-            self._wake.set()
+        self._clock.release(token)
 
     def pin(self) -> object:
         """Stepped mode: stop the clock where it is until `release_clock(token)`."""
@@ -365,33 +344,10 @@ class Swarm:
         if self.quiet is not None:
             self.quiet.sent(ks)
 
-    def _held_at(self) -> float:
-        return min(self._clock_holds.values()) if self._clock_holds else math.inf
-
-    def _steps_allowed(self) -> int:
-        """Steps the stepped clock may run now: up to the next advance target when idle, and
-        never past a clock hold."""
-        now, dt = self.fleet.now_s, self.fleet.dt_s
-        limit = MAX_STEPS_PER_RUN if self.fleet.any_busy else 0
-        targets = [t for t, _ in self._advance_waiters] + [self._advance_to_s]
-        targets += self.watches.advance_targets()
-        targets.append(self.faults.next_event_s())  # never step past a fault's time
-        ahead = [t for t in targets if t > now + 1e-9 and math.isfinite(t)]
-        if ahead:
-            to_target = math.ceil((min(ahead) - now) / dt - 1e-9)
-            limit = to_target if limit == 0 else min(limit, to_target)
-        held = self._held_at()
-        if math.isfinite(held):
-            limit = min(limit, math.ceil((held - now) / dt - 1e-9))
-        return max(1, limit)
-
-    def _should_step(self) -> bool:
-        now = self.fleet.now_s
-        if now + 1e-9 >= self._held_at():
-            return False
-        if self.fleet.any_busy or now + 1e-9 < self._advance_to_s:
-            return True
-        return any(now + 1e-9 < t for t in self.watches.advance_targets())
+    def _clock_targets(self) -> list[float]:
+        """Where the stepped clock must stop besides its callers' targets: lockstep watches'
+        deadlines and the next fault."""
+        return [*self.watches.advance_targets(), self.faults.next_event_s()]
 
     async def _run(self) -> None:
         fleet = self.fleet
@@ -400,12 +356,14 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
-                while self._should_step() and time.monotonic() < deadline:
+                while (self._clock.should_step(self.watches.advance_targets())
+                       and time.monotonic() < deadline):
                     self.bursts.note_active()
-                    fleet.run(min(self._steps_allowed(), STEPS_PER_SLICE))
+                    fleet.run(min(self._clock.steps_allowed(self._clock_targets()),
+                                  STEPS_PER_SLICE))
                     if self.faults.fire_due():
                         self.bursts.all_changed()
-                    self._release_waiters()
+                    self._clock.release_waiters()
                     self.watches.check()
             else:
                 assert self._pacer is not None
@@ -413,7 +371,7 @@ class Swarm:
                     fleet.step()
                     if self.faults.fire_due():
                         self.bursts.all_changed()
-                self._release_waiters()
+                self._clock.release_waiters()
             wall = time.monotonic()
             if wall >= next_telemetry:
                 tick = telemetry_tick_s(self.streams.shortest_period_s(),
@@ -431,7 +389,7 @@ class Swarm:
                 next_peer_tick = wall + 1.0
                 for network in self.networks:
                     network.expire_peers(wall)
-            if self.clock.stepped and self._should_step():
+            if self.clock.stepped and self._clock.should_step(self.watches.advance_targets()):
                 await asyncio.sleep(0)
                 continue
             self._wake.clear()
@@ -474,20 +432,3 @@ class Swarm:
                 if self.quiet is not None:  # a duty may change it (a link-loss failsafe)
                     self.quiet.mark((k,))
         self._tick_candidates.difference_update(idle)
-
-    def _release_waiters(self) -> None:
-        now = self.fleet.now_s
-        if self._advance_waiters:
-            keep = []
-            for target, fut in self._advance_waiters:
-                if now + 1e-9 >= target:
-                    if not fut.done():
-                        fut.set_result(None)
-                else:
-                    keep.append((target, fut))
-            self._advance_waiters = keep
-        if self._idle_waiters and not self.fleet.any_busy:
-            for fut in self._idle_waiters:
-                if not fut.done():
-                    fut.set_result(None)
-            self._idle_waiters = []
