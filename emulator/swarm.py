@@ -344,11 +344,6 @@ class Swarm:
         if self.quiet is not None:
             self.quiet.sent(ks)
 
-    def _clock_targets(self) -> list[float]:
-        """Where the stepped clock must stop besides its callers' targets: lockstep watches'
-        deadlines and the next fault."""
-        return [*self.watches.advance_targets(), self.faults.next_event_s()]
-
     async def _run(self) -> None:
         fleet = self.fleet
         next_link_tick = next_peer_tick = next_telemetry = 0.0
@@ -356,11 +351,14 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
-                while (self._clock.should_step(self.watches.advance_targets())
-                       and time.monotonic() < deadline):
+                while time.monotonic() < deadline:
+                    watched = self.watches.advance_targets()  # the wait tools' deadlines
+                    if not self._clock.should_step(watched):
+                        break
                     self.bursts.note_active()
-                    fleet.run(min(self._clock.steps_allowed(self._clock_targets()),
-                                  STEPS_PER_SLICE))
+                    # never past a fault's time either
+                    allowed = self._clock.steps_allowed([*watched, self.faults.next_event_s()])
+                    fleet.run(min(allowed, STEPS_PER_SLICE))
                     if self.faults.fire_due():
                         self.bursts.all_changed()
                     self._clock.release_waiters()

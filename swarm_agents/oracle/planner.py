@@ -14,7 +14,7 @@ import struct
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 import shapely
@@ -26,6 +26,8 @@ if TYPE_CHECKING:
 
 __all__ = ["NoPath", "PathPlanner"]
 
+K = TypeVar("K")
+V = TypeVar("V")
 Point2 = tuple[float, float]
 Point3 = tuple[float, float, float]
 
@@ -136,13 +138,8 @@ class PathPlanner:
         """
         start, goal = _point3(start_m, "start_m"), _point3(goal_m, "goal_m")
         key = struct.pack("6d", *start, *goal)  # every bit: -0.0 is not 0.0
-        route = self._routes.get(key)
-        if route is None:
-            route = self._routes[key] = tuple(self._plan(start, goal))
-            while len(self._routes) > ROUTES_KEPT:
-                self._routes.popitem(last=False)
-        else:
-            self._routes.move_to_end(key)
+        route = _remember(self._routes, key, ROUTES_KEPT,
+                          lambda: tuple(self._plan(start, goal)))
         return list(route)
 
     def _plan(self, start: Point3, goal: Point3) -> list[Point3]:
@@ -218,14 +215,7 @@ class PathPlanner:
 
     def _grid(self, band: _Band) -> _Grid:
         """The routing grid of a band with obstacles (built again if it was dropped)."""
-        grid = self._grids.get(band.ids)
-        if grid is not None:
-            self._grids.move_to_end(band.ids)
-            return grid
-        grid = self._grids[band.ids] = self._build_grid(band)
-        while len(self._grids) > GRIDS_KEPT:
-            self._grids.popitem(last=False)
-        return grid
+        return _remember(self._grids, band.ids, GRIDS_KEPT, lambda: self._build_grid(band))
 
     def _build_grid(self, band: _Band) -> _Grid:
         cell = self.cell_m
@@ -354,6 +344,19 @@ class PathPlanner:
 
     def _leg_ok(self, a: Point3, b: Point3) -> bool:
         return self.world.first_blockage(a, b) is None and self._soft_ok(a, b)
+
+
+def _remember(kept: OrderedDict[K, V], key: K, most: int, build: Callable[[], V]) -> V:
+    """kept[key], built first when missing (a build that raises stores nothing); only the
+    `most` used last are kept."""
+    value = kept.get(key)
+    if value is not None:
+        kept.move_to_end(key)
+        return value
+    value = kept[key] = build()
+    while len(kept) > most:
+        kept.popitem(last=False)
+    return value
 
 
 def _grid_graph(node: np.ndarray, cell_of_node: np.ndarray, cell_m: float
