@@ -8,6 +8,7 @@ import hashlib
 import importlib
 import json
 import logging
+import math
 import os
 import subprocess
 import sys
@@ -18,6 +19,7 @@ import numpy as np
 import pytest
 
 from emulator.flight import cruise, native, solo
+from emulator.flight.dynamics import DEG_PER_RAD
 from tests.test_solo_step import DT_S, _random_dynamics
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -116,3 +118,15 @@ def test_the_modules_compiled_are_the_ones_swapped() -> None:
                                                             "SoloVehicle", None))
     assert native.cruise_plan in (cruise.cruise_plan, getattr(native.compiled("cruise"),
                                                               "cruise_plan", None))
+
+
+def test_degrees_by_the_constant_are_math_degrees_to_the_last_bit() -> None:
+    """The compiled steps turn radians into degrees with DEG_PER_RAD instead of calling
+    math.degrees: the same double for every angle atan2 returns, and for any other value."""
+    assert 180.0 / math.pi == DEG_PER_RAD
+    rng = np.random.default_rng(7)
+    angles = np.arctan2(rng.uniform(-1e3, 1e3, 200_000), rng.uniform(-1e3, 1e3, 200_000))
+    others = rng.uniform(-1e300, 1e300, 20_000)
+    edges = [0.0, -0.0, math.pi, -math.pi, math.pi / 2, 5e-324, 1e308, math.inf, -math.inf]
+    for x in [*angles.tolist(), *others.tolist(), *edges]:
+        assert (x * DEG_PER_RAD).hex() == math.degrees(x).hex(), x

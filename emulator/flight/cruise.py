@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from emulator.flight.dynamics import (
     BRAKING_SHARE,
     CONTROL_NONE,
     CONTROL_VELOCITY,
+    DEG_PER_RAD,
     TRACK_NONE,
     along_line_limit,
 )
@@ -198,8 +200,8 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
     """The steps one vehicle with no acceleration and no yaw change can cruise (-inf: none)."""
     pz = p[2]
     ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - pz
-    s = _sqrt(vx * vx + vy * vy + vz * vz)
-    d = _sqrt(ex * ex + ey * ey + ez * ez)
+    s = math.sqrt(vx * vx + vy * vy + vz * vz)
+    d = math.sqrt(ex * ex + ey * ey + ez * ez)
     if control == CONTROL_NONE or not s > 1e-9:
         at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
         return battery_steps(k, vx, vy, vz) if at_rest else _NEG_INF
@@ -224,7 +226,7 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
     if abs(s - along) > speed_tol:
         return _NEG_INF  # not at the speed its commands ask for now
     if goal_yaw != goal_yaw:  # free: facing the goal when more than 2 m away
-        desired = _degrees(_atan2(ex, ey)) if d_xy > 2.0 else yaw
+        desired = _atan2(ex, ey) * DEG_PER_RAD if d_xy > 2.0 else yaw
     else:
         desired = goal_yaw
     if abs((desired - yaw + 540.0) % 360.0 - 180.0) > YAW_STEADY_DEG:
@@ -274,8 +276,11 @@ class _BatteryFloats:
 
 
 _NO_SOLO = np.empty(0, dtype=np.intp)
-_INF, _NEG_INF = math.inf, -math.inf
-_sqrt, _hypot, _atan2, _degrees = math.sqrt, math.hypot, math.atan2, math.degrees
+_INF: Final = math.inf
+_NEG_INF: Final = -math.inf
+# Bound once, as in emulator.flight.solo (math.sqrt is compiled to C's sqrt where called as such).
+_hypot: Final = math.hypot
+_atan2: Final = math.atan2
 
 
 def _battery_horizon_steps(fleet: FleetView) -> np.ndarray:

@@ -47,6 +47,9 @@ SETTLED_SPEED_M_S: Final = 0.3
 # move), which would otherwise count as arrived before it moved.
 SETTLED_GOAL_M: Final = 0.1
 BRAKING_SHARE: Final = 0.8
+# 180 / pi as a double: x * DEG_PER_RAD is math.degrees(x) to the last bit (CPython multiplies
+# by the same constant; tests/test_native.py checks it), without a call into the math module.
+DEG_PER_RAD: Final = 57.29577951308232
 YAW_REACHED_DEG: Final = 1.0
 _EMPTY = np.empty(0, dtype=np.intp)
 

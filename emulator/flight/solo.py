@@ -21,6 +21,7 @@ from emulator.flight.dynamics import (
     BRAKING_SHARE,
     CONTROL_NONE,
     CONTROL_POSITION,
+    DEG_PER_RAD,
     SETTLED_GOAL_M,
     SETTLED_SPEED_M_S,
     TRACK_NONE,
@@ -54,6 +55,9 @@ YAW_STEADY_DEG: Final = 1e-9
 _SETTLED_SPEED2: Final = SETTLED_SPEED_M_S**2
 _SETTLED_GOAL2: Final = SETTLED_GOAL_M**2
 _INF: Final = math.inf
+# Bound once: the compiled step calls them without looking them up in the math module.
+_hypot: Final = math.hypot
+_atan2: Final = math.atan2
 
 
 SOLO_EVENTS: Final = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
@@ -165,7 +169,7 @@ class SoloVehicle:
         gx, gy, gz = self._gx, self._gy, self._gz
         dt = self._dt
         ex, ey, ez = gx - px, gy - py, gz - pz
-        d_xy = math.hypot(ex, ey)
+        d_xy = _hypot(ex, ey)
         active = self._active
         if active:
             dist = math.sqrt(d_xy * d_xy + ez * ez)
@@ -197,7 +201,7 @@ class SoloVehicle:
                 speed = reach
             f = speed * inv
             dvx, dvy, dvz = ex * f - vx, ey * f - vy, ez * f - vz
-            dv_xy = math.hypot(dvx, dvy)
+            dv_xy = _hypot(dvx, dvy)
             scale = self._dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
             if scale < 1.0:
                 nvx, nvy = vx + dvx * scale, vy + dvy * scale
@@ -207,13 +211,13 @@ class SoloVehicle:
             nvz = vz + (-lim_z if dvz < -lim_z else lim_z if dvz > lim_z else dvz)
             wind = self._wind
             if wind is None:
-                air = math.hypot(nvx, nvy)
+                air = _hypot(nvx, nvy)
                 if air > self._airspeed:
                     ratio = self._airspeed / air
                     nvx, nvy = nvx * ratio, nvy * ratio
             else:
                 airx, airy = nvx - wind[0], nvy - wind[1]
-                air = math.hypot(airx, airy)
+                air = _hypot(airx, airy)
                 if air > self._airspeed:
                     ratio = self._airspeed / air
                     nvx, nvy = airx * ratio + wind[0], airy * ratio + wind[1]
@@ -246,7 +250,7 @@ class SoloVehicle:
         if goal_yaw == goal_yaw:
             desired = goal_yaw
         elif self._position and d_xy > 2.0:
-            desired = math.degrees(math.atan2(ex, ey))
+            desired = _atan2(ex, ey) * DEG_PER_RAD
         else:
             desired = yaw
         if desired == yaw:

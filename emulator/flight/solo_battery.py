@@ -10,6 +10,7 @@ level and every level is OK.
 from __future__ import annotations
 
 import math
+from typing import Final
 
 import numpy as np
 
@@ -25,6 +26,7 @@ from emulator.flight.solo import SoloVehicle
 __all__ = ["NO_LEVELS", "SoloBattery"]
 
 NO_LEVELS = np.empty(0, dtype=np.intp)
+_hypot: Final = math.hypot  # bound once (see emulator.flight.solo)
 
 
 class SoloBattery:
@@ -42,6 +44,7 @@ class SoloBattery:
         # airborne, armed, full charge per s of hover (%/s) and charge rate of each solo vehicle
         self._flags: list[tuple[bool, bool, float, float]] = []
         self._floor_pct = float(bat.levels_pct.max())
+        self._levels_ok = not count_nonzero(bat.level)  # every vehicle's level OK (kept below)
         self._wind_x, self._wind_y = fleet.dyn.wind_m_s.tolist()
         self.pct: list[float] = bat.pct.tolist()
         self.levels = NO_LEVELS
@@ -51,9 +54,10 @@ class SoloBattery:
         """One battery step; whether the autopilots must look at the fleet after it (a level
         changed, or a charging vehicle is full)."""
         self.ran = True
-        fleet, bat, dyn = self._fleet, self._bat, self._fleet.dyn
+        bat = self._bat
         deltas = self._deltas
         if deltas is None:
+            fleet, dyn = self._fleet, self._fleet.dyn
             deltas = self._deltas = bat.deltas(self._dt_s, fleet.airborne, fleet.armed,
                                                dyn.airspeed_m_s(),
                                                dyn.velocity_m_s[:, 2]).tolist()
@@ -66,7 +70,7 @@ class SoloBattery:
                 solos, self._flags, strict=True):
             # FleetBattery.delta, written out
             if airborne:
-                air = math.hypot(vehicle.vx - wind_x, vehicle.vy - wind_y)
+                air = _hypot(vehicle.vx - wind_x, vehicle.vy - wind_y)
                 power = (1.0 + SPEED_POWER_PER_M2_S2 * (air * air)
                          + CLIMB_POWER_PER_M_S * max(vehicle.vz, 0.0))
             else:
@@ -76,10 +80,11 @@ class SoloBattery:
         if min(pct) < 0.0 or max(pct) > 100.0:
             pct = [_clip_pct(p) for p in pct]
         self.pct = pct
-        if min(pct) > self._floor_pct and not count_nonzero(bat.level):
+        if min(pct) > self._floor_pct and self._levels_ok:
             self.levels = NO_LEVELS
         else:
             self.levels = bat.set_pct(np.array(pct))
+            self._levels_ok = not count_nonzero(bat.level)
         return bool(self.levels.size) or (
             self._any_charging and any(pct[k] >= 100.0 for k in self._charging_k))
 
