@@ -264,17 +264,17 @@ class Fleet:
         moving = self._moving_mask()
         start = self.step_count
         battery = SoloBattery(self, plan.solo, dt * BATTERY_EVERY_STEPS)
-        charge: list[list[float]] = []
+        charge: list[list[float]] = [battery.pct]  # then the charges after each battery step
         bits = [0] * len(solos)
+        first_battery = BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS
         j, battery_step = run_solo_steps(
-            solos, bits, plan.steps, start, dt,
-            BATTERY_EVERY_STEPS - start % BATTERY_EVERY_STEPS, BATTERY_EVERY_STEPS, battery,
+            solos, bits, plan.steps, start, dt, first_battery, BATTERY_EVERY_STEPS, battery,
             charge, LEAP_RETRY_STEPS)
         if battery.ran:
             bat.pct = np.array(battery.pct)
         steps = np.arange(start + 1, start + j + 1)
         positions = dyn.position_m + dyn.velocity_m_s * ((steps - start)[:, None, None] * dt)
-        solo_rows = np.array(rows).reshape(j, len(solos), 5)
+        solo_rows = np.fromiter(rows, float, len(rows)).reshape(j, len(solos), 5)
         index = plan.solo
         positions[:, index] = solo_rows[:, :, :3]
         yaw = np.empty((j, n))
@@ -292,7 +292,10 @@ class Fleet:
             solo.store(dyn)
             yaw_step[solo.k] = solo.yaw_step
         dyn.yaw_step_deg = yaw_step
-        self.recorder.record_fleet_steps(steps * dt, positions, yaw, np.array(charge),
+        # Step i records the charge after every battery step at or before it (the battery
+        # steps are first_battery, first_battery + BATTERY_EVERY_STEPS, ...).
+        done = (steps - (start + first_battery)) // BATTERY_EVERY_STEPS + 1
+        self.recorder.record_fleet_steps(steps * dt, positions, yaw, np.array(charge)[done],
                                          moving_rows)
         events = _NO_EVENTS
         if any(b & SOLO_EVENTS for b in bits):

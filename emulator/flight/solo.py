@@ -323,8 +323,8 @@ def run_solo_steps(solos: list[SoloVehicle], bits: list[int], steps: int, start:
                    battery: SoloBattery, charge: list[list[float]],
                    settle_steps: int) -> tuple[int, bool]:
     """Up to `steps` steps of `solos` from step `start` (emulator.flight.fleet's cruise):
-    a battery step at step first_battery_step and every battery_every after it, each step's
-    charges appended to `charge`. Ends after a step in which something happened to a solo
+    a battery step at step first_battery_step and every battery_every after it, the charges
+    after each battery step appended to `charge`. Ends after a step in which something happened to a solo
     vehicle (bits[i]: solos[i]'s last step), or in which every one of them flies steadily
     again after speeding up, braking or turning (at settle_steps or later). Returns the
     steps run and whether the last one was a battery step."""
@@ -341,7 +341,7 @@ def run_solo_steps(solos: list[SoloVehicle], bits: list[int], steps: int, start:
             battery_j += battery_every
             if battery.step(solos):
                 happened |= ARRIVED  # not an arrival: just stop here for the autopilots
-        charge.append(battery.pct)
+            charge.append(battery.pct)
         if happened & SOLO_EVENTS:
             break
         if not happened & STEADY:
