@@ -324,10 +324,10 @@ def run_solo_steps(solos: list[SoloVehicle], bits: list[int], steps: int, start:
                    settle_steps: int) -> tuple[int, bool]:
     """Up to `steps` steps of `solos` from step `start` (emulator.flight.fleet's cruise):
     a battery step at step first_battery_step and every battery_every after it, the charges
-    after each battery step appended to `charge`. Ends after a step in which something happened to a solo
-    vehicle (bits[i]: solos[i]'s last step), or in which every one of them flies steadily
-    again after speeding up, braking or turning (at settle_steps or later). Returns the
-    steps run and whether the last one was a battery step."""
+    after each battery step appended to `charge`. Ends after a step in which something
+    happened to a solo vehicle (bits[i]: solos[i]'s last step), or in which every one of them
+    flies steadily again after speeding up, braking or turning (at settle_steps or later).
+    Returns the steps run and whether the last one was a battery step."""
     settling = False
     battery_step = False
     battery_j = first_battery_step
