@@ -6,9 +6,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import shapely
 
-from emulator.flight.collision import ClearanceGuard
+from emulator.flight.collision import FEW_OBSTACLES, ClearanceGuard
 from emulator.world import Obstacle, World
 
 
@@ -38,9 +39,10 @@ def _every_obstacle_m(world: World, x: float, y: float, z: float) -> float:
     return best
 
 
-def test_clearance_is_the_distance_to_the_nearest_of_all_obstacles() -> None:
+@pytest.mark.parametrize("count", [60, FEW_OBSTACLES, 3])  # numpy's passes, Python floats
+def test_clearance_is_the_distance_to_the_nearest_of_all_obstacles(count: int) -> None:
     rng = np.random.default_rng(7)
-    world = _world(rng, 60)
+    world = _world(rng, count)
     guard = ClearanceGuard(world, 1)
     points = [tuple(p) for p in np.column_stack((rng.uniform(-450, 450, (1500, 2)),
                                                  rng.uniform(-1, 80, 1500))).tolist()]
