@@ -54,15 +54,7 @@ TICKS_PER_PERIOD = 5
 # hosted session wakes twice a second instead of ten times.
 QUIET_TELEMETRY_TICK_MAX_S = 0.5
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
-# A lockstep clock steps in slices of STEPS_PER_SLICE: a fast-forward through steady flight
-# ends with its slice, so where the slices end is part of every result (the truth's last bits),
-# and lockstep results never change. A stepped clock without lockstep runs flat out and looks
-# at its sockets between slices, so where its slices end already depends on when datagrams
-# arrive; it takes slices of up to FREE_STEPS_PER_SLICE (10 simulated s at 50 Hz), which cost
-# fewer cruise plans, leaps and truth writes, still looking at the sockets every STEP_BUDGET_S
-# of wall time or after one slice.
 STEPS_PER_SLICE = 50
-FREE_STEPS_PER_SLICE = 500
 LINK_TICK_S = 0.05
 log = logging.getLogger("mavswarm.swarm")
 
@@ -359,7 +351,6 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
-                slice_steps = STEPS_PER_SLICE if self.clock.lockstep else FREE_STEPS_PER_SLICE
                 while time.monotonic() < deadline:
                     watched = self.watches.advance_targets()  # the wait tools' deadlines
                     if not self._clock.should_step(watched):
@@ -367,7 +358,7 @@ class Swarm:
                     self.bursts.note_active()
                     # never past a fault's time either
                     allowed = self._clock.steps_allowed([*watched, self.faults.next_event_s()])
-                    fleet.run(min(allowed, slice_steps))
+                    fleet.run(min(allowed, STEPS_PER_SLICE))
                     if self.faults.fire_due():
                         self.bursts.all_changed()
                     self._clock.release_waiters()
