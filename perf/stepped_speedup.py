@@ -176,8 +176,9 @@ async def fly(n: int, hz: float, prflt: float | None, timeout_s: float,
             "cpu_s": s1["cpu"] - s0["cpu"]}
 
 
-def fly_core(n: int, hz: float) -> dict:
-    """The same missions on the pure core: CPU seconds of the physics and a truth digest."""
+def fly_core(n: int, hz: float, *, digest: bool = True) -> dict:
+    """The same missions on the pure core: CPU seconds of the physics and a truth digest
+    (`digest=False`: none, "")."""
     scenario = default_scenario(n)
     fleet = Fleet(scenario, physics_hz=hz)
     for k, ap in enumerate(fleet.autopilots):
@@ -191,11 +192,17 @@ def fly_core(n: int, hz: float) -> dict:
     while fleet.any_busy:
         steps += fleet.run(50)  # the stepped swarm's slice (STEPS_PER_SLICE)
     cpu = time.process_time() - cpu0
+    return {"sim": fleet.now_s, "cpu": cpu, "steps": steps,
+            "digest": truth_digest(fleet) if digest else ""}
+
+
+def truth_digest(fleet: Fleet) -> str:
+    """SHA-256 (16 hex digits) of every trajectory row and truth event of `fleet`."""
     digest = hashlib.sha256()
     for vehicle in fleet.recorder.vehicle_ids:
         digest.update(fleet.recorder.trajectory(vehicle).tobytes())
     digest.update(json.dumps([e.to_json() for e in fleet.recorder.events()]).encode())
-    return {"sim": fleet.now_s, "cpu": cpu, "steps": steps, "digest": digest.hexdigest()[:16]}
+    return digest.hexdigest()[:16]
 
 
 EXTREME_SESSIONS = ("area_search-extreme-1", "area_assignment_and_patrol-extreme-1",

@@ -1,0 +1,82 @@
+"""Instructions the physics core executes for the stepped benchmark's missions: a count that
+does not depend on the machine's speed or load, so a change of a few percent shows where CPU
+time cannot (on a shared 2-core machine the same code's CPU time swings by a third).
+
+    ./dev perf core_instructions [--drones 10] [--physics-hz 50] [--runs 3]
+
+The missions of `stepped_speedup --core` (emulator.flight.Fleet in 50-step slices, no MAVLink)
+fly in two child processes under valgrind's callgrind, one flying them once and one `--runs`
+times; their difference over runs - 1 is the instructions of one flight, start-up and imports
+left out. Printed with the truth digest, which must not change when the physics is only made
+faster. Needs valgrind (`apt-get install valgrind`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _common import machine_line
+
+from emulator.flight.native import COMPILED
+
+HERE = os.path.abspath(__file__)
+
+
+def child(drones: int, hz: float, runs: int) -> None:
+    """Fly the missions `runs` times; print the truth digest of the last flight."""
+    from stepped_speedup import fly_core
+
+    for i in range(runs):
+        result = fly_core(drones, hz, digest=i == runs - 1)
+    print(f"digest {result['digest']}")
+
+
+def counted(drones: int, hz: float, runs: int) -> tuple[int, str]:
+    """Instructions of a child flying `runs` times, and its digest."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/callgrind.out",
+             sys.executable, HERE, "--child", str(runs), "--drones", str(drones),
+             "--physics-hz", str(hz)],
+            capture_output=True, text=True, check=True)
+    found = re.search(r"Collected : (\d+)", out.stderr)
+    digest = re.search(r"digest (\w+)", out.stdout)
+    if found is None or digest is None:
+        raise RuntimeError(f"callgrind gave no count:\n{out.stderr[-2000:]}")
+    return int(found.group(1)), digest.group(1)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--drones", type=int, default=10)
+    p.add_argument("--physics-hz", type=float, default=50.0)
+    p.add_argument("--runs", type=int, default=3, help="flights in the second child (>= 2)")
+    p.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    args = p.parse_args()
+    if args.child is not None:
+        child(args.drones, args.physics_hz, args.child)
+        return
+    if shutil.which("valgrind") is None:
+        sys.exit("core_instructions needs valgrind (apt-get install valgrind)")
+    runs = max(2, args.runs)
+    print(f"core_instructions: {args.drones} vehicles, {args.physics_hz:g} Hz, the stepped "
+          f"benchmark's missions on the core under callgrind (1 and {runs} flights); compiled: "
+          f"{', '.join(sorted(COMPILED)) or 'none'}")
+    print(machine_line(), flush=True)
+    with ThreadPoolExecutor(2) as pool:
+        once, more = pool.map(lambda k: counted(args.drones, args.physics_hz, k), (1, runs))
+    per_flight = (more[0] - once[0]) / (runs - 1)
+    print(f"instructions per flight: {per_flight / 1e6:.1f} million; truth sha256 {more[1]}"
+          + ("" if more[1] == once[1] else f" (the single flight: {once[1]})"))
+
+
+if __name__ == "__main__":
+    main()
