@@ -13,7 +13,6 @@ step of the trajectory is recorded, and no step runs past a timer.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
@@ -168,7 +167,6 @@ def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[
                                 dyn.descent_m_s.tolist())
     goal_yaws, yaws = dyn.goal_yaw_deg.tolist(), dyn.yaw_deg.tolist()
     battery = _BatteryFloats(fleet)
-    battery_steps = battery.steps
     speed_tol = ACCEL_STEADY_M_S2 * dt
     steps = []
     for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), p, g) in enumerate(zip(
@@ -183,7 +181,7 @@ def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[
                                    climb[k], descent[k], accel_xy[k], accel_z[k],
                                    acceptance[k], goal_yaws[k], yaws[k],
                                    (check_at[k] - now) / dt - 1.0, dt, speed_tol,
-                                   battery_steps)
+                                   battery)
         if not value >= MIN_CRUISE_STEPS:
             short_left -= 1
             if short_left < 0:
@@ -196,7 +194,7 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
                    p: list[float], g: list[float], speed_xy: float, climb: float,
                    descent: float, accel_xy: float, accel_z: float, acceptance: float,
                    goal_yaw: float, yaw: float, guard_steps: float, dt: float,
-                   speed_tol: float, battery_steps: Callable[..., float]) -> float:
+                   speed_tol: float, battery: _BatteryFloats) -> float:
     """The steps one vehicle with no acceleration and no yaw change can cruise (-inf: none)."""
     pz = p[2]
     ex, ey, ez = g[0] - p[0], g[1] - p[1], g[2] - pz
@@ -204,7 +202,7 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
     d = math.sqrt(ex * ex + ey * ey + ez * ez)
     if control == CONTROL_NONE or not s > 1e-9:
         at_rest = control == CONTROL_NONE or (d <= AT_GOAL_M and tracking == TRACK_NONE)
-        return battery_steps(k, vx, vy, vz) if at_rest else _NEG_INF
+        return battery.steps(k, vx, vy, vz) if at_rest else _NEG_INF
     if vx * ex + vy * ey + vz * ez < s * d * (1.0 - ALIGNED_COS_TOL):
         return _NEG_INF  # not heading straight for the goal
     d_min = d if d > 1e-9 else 1e-9
@@ -239,7 +237,7 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
         free_m = min(free_m, d - acceptance)
     if vz < 0.0:
         free_m = min(free_m, pz / max(-vz, 1e-9) * s)
-    return min(free_m / (s * dt) - 2.0, guard_steps, battery_steps(k, vx, vy, vz))
+    return min(free_m / (s * dt) - 2.0, guard_steps, battery.steps(k, vx, vy, vz))
 
 
 class _BatteryFloats:
