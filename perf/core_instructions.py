@@ -46,7 +46,8 @@ def counted(drones: int, hz: float, runs: int) -> tuple[int, str]:
             ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/callgrind.out",
              sys.executable, HERE, "--child", str(runs), "--drones", str(drones),
              "--physics-hz", str(hz)],
-            capture_output=True, text=True, check=True)
+            capture_output=True, text=True, check=True,
+            env={**os.environ, "PYTHONHASHSEED": "0"})  # the same dict and set layouts
     found = re.search(r"Collected : (\d+)", out.stderr)
     digest = re.search(r"digest (\w+)", out.stdout)
     if found is None or digest is None:
