@@ -18,7 +18,7 @@ import pytest
 from emulator.world import Wind
 from mavlink_gateway import Outcome, Status
 from mavlink_gateway.flight import ARRIVAL_M
-from tests.gateway_fixtures import assert_consistent, gateway_session, near
+from tests.gateway_fixtures import GatewaySession, assert_consistent, gateway_session, near
 from tests.scenario_fixtures import tiny_scenario, vehicle
 
 pytestmark = pytest.mark.mavsdk
@@ -149,6 +149,19 @@ async def test_critical_battery_failsafe_stops_a_move():
         s.swarm.release_clock(hold)
 
 
+async def _race_once_in(s: GatewaySession, mode: str, t0_s: float) -> None:
+    """Run d1's clock flat out to 600 s on, as other drones' flights would, once its command
+    has reached it (it entered `mode`). Racing from before, the clock could run the budget out
+    while the command itself travels, which on a loaded machine takes long enough."""
+    def entered() -> bool:
+        return any(e.data.get("mode") == mode
+                   for e in s.swarm.recorder.events("d1", t0_s=t0_s, kinds=["mode"]))
+
+    while not entered():
+        await asyncio.sleep(0.001)
+    await s.services.advance(600.0)
+
+
 async def test_outcomes_hold_when_the_clock_outruns_telemetry():
     # In stepped mode the clock runs as fast as it can while anything keeps it busy (here a
     # caller advancing it, as other drones' flights would): telemetry at its default wall
@@ -156,13 +169,13 @@ async def test_outcomes_hold_when_the_clock_outruns_telemetry():
     # that succeeded must not be reported as out of time because the news came late.
     async with gateway_session(tiny_scenario([vehicle(1)]), telemetry_hz=None) as s:
         gw, ap = s.gw, s.ap("d1")
-        for call, message, budget in [
-            (lambda: gw.take_off("d1", 10), "d1 took off to 10.0 m", 40.0),
-            (lambda: gw.land("d1"), "d1 landed at (0.0, 0.0)", 50.0),
+        for call, message, budget, mode in [
+            (lambda: gw.take_off("d1", 10), "d1 took off to 10.0 m", 40.0, "takeoff"),
+            (lambda: gw.land("d1"), "d1 landed at (0.0, 0.0)", 50.0, "land"),
         ]:
             await s.settle()
             t0 = s.now_s
-            racing = asyncio.create_task(s.services.advance(600.0))
+            racing = asyncio.create_task(_race_once_in(s, mode, t0))
             out = await call()
             await racing
             assert out.status is Status.OK and out.message == message, out
