@@ -9,6 +9,8 @@ station gains charge at the station's rate.
 
 from __future__ import annotations
 
+from typing import Final
+
 import numpy as np
 
 from emulator.flight.arrays import count_nonzero as _count
@@ -29,9 +31,9 @@ __all__ = [
     "power_factor",
 ]
 
-SPEED_POWER_PER_M2_S2 = 0.004  # +0.4 % power per (m/s)^2 of airspeed: +40 % at 10 m/s
-CLIMB_POWER_PER_M_S = 0.08  # +8 % power per m/s of climb
-GROUND_IDLE_POWER = 0.1  # armed on the ground: motors idle at 10 % of hover power
+SPEED_POWER_PER_M2_S2: Final = 0.004  # +0.4 % power per (m/s)^2 of airspeed: +40 % at 10 m/s
+CLIMB_POWER_PER_M_S: Final = 0.08  # +8 % power per m/s of climb
+GROUND_IDLE_POWER: Final = 0.1  # armed on the ground: motors idle at 10 % of hover power
 PHOTO_COST_PCT = 0.05
 MESSAGE_COST_PCT = 0.01  # per message sent (a broadcast counts once)
 

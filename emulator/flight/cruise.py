@@ -38,14 +38,14 @@ from emulator.flight.fleet_view import FleetView
 
 __all__ = ["CruisePlan", "cruise_plan", "steady_steps"]
 
-ACCEL_STEADY_M_S2 = 1e-6
-YAW_STEADY_DEG = 1e-9
-AT_GOAL_M = 1e-6
-ALIGNED_COS_TOL = 1e-9  # 1 - cos of the largest angle between velocity and goal direction
-MIN_CRUISE_STEPS = 2.0  # a vehicle steady for fewer steps than this is stepped one by one
+ACCEL_STEADY_M_S2: Final = 1e-6
+YAW_STEADY_DEG: Final = 1e-9
+AT_GOAL_M: Final = 1e-6
+ALIGNED_COS_TOL: Final = 1e-9  # 1 - cos of the largest angle between velocity and goal direction
+MIN_CRUISE_STEPS: Final = 2.0  # a vehicle steady for fewer steps than this is stepped one by one
 # Up to this many vehicles the plan is worked out in Python floats, vehicle by vehicle; for
 # more, with whole arrays (the same decisions, up to the last bit of a few roundings).
-FLOAT_PLAN_MAX_VEHICLES = 32
+FLOAT_PLAN_MAX_VEHICLES: Final = 32
 
 
 @dataclass(frozen=True, slots=True)
@@ -159,20 +159,33 @@ def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[
     n = dyn.n
     short_left = n if max_solo is None else max_solo
     yaw_step = dyn.yaw_step_deg
-    yaw_steps = [0.0] * n if yaw_step is None else yaw_step.tolist()
-    check_at = fleet.guard.check_at_s.tolist() if fleet.guard.enabled else [_INF] * n
-    accel_xy, accel_z = dyn.accel_xy_m_s2.tolist(), dyn.accel_z_m_s2.tolist()
-    acceptance = dyn.acceptance_m.tolist()
-    speed_xy, climb, descent = (dyn.speed_xy_m_s.tolist(), dyn.climb_m_s.tolist(),
-                                dyn.descent_m_s.tolist())
-    goal_yaws, yaws = dyn.goal_yaw_deg.tolist(), dyn.yaw_deg.tolist()
+    # Typed lists: the compiled plan works on C doubles, not on Python objects.
+    yaw_steps: list[float] = [0.0] * n if yaw_step is None else yaw_step.tolist()
+    check_at: list[float] = (fleet.guard.check_at_s.tolist() if fleet.guard.enabled
+                             else [_INF] * n)
+    accel_xy: list[float] = dyn.accel_xy_m_s2.tolist()
+    accel_z: list[float] = dyn.accel_z_m_s2.tolist()
+    acceptance: list[float] = dyn.acceptance_m.tolist()
+    speed_xy: list[float] = dyn.speed_xy_m_s.tolist()
+    climb: list[float] = dyn.climb_m_s.tolist()
+    descent: list[float] = dyn.descent_m_s.tolist()
+    goal_yaws: list[float] = dyn.goal_yaw_deg.tolist()
+    yaws: list[float] = dyn.yaw_deg.tolist()
+    controls: list[int] = dyn.control.tolist()
+    trackings: list[int] = dyn.tracking.tolist()
+    yaw_trackings: list[bool] = dyn.yaw_tracking.tolist()
+    accels: list[list[float]] = dyn.accel_m_s2.tolist()
+    velocities: list[list[float]] = dyn.velocity_m_s.tolist()
+    positions: list[list[float]] = dyn.position_m.tolist()
+    goals: list[list[float]] = dyn.goal_m.tolist()
     battery = _BatteryFloats(fleet)
     speed_tol = ACCEL_STEADY_M_S2 * dt
-    steps = []
-    for k, (control, tracking, yaw_tracking, (ax, ay, az), (vx, vy, vz), p, g) in enumerate(zip(
-            dyn.control.tolist(), dyn.tracking.tolist(), dyn.yaw_tracking.tolist(),
-            dyn.accel_m_s2.tolist(), dyn.velocity_m_s.tolist(), dyn.position_m.tolist(),
-            dyn.goal_m.tolist(), strict=True)):
+    steps: list[float] = []
+    for k in range(n):
+        control, tracking, yaw_tracking = controls[k], trackings[k], yaw_trackings[k]
+        accel, velocity, p, g = accels[k], velocities[k], positions[k], goals[k]
+        ax, ay, az = accel[0], accel[1], accel[2]
+        vx, vy, vz = velocity[0], velocity[1], velocity[2]
         if (yaw_tracking or abs(ax) > ACCEL_STEADY_M_S2 or abs(ay) > ACCEL_STEADY_M_S2
                 or abs(az) > ACCEL_STEADY_M_S2 or abs(yaw_steps[k]) > YAW_STEADY_DEG):
             value = _NEG_INF  # speeding up, braking or turning
@@ -245,14 +258,17 @@ class _BatteryFloats:
 
     def __init__(self, fleet: FleetView) -> None:
         bat = fleet.bat
-        self._pct = bat.pct.tolist()
-        self._levels = bat.levels_pct.T.tolist()
-        self._full_pct_s = (100.0 / bat.hover_endurance_s).tolist()
-        self._charge = bat.charge_rate_pct_s.tolist()
-        self._airborne, self._armed = fleet.airborne.tolist(), fleet.armed.tolist()
-        self._wind_x, self._wind_y = fleet.dyn.wind_m_s.tolist()
-        self._dt = fleet.dt_s
-        self._slack = 2.0 * fleet.battery_every_steps
+        self._pct: list[float] = bat.pct.tolist()
+        self._levels: list[list[float]] = bat.levels_pct.T.tolist()
+        self._full_pct_s: list[float] = (100.0 / bat.hover_endurance_s).tolist()
+        self._charge: list[float] = bat.charge_rate_pct_s.tolist()
+        self._airborne: list[bool] = fleet.airborne.tolist()
+        self._armed: list[bool] = fleet.armed.tolist()
+        wind: list[float] = fleet.dyn.wind_m_s.tolist()
+        self._wind_x: float = wind[0]
+        self._wind_y: float = wind[1]
+        self._dt: float = fleet.dt_s
+        self._slack: float = 2.0 * fleet.battery_every_steps
 
     def steps(self, k: int, vx: float, vy: float, vz: float) -> float:
         if self._airborne[k]:

@@ -39,13 +39,15 @@ class SoloBattery:
         self._fleet, self._bat, self._solo, self._dt_s = fleet, bat, solo, dt_s
         charging = bat.charge_rate_pct_s > 0.0
         self._any_charging = any_true(charging)
-        self._charging_k = indices(charging).tolist()
+        self._charging_k: list[int] = indices(charging).tolist()
         self._deltas: list[float] | None = None  # per battery step (the same for the cruising)
         # airborne, armed, full charge per s of hover (%/s) and charge rate of each solo vehicle
         self._flags: list[tuple[bool, bool, float, float]] = []
         self._floor_pct = float(bat.levels_pct.max())
         self._levels_ok = not count_nonzero(bat.level)  # every vehicle's level OK (kept below)
-        self._wind_x, self._wind_y = fleet.dyn.wind_m_s.tolist()
+        wind: list[float] = fleet.dyn.wind_m_s.tolist()  # typed: C doubles when compiled
+        self._wind_x: float = wind[0]
+        self._wind_y: float = wind[1]
         self.pct: list[float] = bat.pct.tolist()
         self.levels = NO_LEVELS
         self.ran = False
