@@ -250,7 +250,8 @@ def _vehicle_steps(k: int, control: int, tracking: int, vx: float, vy: float, vz
         free_m = min(free_m, d - acceptance)
     if vz < 0.0:
         free_m = min(free_m, pz / max(-vz, 1e-9) * s)
-    return min(free_m / (s * dt) - 2.0, guard_steps, battery.steps(k, vx, vy, vz))
+    # two-argument min: compiled as a float comparison (the same first-smallest rule)
+    return min(min(free_m / (s * dt) - 2.0, guard_steps), battery.steps(k, vx, vy, vz))
 
 
 class _BatteryFloats:
@@ -280,10 +281,13 @@ class _BatteryFloats:
         pct = self._pct[k]
         if rate > 0.0:
             # the nearest level below: pct less the highest one (subtraction keeps the order)
-            below = [level for level in self._levels[k] if level < pct]
-            if not below:
+            highest = _NEG_INF
+            for level in self._levels[k]:
+                if highest < level < pct:
+                    highest = level
+            if highest == _NEG_INF:
                 return _INF
-            return (pct - max(below)) / rate / self._dt - self._slack
+            return (pct - highest) / rate / self._dt - self._slack
         if rate < 0.0:
             return (100.0 - pct) / -rate / self._dt - self._slack
         return _INF

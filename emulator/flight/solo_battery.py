@@ -78,17 +78,31 @@ class SoloBattery:
             else:
                 power = GROUND_IDLE_POWER if armed else 0.0
             deltas[vehicle.k] = (charge_pct_s - full_pct_s * power) * dt_s
-        pct = [p + d for p, d in zip(self.pct, deltas, strict=True)]
-        if min(pct) < 0.0 or max(pct) > 100.0:
+        before = self.pct
+        pct = [before[i] + deltas[i] for i in range(len(before))]
+        lowest, highest = _bounds(pct)
+        if lowest < 0.0 or highest > 100.0:
             pct = [_clip_pct(p) for p in pct]
+            lowest = _bounds(pct)[0]
         self.pct = pct
-        if min(pct) > self._floor_pct and self._levels_ok:
+        if lowest > self._floor_pct and self._levels_ok:
             self.levels = NO_LEVELS
         else:
             self.levels = bat.set_pct(np.array(pct))
             self._levels_ok = not count_nonzero(bat.level)
         return bool(self.levels.size) or (
             self._any_charging and any(pct[k] >= 100.0 for k in self._charging_k))
+
+
+def _bounds(values: list[float]) -> tuple[float, float]:
+    """min(values) and max(values) of a non-empty list, in one compiled pass."""
+    lowest = highest = values[0]
+    for value in values:
+        if value < lowest:
+            lowest = value
+        elif value > highest:
+            highest = value
+    return lowest, highest
 
 
 def _clip_pct(pct: float) -> float:
