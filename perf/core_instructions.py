@@ -3,12 +3,16 @@ does not depend on the machine's speed or load, so a change of a few percent sho
 time cannot (on a shared 2-core machine the same code's CPU time swings by a third).
 
     ./dev perf core_instructions [--drones 10] [--physics-hz 50] [--runs 3]
+    ./dev perf core_instructions --session area_search-easy-1
 
 The missions of `stepped_speedup --core` (emulator.flight.Fleet in 50-step slices, no MAVLink)
 fly in two child processes under valgrind's callgrind, one flying them once and one `--runs`
 times; their difference over runs - 1 is the instructions of one flight, start-up and imports
 left out. Printed with the truth digest, which must not change when the physics is only made
-faster. Needs valgrind (`apt-get install valgrind`).
+faster. `--session ID` counts instead the whole process of `truth_digest --sessions ID`: the
+oracle over every task of that session in lockstep, every action over MAVLink (start-up and
+MAVSDK's threads included), with its truth and records digests. Needs valgrind
+(`apt-get install valgrind`).
 """
 
 from __future__ import annotations
@@ -55,11 +59,29 @@ def counted(drones: int, hz: float, runs: int) -> tuple[int, str]:
     return int(found.group(1)), digest.group(1)
 
 
+def session_count(session: str) -> None:
+    """The instructions of `truth_digest --sessions SESSION`, and its digests."""
+    script = os.path.join(os.path.dirname(HERE), "truth_digest.py")
+    out = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
+         script, "--sessions", session],
+        capture_output=True, text=True, check=True, env={**os.environ, "PYTHONHASHSEED": "0"})
+    found = re.search(r"Collected : (\d+)", out.stderr)
+    row = [line for line in out.stdout.splitlines() if line.startswith(session)]
+    if found is None or not row:
+        raise RuntimeError(f"callgrind gave no count:\n{out.stderr[-2000:]}")
+    _, tasks, sim_s, truth, records, _cpu = row[-1].split()
+    print(f"instructions: {int(found.group(1)) / 1e9:.2f} billion for {tasks} tasks "
+          f"({sim_s} simulated s); truth sha256 {truth}, records sha256 {records}")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--drones", type=int, default=10)
     p.add_argument("--physics-hz", type=float, default=50.0)
     p.add_argument("--runs", type=int, default=3, help="flights in the second child (>= 2)")
+    p.add_argument("--session", metavar="ID",
+                   help="count the oracle over this benchmark session instead (lockstep)")
     p.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.child is not None:
@@ -67,6 +89,12 @@ def main() -> None:
         return
     if shutil.which("valgrind") is None:
         sys.exit("core_instructions needs valgrind (apt-get install valgrind)")
+    if args.session:
+        print(f"core_instructions --session {args.session}: the oracle over its tasks in "
+              "lockstep under callgrind, the whole process")
+        print(machine_line(), flush=True)
+        session_count(args.session)
+        return
     runs = max(2, args.runs)
     print(f"core_instructions: {args.drones} vehicles, {args.physics_hz:g} Hz, the stepped "
           f"benchmark's missions on the core under callgrind (1 and {runs} flights); compiled: "
