@@ -23,7 +23,6 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -43,36 +42,39 @@ def child(drones: int, hz: float, runs: int) -> None:
     print(f"digest {result['digest']}")
 
 
+def callgrind(*args: str) -> tuple[int, str]:
+    """Run `python ARGS` under callgrind (a fixed hash seed: the same dict and set layouts);
+    the instructions it executed and its standard output."""
+    out = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
+         *args], capture_output=True, text=True, check=True,
+        env={**os.environ, "PYTHONHASHSEED": "0"})
+    found = re.search(r"Collected : (\d+)", out.stderr)
+    if found is None:
+        raise RuntimeError(f"callgrind gave no count:\n{out.stderr[-2000:]}")
+    return int(found.group(1)), out.stdout
+
+
 def counted(drones: int, hz: float, runs: int) -> tuple[int, str]:
     """Instructions of a child flying `runs` times, and its digest."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = subprocess.run(
-            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={tmp}/callgrind.out",
-             sys.executable, HERE, "--child", str(runs), "--drones", str(drones),
-             "--physics-hz", str(hz)],
-            capture_output=True, text=True, check=True,
-            env={**os.environ, "PYTHONHASHSEED": "0"})  # the same dict and set layouts
-    found = re.search(r"Collected : (\d+)", out.stderr)
-    digest = re.search(r"digest (\w+)", out.stdout)
-    if found is None or digest is None:
-        raise RuntimeError(f"callgrind gave no count:\n{out.stderr[-2000:]}")
-    return int(found.group(1)), digest.group(1)
+    count, out = callgrind(HERE, "--child", str(runs), "--drones", str(drones),
+                           "--physics-hz", str(hz))
+    digest = re.search(r"digest (\w+)", out)
+    if digest is None:
+        raise RuntimeError(f"the child printed no digest:\n{out[-2000:]}")
+    return count, digest.group(1)
 
 
 def session_count(session: str) -> None:
     """The instructions of `truth_digest --sessions SESSION`, and its digests."""
-    script = os.path.join(os.path.dirname(HERE), "truth_digest.py")
-    out = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
-         script, "--sessions", session],
-        capture_output=True, text=True, check=True, env={**os.environ, "PYTHONHASHSEED": "0"})
-    found = re.search(r"Collected : (\d+)", out.stderr)
-    row = [line for line in out.stdout.splitlines() if line.startswith(session)]
-    if found is None or not row:
-        raise RuntimeError(f"callgrind gave no count:\n{out.stderr[-2000:]}")
+    count, out = callgrind(os.path.join(os.path.dirname(HERE), "truth_digest.py"),
+                           "--sessions", session)
+    row = [line for line in out.splitlines() if line.startswith(session)]
+    if not row:
+        raise RuntimeError(f"truth_digest printed no row for {session}:\n{out[-2000:]}")
     _, tasks, sim_s, truth, records, _cpu = row[-1].split()
-    print(f"instructions: {int(found.group(1)) / 1e9:.2f} billion for {tasks} tasks "
-          f"({sim_s} simulated s); truth sha256 {truth}, records sha256 {records}")
+    print(f"instructions: {count / 1e9:.2f} billion for {tasks} tasks ({sim_s} simulated s); "
+          f"truth sha256 {truth}, records sha256 {records}")
 
 
 def main() -> None:

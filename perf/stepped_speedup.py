@@ -193,11 +193,12 @@ def fly_core(n: int, hz: float, *, digest: bool = True) -> dict:
         steps += fleet.run(50)  # the stepped swarm's slice (STEPS_PER_SLICE)
     cpu = time.process_time() - cpu0
     return {"sim": fleet.now_s, "cpu": cpu, "steps": steps,
-            "digest": truth_digest(fleet) if digest else ""}
+            "digest": core_digest(fleet) if digest else ""}
 
 
-def truth_digest(fleet: Fleet) -> str:
-    """SHA-256 (16 hex digits) of every trajectory row and truth event of `fleet`."""
+def core_digest(fleet: Fleet) -> str:
+    """SHA-256 (16 hex digits) of every trajectory row and truth event of `fleet`, the --core
+    digest (its own format: truth_digest.py hashes events and moving targets otherwise)."""
     digest = hashlib.sha256()
     for vehicle in fleet.recorder.vehicle_ids:
         digest.update(fleet.recorder.trajectory(vehicle).tobytes())

@@ -41,10 +41,11 @@ class ClearanceGuard:
                                      nan=np.inf)
         if self.enabled:
             shapely.prepare(self._footprints)
-        # The same bounds and tops as Python floats, for a world of a few obstacles.
-        self._boxes: list[tuple[float, float, float, float, float]] = [
-            (x0, y0, x1, y1, top) for (x0, y0, x1, y1), top
-            in zip(self._bounds.tolist(), self._top_m.tolist(), strict=True)]
+        # The same bounds and tops as Python floats, for a world of a few obstacles (None: more).
+        self._boxes: list[tuple[float, float, float, float, float]] | None = None
+        if len(obstacles) <= FEW_OBSTACLES:
+            self._boxes = [(x0, y0, x1, y1, top) for (x0, y0, x1, y1), top
+                           in zip(self._bounds.tolist(), self._top_m.tolist(), strict=True)]
         self.check_at_s = np.zeros(n)
         self._first_check_s = 0.0  # the earliest of check_at_s (kept by the methods below)
 
@@ -54,8 +55,8 @@ class ClearanceGuard:
             return math.inf
         # Only the volumes whose boxes lie no farther than the one nearest by box are measured
         # exactly: the same minimum as measuring all (the others are provably farther).
-        if len(self._boxes) <= FEW_OBSTACLES:
-            return self._clearance_of_few(x_m, y_m, z_m)
+        if self._boxes is not None:
+            return self._clearance_of_few(self._boxes, x_m, y_m, z_m)
         b = self._bounds
         dx = np.maximum(np.maximum(b[:, 0] - x_m, x_m - b[:, 2]), 0.0)
         dy = np.maximum(np.maximum(b[:, 1] - y_m, y_m - b[:, 3]), 0.0)
@@ -72,13 +73,14 @@ class ClearanceGuard:
         up = above[near]
         return float(np.sqrt(d_xy * d_xy + up * up).min())
 
-    def _clearance_of_few(self, x_m: float, y_m: float, z_m: float) -> float:
+    def _clearance_of_few(self, boxes: list[tuple[float, float, float, float, float]],
+                          x_m: float, y_m: float, z_m: float) -> float:
         """`clearance_m` in Python floats, obstacle by obstacle (cheaper for a few): the same
         operations, so the same result to the last bit."""
         lows: list[float] = []
         aboves: list[float] = []
         first, first_low = 0, math.inf
-        for i, (x0, y0, x1, y1, top) in enumerate(self._boxes):
+        for i, (x0, y0, x1, y1, top) in enumerate(boxes):
             dx = max(x0 - x_m, x_m - x1, 0.0)
             dy = max(y0 - y_m, y_m - y1, 0.0)
             above = z_m - top
