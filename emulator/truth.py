@@ -52,6 +52,9 @@ class TruthRecorder(TruthHistory):
         stage_rows = max(_MIN_STAGE_ROWS, _STAGE_ROWS_PER_VEHICLE * n)
         self._stage = np.empty((stage_rows, _N_COLS + 1), dtype=np.float64)
         self._stage_len = 0
+        # Whether every staged row so far belongs to a block of the whole fleet in vehicle
+        # order (the usual case): such a stage is split by vehicle without sorting.
+        self._stage_regular = True
         self._owner_dtype = np.uint16 if n <= 2**16 else np.intp
         self._chunks = [[np.empty((_FIRST_CHUNK_ROWS, _N_COLS))] for _ in range(n)]
         self._fill = [0] * n
@@ -124,6 +127,8 @@ class TruthRecorder(TruthHistory):
             return
         if self._stage_len + size > self._stage.shape[0]:
             self._flush()
+        if size != self._n or self._left is not None:
+            self._stage_regular = False
         start = self._stage_len
         self._stage_len = end = start + size
         rows = self._stage[start:end]
@@ -183,7 +188,7 @@ class TruthRecorder(TruthHistory):
             grid[:, :, 4] = yaw_deg
             grid[:, :, 5] = battery_pct
             grid[:, :, 6] = self._all_index
-            self._staged(rows)
+            self._staged(rows, regular=self._left is None)
             return
         # Which vehicles each step stores: all on a keyframe, else the moving ones (and on
         # the first step those that stopped moving with the step before).
@@ -204,7 +209,7 @@ class TruthRecorder(TruthHistory):
         rows[:, 4] = yaw_deg[steps, index] if yaw_deg.ndim == 2 else yaw_deg[index]
         rows[:, 5] = battery_pct[steps, index]
         rows[:, 6] = index
-        self._staged(rows)
+        self._staged(rows, regular=False)
 
     def _new_rows(self, size: int) -> np.ndarray:
         """`size` rows to fill and hand to `_staged`: the next rows of the stage, or an array
@@ -217,10 +222,13 @@ class TruthRecorder(TruthHistory):
         self._stage_len = start + size
         return self._stage[start : self._stage_len]
 
-    def _staged(self, rows: np.ndarray) -> None:
-        """The rows of `_new_rows` are filled in."""
+    def _staged(self, rows: np.ndarray, *, regular: bool) -> None:
+        """The rows of `_new_rows` are filled in (`regular`: blocks of the whole fleet in
+        vehicle order)."""
         if rows.base is not self._stage:
-            self._group_into_chunks(rows)
+            self._group_into_chunks(rows, regular=regular)
+        elif not regular:
+            self._stage_regular = False
 
     def add_vehicle(self, vehicle_id: str, t_s: float, position_m: npt.ArrayLike,
                     yaw_deg: float, battery_pct: float) -> int:
@@ -303,10 +311,16 @@ class TruthRecorder(TruthHistory):
         return chunks[0][:fill]
 
     def _flush(self) -> None:
-        self._group_into_chunks(self._stage[: self._stage_len])
+        self._group_into_chunks(self._stage[: self._stage_len], regular=self._stage_regular)
         self._stage_len = 0
+        self._stage_regular = True
 
-    def _group_into_chunks(self, staged: np.ndarray) -> None:
+    def _group_into_chunks(self, staged: np.ndarray, *, regular: bool) -> None:
+        if regular and staged.shape[0]:  # whole-fleet blocks: vehicle k's rows are every n-th
+            blocks = staged.reshape(-1, self._n, _N_COLS + 1)
+            for vehicle in range(self._n):
+                self._append(vehicle, blocks[:, vehicle, :_N_COLS])
+            return
         owners = staged[:, _N_COLS].astype(self._owner_dtype)
         grouped = staged[np.argsort(owners, kind="stable"), :_N_COLS]
         counts = np.bincount(owners, minlength=self._n).tolist()

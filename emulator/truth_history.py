@@ -41,6 +41,17 @@ def _json_default(value: Any) -> Any:
     raise TypeError(f"event data value of type {type(value).__name__} is not JSON-serialisable")
 
 
+_SCALARS = frozenset((str, int, float, bool, type(None)))
+_MAPPINGS = (dict, MappingProxyType)
+
+
+def _flat(data: Mapping[str, Any]) -> bool:
+    """Whether data is str keys to plain JSON scalars, which a JSON round trip gives back
+    as they are (floats by their repr, NaN and the infinities included)."""
+    return type(data) in _MAPPINGS and all(
+        type(key) is str and type(value) in _SCALARS for key, value in data.items())
+
+
 def _freeze(value: Any) -> Any:
     if isinstance(value, dict):
         return MappingProxyType({key: _freeze(item) for key, item in value.items()})
@@ -85,7 +96,8 @@ class TruthEvent:
             raise ValueError(f"event kind must be a truth event kind "
                              f"({', '.join(TruthEventKind)}), got {self.kind!r}") from None
         try:
-            plain = json.loads(json.dumps(dict(self.data), default=_json_default))
+            plain = (dict(self.data) if _flat(self.data)
+                     else json.loads(json.dumps(dict(self.data), default=_json_default)))
         except (TypeError, ValueError) as exc:
             raise ValueError(f"event {self.kind!r} data is not JSON-serialisable: {exc}") from exc
         object.__setattr__(self, "t_s", float(self.t_s))
@@ -93,7 +105,8 @@ class TruthEvent:
 
     def to_json(self) -> dict[str, Any]:
         """Plain JSON-ready form; ``TruthEvent(**event.to_json())`` rebuilds the event."""
-        data = json.loads(json.dumps(self.data, default=_json_default))
+        data = (dict(self.data) if _flat(self.data)
+                else json.loads(json.dumps(self.data, default=_json_default)))
         return {"t_s": self.t_s, "vehicle_id": self.vehicle_id, "kind": self.kind, "data": data}
 
 

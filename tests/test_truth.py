@@ -305,6 +305,28 @@ def test_many_moving_vehicles_match_reference_across_flushes() -> None:
         np.testing.assert_array_equal(rec.trajectory(vehicle_id), ref.window(i, None, None))
 
 
+def test_blocks_of_the_whole_fleet_and_partial_blocks_match_reference() -> None:
+    # All-moving blocks are split by vehicle without sorting; a partial block (or a block
+    # larger than the stage) takes the sorting path: every vehicle's rows come out the same.
+    n = 7
+    rec, ref = TruthRecorder(_ids(n)), NaiveTruth(n, 1.0)
+    step, rng = 0, np.random.default_rng(5)
+    for count, share in ((3, 1.0), (700, 1.0), (40, 0.5), (1, 1.0), (2000, 1.0), (9, 0.0),
+                         (300, 1.0)):
+        t_s = np.arange(step, step + count) * 0.02
+        states = [_state(n, s) for s in range(step, step + count)]
+        moving = rng.random(n) < share
+        rec.record_steps(t_s, np.stack([s[0] for s in states]), states[0][1],
+                         np.stack([s[2] for s in states]), moving)
+        for i, t in enumerate(t_s.tolist()):
+            ref.step(t, states[i][0], states[0][1], states[i][2], moving.tolist())
+        step += count
+        if step % 2:
+            np.testing.assert_array_equal(rec.trajectory("uav1"), ref.window(1, None, None))
+    for i, vehicle_id in enumerate(rec.vehicle_ids):
+        np.testing.assert_array_equal(rec.trajectory(vehicle_id), ref.window(i, None, None))
+
+
 @st.composite
 def _recordings(draw: st.DrawFn) -> tuple[int, float, list[tuple[float, list[bool], bool]]]:
     n = draw(st.integers(1, 4))
@@ -342,3 +364,17 @@ def test_trajectory_matches_naive_reference(
             t0_s, t1_s = t1_s, t0_s
         expected = ref.window(i, t0_s, t1_s)
         np.testing.assert_array_equal(rec.trajectory(vehicle_id, t0_s, t1_s), expected)
+
+
+def test_event_data_of_plain_scalars_reads_as_after_a_json_round_trip():
+    data = {"alt_m": 12.5, "n": 3, "ok": False, "why": None, "nan": math.nan, "inf": -math.inf,
+            "np": np.float64(0.1), "nested": {"ids": (1, 2)}}
+    event = TruthEvent(2.0, "a", "failsafe", data)
+    assert type(event.data["np"]) is float and event.data["nested"]["ids"] == (1, 2)
+    assert math.isnan(event.data["nan"]) and event.data["inf"] == -math.inf
+    flat = TruthEvent(2.0, "a", "failsafe", {"alt_m": 12.5, "ok": True, "why": None})
+    assert flat.to_json()["data"] == {"alt_m": 12.5, "ok": True, "why": None}
+    with pytest.raises(TypeError):
+        flat.data["alt_m"] = 1.0  # read-only either way
+    with pytest.raises(ValueError, match="not JSON-serialisable"):
+        TruthEvent(2.0, "a", "failsafe", {"when": object()})
