@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from emulator.flight.battery import FleetBattery
-from emulator.flight.cruise import _cruise_steps_arrays, _cruise_steps_floats
+from emulator.flight.cruise import _cruise_steps_arrays, _cruise_steps_floats, cruise_plan
 from emulator.flight.dynamics import (
     CONTROL_NONE,
     CONTROL_POSITION,
@@ -22,6 +22,7 @@ from emulator.flight.fleet import Fleet, _SoloGuard
 from emulator.flight.solo import (
     ARRIVED,
     OBSTACLE_STOP,
+    STATE_FIELDS,
     TOUCHED_DOWN,
     YAW_REACHED,
     SoloVehicle,
@@ -160,6 +161,23 @@ def test_the_cruise_plan_in_floats_is_the_plan_in_arrays() -> None:
                 assert a == pytest.approx(b, rel=1e-9, abs=1e-6)
         compared += 1
     assert compared > 500
+
+
+def test_a_solo_vehicle_from_the_plans_state_is_the_one_read_from_the_arrays() -> None:
+    rng = np.random.default_rng(11)
+    fleet = _mission_fleet(12)
+    for _ in range(20):
+        fleet.dyn = _random_dynamics(rng, 12, wind=True)
+        plan = cruise_plan(fleet, 50, max_solo=12)
+        assert plan is not None and plan.states is not None
+        for k, state in zip(plan.solo.tolist(), plan.states, strict=True):
+            assert len(state) == len(STATE_FIELDS)
+            given = SoloVehicle(fleet.dyn, k, DT_S, None, state=state)
+            read = SoloVehicle(fleet.dyn, k, DT_S, None)
+            assert [given.step(DT_S * (i + 1)) for i in range(30)] == [
+                read.step(DT_S * (i + 1)) for i in range(30)]
+            assert (given.px, given.py, given.pz, given.yaw, given.tracking) == (
+                read.px, read.py, read.pz, read.yaw, read.tracking)
 
 
 def test_a_solo_vehicle_stops_at_an_obstacle_like_the_fleet_step() -> None:

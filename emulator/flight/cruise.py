@@ -51,10 +51,13 @@ FLOAT_PLAN_MAX_VEHICLES: Final = 32
 @dataclass(frozen=True, slots=True)
 class CruisePlan:
     """`steps` steps in which every vehicle outside `solo` flies at constant velocity;
-    `solo` (ascending indices) are stepped one by one (none: a leap of the whole fleet)."""
+    `solo` (ascending indices) are stepped one by one (none: a leap of the whole fleet).
+    `states`: each solo vehicle's state as `SoloVehicle` reads it (emulator.flight.solo's
+    STATE_FIELDS), read by the plan already; None: read it from the arrays."""
 
     steps: int
     solo: np.ndarray
+    states: list[list[float]] | None = None
 
 
 def steady_steps(fleet: FleetView, limit: int) -> int:
@@ -79,8 +82,12 @@ def cruise_plan(fleet: FleetView, limit: int, *, max_solo: int) -> CruisePlan | 
         horizon = min(horizon, (timer - fleet.now_s) / dt - 1.0)
     if horizon < 1.0 or (max_solo == 0 and horizon < MIN_CRUISE_STEPS):
         return None
-    steps = (_cruise_steps_floats(fleet, max_solo) if dyn.n <= FLOAT_PLAN_MAX_VEHICLES
-             else _cruise_steps_arrays(fleet).tolist())
+    floats: _FleetFloats | None = None
+    if dyn.n <= FLOAT_PLAN_MAX_VEHICLES:
+        floats = _FleetFloats(fleet)
+        steps = _cruise_steps_floats(fleet, max_solo, floats)
+    else:
+        steps = _cruise_steps_arrays(fleet).tolist()
     if steps is None:
         return None
     solo = [k for k, s in enumerate(steps) if not s >= MIN_CRUISE_STEPS]
@@ -91,7 +98,10 @@ def cruise_plan(fleet: FleetView, limit: int, *, max_solo: int) -> CruisePlan | 
         return None
     if len(solo) < len(steps):
         horizon = min(horizon, min(s for s in steps if s >= MIN_CRUISE_STEPS))
-    return CruisePlan(int(horizon), np.array(solo, dtype=np.intp)) if horizon >= 1.0 else None
+    if horizon < 1.0:
+        return None
+    states = None if floats is None else [floats.state(k) for k in solo]
+    return CruisePlan(int(horizon), np.array(solo, dtype=np.intp), states)
 
 
 def _cruise_steps_arrays(fleet: FleetView) -> np.ndarray:
@@ -152,32 +162,56 @@ def _cruise_steps_arrays(fleet: FleetView) -> np.ndarray:
     return steps
 
 
-def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None) -> list[float] | None:
+class _FleetFloats:
+    """The fleet's arrays that the plan and the solo vehicles read, as Python lists (typed:
+    the compiled plan works on C doubles, not on Python objects)."""
+
+    def __init__(self, fleet: FleetView) -> None:
+        dyn = fleet.dyn
+        n = dyn.n
+        yaw_step = dyn.yaw_step_deg
+        self.yaw_steps: list[float] = [0.0] * n if yaw_step is None else yaw_step.tolist()
+        self.check_at: list[float] = (fleet.guard.check_at_s.tolist() if fleet.guard.enabled
+                                      else [_INF] * n)
+        self.accel_xy: list[float] = dyn.accel_xy_m_s2.tolist()
+        self.accel_z: list[float] = dyn.accel_z_m_s2.tolist()
+        self.acceptance: list[float] = dyn.acceptance_m.tolist()
+        self.speed_xy: list[float] = dyn.speed_xy_m_s.tolist()
+        self.climb: list[float] = dyn.climb_m_s.tolist()
+        self.descent: list[float] = dyn.descent_m_s.tolist()
+        self.goal_yaws: list[float] = dyn.goal_yaw_deg.tolist()
+        self.yaws: list[float] = dyn.yaw_deg.tolist()
+        self.controls: list[int] = dyn.control.tolist()
+        self.trackings: list[int] = dyn.tracking.tolist()
+        self.yaw_trackings: list[bool] = dyn.yaw_tracking.tolist()
+        self.accels: list[list[float]] = dyn.accel_m_s2.tolist()
+        self.velocities: list[list[float]] = dyn.velocity_m_s.tolist()
+        self.positions: list[list[float]] = dyn.position_m.tolist()
+        self.goals: list[list[float]] = dyn.goal_m.tolist()
+
+    def state(self, k: int) -> list[float]:
+        """Vehicle k's state in the order of emulator.flight.solo's STATE_FIELDS."""
+        p, v, a, g = self.positions[k], self.velocities[k], self.accels[k], self.goals[k]
+        return [p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2], self.yaws[k],
+                float(self.trackings[k]), 1.0 if self.yaw_trackings[k] else 0.0,
+                float(self.controls[k]), g[0], g[1], g[2], self.goal_yaws[k], self.speed_xy[k],
+                self.accel_xy[k], self.accel_z[k], self.climb[k], self.descent[k],
+                self.acceptance[k]]
+
+
+def _cruise_steps_floats(fleet: FleetView, max_solo: int | None = None,
+                         floats: _FleetFloats | None = None) -> list[float] | None:
     """`_cruise_steps_arrays` vehicle by vehicle in Python floats (cheaper for a few); None
     as soon as more than max_solo vehicles cannot cruise for MIN_CRUISE_STEPS."""
     dyn, dt, now = fleet.dyn, fleet.dt_s, fleet.now_s
     n = dyn.n
     short_left = n if max_solo is None else max_solo
-    yaw_step = dyn.yaw_step_deg
-    # Typed lists: the compiled plan works on C doubles, not on Python objects.
-    yaw_steps: list[float] = [0.0] * n if yaw_step is None else yaw_step.tolist()
-    check_at: list[float] = (fleet.guard.check_at_s.tolist() if fleet.guard.enabled
-                             else [_INF] * n)
-    accel_xy: list[float] = dyn.accel_xy_m_s2.tolist()
-    accel_z: list[float] = dyn.accel_z_m_s2.tolist()
-    acceptance: list[float] = dyn.acceptance_m.tolist()
-    speed_xy: list[float] = dyn.speed_xy_m_s.tolist()
-    climb: list[float] = dyn.climb_m_s.tolist()
-    descent: list[float] = dyn.descent_m_s.tolist()
-    goal_yaws: list[float] = dyn.goal_yaw_deg.tolist()
-    yaws: list[float] = dyn.yaw_deg.tolist()
-    controls: list[int] = dyn.control.tolist()
-    trackings: list[int] = dyn.tracking.tolist()
-    yaw_trackings: list[bool] = dyn.yaw_tracking.tolist()
-    accels: list[list[float]] = dyn.accel_m_s2.tolist()
-    velocities: list[list[float]] = dyn.velocity_m_s.tolist()
-    positions: list[list[float]] = dyn.position_m.tolist()
-    goals: list[list[float]] = dyn.goal_m.tolist()
+    f = _FleetFloats(fleet) if floats is None else floats
+    yaw_steps, check_at, accel_xy, accel_z = f.yaw_steps, f.check_at, f.accel_xy, f.accel_z
+    acceptance, speed_xy, climb, descent = f.acceptance, f.speed_xy, f.climb, f.descent
+    goal_yaws, yaws, controls, trackings = f.goal_yaws, f.yaws, f.controls, f.trackings
+    yaw_trackings, accels, velocities = f.yaw_trackings, f.accels, f.velocities
+    positions, goals = f.positions, f.goals
     battery = _BatteryFloats(fleet)
     speed_tol = ACCEL_STEADY_M_S2 * dt
     steps: list[float] = []

@@ -260,7 +260,10 @@ class Fleet:
         dyn, dt, bat, n = self.dyn, self.dt_s, self.bat, self.n
         guard = _SoloGuard(self) if self.guard.enabled else None
         rows: list[float] = []  # x, y, z, yaw, moving of each solo vehicle, step by step
-        solos = [SoloVehicle(dyn, k, dt, guard, rows) for k in plan.solo.tolist()]
+        ks, states = plan.solo.tolist(), plan.states
+        solos = ([SoloVehicle(dyn, k, dt, guard, rows) for k in ks] if states is None else
+                 [SoloVehicle(dyn, k, dt, guard, rows, state)
+                  for k, state in zip(ks, states, strict=True)])
         moving = self._moving_mask()
         start = self.step_count
         battery = SoloBattery(self, plan.solo, dt * BATTERY_EVERY_STEPS)

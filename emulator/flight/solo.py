@@ -34,6 +34,7 @@ from emulator.flight.dynamics import (
 __all__ = [
     "ARRIVED",
     "OBSTACLE_STOP",
+    "STATE_FIELDS",
     "STEADY",
     "TOUCHED_DOWN",
     "YAW_REACHED",
@@ -61,6 +62,11 @@ _atan2: Final = math.atan2
 
 
 SOLO_EVENTS: Final = ARRIVED | YAW_REACHED | TOUCHED_DOWN | OBSTACLE_STOP
+# A vehicle's state as one list of floats (`SoloVehicle`'s `state`; emulator.flight.cruise's
+# plan reads it from the arrays already): the FleetDynamics row of each, in this order.
+STATE_FIELDS: Final = ("px", "py", "pz", "vx", "vy", "vz", "ax", "ay", "az", "yaw", "tracking",
+                       "yaw_tracking", "control", "gx", "gy", "gz", "goal_yaw", "speed_xy",
+                       "accel_xy", "accel_z", "climb", "descent", "acceptance")
 
 
 class Guard(Protocol):
@@ -126,34 +132,36 @@ class SoloVehicle:
     _guard: Guard | None
 
     def __init__(self, dyn: FleetDynamics, k: int, dt_s: float, guard: Guard | None,
-                 rows: list[float] | None = None) -> None:
-        """rows: where each step appends the vehicle's x, y, z, yaw and moving (1.0 or 0.0)."""
+                 rows: list[float] | None = None, state: list[float] | None = None) -> None:
+        """rows: where each step appends the vehicle's x, y, z, yaw and moving (1.0 or 0.0);
+        state: row k of dyn's arrays in the order of STATE_FIELDS (None: read here)."""
         self.k = k
         self._rows = [] if rows is None else rows
-        self.px, self.py, self.pz = dyn.position_m[k].tolist()
-        self.vx, self.vy, self.vz = dyn.velocity_m_s[k].tolist()
-        self.ax, self.ay, self.az = dyn.accel_m_s2[k].tolist()
-        self.yaw = float(dyn.yaw_deg[k])
+        s = _state(dyn, k) if state is None else state
+        self.px, self.py, self.pz = s[0], s[1], s[2]
+        self.vx, self.vy, self.vz = s[3], s[4], s[5]
+        self.ax, self.ay, self.az = s[6], s[7], s[8]
+        self.yaw = s[9]
         self.yaw_step = 0.0
-        self.tracking = int(dyn.tracking[k])
-        self.yaw_tracking = bool(dyn.yaw_tracking[k])
+        self.tracking = int(s[10])
+        self.yaw_tracking = s[11] != 0.0
         self.moving = False
-        control = int(dyn.control[k])
+        control = int(s[12])
         self._active = control != CONTROL_NONE
         self._position = control == CONTROL_POSITION
-        self._gx, self._gy, self._gz = dyn.goal_m[k].tolist()
+        self._gx, self._gy, self._gz = s[13], s[14], s[15]
         self._landing = self._active and self._gz < 0.0
-        self._goal_yaw = float(dyn.goal_yaw_deg[k])
-        self._speed_xy = float(dyn.speed_xy_m_s[k])
-        self._accel_xy = float(dyn.accel_xy_m_s2[k])
-        self._accel_z = float(dyn.accel_z_m_s2[k])
+        self._goal_yaw = s[16]
+        self._speed_xy = s[17]
+        self._accel_xy = s[18]
+        self._accel_z = s[19]
+        self._climb = s[20]
+        self._descent = s[21]
         self._airspeed = float(dyn.airspeed_max_m_s[k])
-        self._climb = float(dyn.climb_m_s[k])
-        self._descent = float(dyn.descent_m_s[k])
         self._dv_xy_max = self._accel_xy * dt_s
         self._dv_z_max = self._accel_z * dt_s
         self._yaw_step_max = float(dyn.yaw_rate_deg_s[k]) * dt_s
-        acceptance = float(dyn.acceptance_m[k])
+        acceptance = s[22]
         self._acceptance2 = acceptance * acceptance
         self._wind = dyn.wind_m_s.tolist() if dyn.windy else None
         self._dt = dt_s
@@ -294,6 +302,17 @@ class SoloVehicle:
         dyn.yaw_deg[k] = self.yaw
         dyn.tracking[k] = self.tracking
         dyn.yaw_tracking[k] = self.yaw_tracking
+
+
+def _state(dyn: FleetDynamics, k: int) -> list[float]:
+    """Row k of dyn in the order of STATE_FIELDS."""
+    p, v, a, g = (dyn.position_m[k].tolist(), dyn.velocity_m_s[k].tolist(),
+                  dyn.accel_m_s2[k].tolist(), dyn.goal_m[k].tolist())
+    return [p[0], p[1], p[2], v[0], v[1], v[2], a[0], a[1], a[2], float(dyn.yaw_deg[k]),
+            float(dyn.tracking[k]), 1.0 if dyn.yaw_tracking[k] else 0.0, float(dyn.control[k]),
+            g[0], g[1], g[2], float(dyn.goal_yaw_deg[k]), float(dyn.speed_xy_m_s[k]),
+            float(dyn.accel_xy_m_s2[k]), float(dyn.accel_z_m_s2[k]), float(dyn.climb_m_s[k]),
+            float(dyn.descent_m_s[k]), float(dyn.acceptance_m[k])]
 
 
 def step_all(solos: list[SoloVehicle], t_s: float, bits: list[int]) -> int:
