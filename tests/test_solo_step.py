@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from emulator.flight.battery import FleetBattery
 from emulator.flight.cruise import _cruise_steps_arrays, _cruise_steps_floats, cruise_plan
@@ -26,6 +28,7 @@ from emulator.flight.solo import (
     TOUCHED_DOWN,
     YAW_REACHED,
     SoloVehicle,
+    _surely_below,
 )
 from emulator.world import Obstacle
 from tests.scenario_fixtures import tiny_scenario, vehicle
@@ -232,3 +235,15 @@ def test_battery_levels_crossed_while_solo_vehicles_are_stepped_act_as_in_plain_
         assert plain.shape == fast.shape
         assert np.abs(plain[:, 1:4] - fast[:, 1:4]).max() < 1e-6
         assert np.abs(plain[:, 5] - fast[:, 5]).max() < 1e-9  # the charge, step by step
+
+
+@settings(max_examples=3000, deadline=None)
+@given(x=st.floats(-1e6, 1e6), y=st.floats(-1e6, 1e6),
+       stretch=st.floats(1.0 - 1e-6, 1.0 + 1e-6))
+def test_the_solo_steps_hypot_shortcut_never_decides_otherwise_than_hypot(
+        x: float, y: float, stretch: float) -> None:
+    # limits at and around the vector's own length, where a shortcut could go wrong
+    for limit in (math.hypot(x, y) * stretch, math.nextafter(math.hypot(x, y), math.inf),
+                  math.hypot(x, y), 1e-13, 0.0, math.nan):
+        if x * x + y * y < _surely_below(limit):
+            assert math.hypot(x, y) < limit

@@ -85,8 +85,9 @@ class SoloVehicle:
     written back by `store`. The commands and limits must not change in between."""
 
     __slots__ = (
-        "_accel_xy", "_accel_z", "_acceptance2", "_active", "_airspeed", "_check_at", "_climb",
-        "_descent", "_dt", "_dv_xy_max", "_dv_z_max", "_goal_yaw", "_guard", "_gx", "_gy", "_gz",
+        "_accel_xy", "_accel_z", "_acceptance2", "_active", "_airspeed", "_airspeed2_below",
+        "_check_at", "_climb", "_descent", "_dt", "_dv_xy_max", "_dv_xy_max2_below", "_dv_z_max",
+        "_goal_yaw", "_guard", "_gx", "_gy", "_gz",
         "_inv_dt", "_landing", "_position", "_rows", "_speed_xy", "_wind", "_yaw_step_max", "ax",
         "ay", "az", "k", "moving", "px", "py", "pz", "tracking", "vx", "vy", "vz", "yaw",
         "yaw_step", "yaw_tracking",
@@ -118,9 +119,11 @@ class SoloVehicle:
     _accel_xy: float
     _accel_z: float
     _airspeed: float
+    _airspeed2_below: float
     _climb: float
     _descent: float
     _dv_xy_max: float
+    _dv_xy_max2_below: float
     _dv_z_max: float
     _yaw_step_max: float
     _acceptance2: float
@@ -159,6 +162,8 @@ class SoloVehicle:
         self._descent = s[21]
         self._airspeed = float(dyn.airspeed_max_m_s[k])
         self._dv_xy_max = self._accel_xy * dt_s
+        self._airspeed2_below = _surely_below(self._airspeed)
+        self._dv_xy_max2_below = _surely_below(self._dv_xy_max)
         self._dv_z_max = self._accel_z * dt_s
         self._yaw_step_max = float(dyn.yaw_rate_deg_s[k]) * dt_s
         acceptance = s[22]
@@ -209,23 +214,28 @@ class SoloVehicle:
                 speed = reach
             f = speed * inv
             dvx, dvy, dvz = ex * f - vx, ey * f - vy, ez * f - vz
-            dv_xy = _hypot(dvx, dvy)
-            scale = self._dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
-            if scale < 1.0:
-                nvx, nvy = vx + dvx * scale, vy + dvy * scale
+            if dvx * dvx + dvy * dvy < self._dv_xy_max2_below:
+                nvx, nvy = vx + dvx, vy + dvy  # within the limit: the scale would be >= 1
             else:
-                nvx, nvy = vx + dvx, vy + dvy
+                dv_xy = _hypot(dvx, dvy)
+                scale = self._dv_xy_max / (dv_xy if dv_xy > 1e-12 else 1e-12)
+                if scale < 1.0:
+                    nvx, nvy = vx + dvx * scale, vy + dvy * scale
+                else:
+                    nvx, nvy = vx + dvx, vy + dvy
             lim_z = self._dv_z_max
             nvz = vz + (-lim_z if dvz < -lim_z else lim_z if dvz > lim_z else dvz)
             wind = self._wind
             if wind is None:
-                air = _hypot(nvx, nvy)
-                if air > self._airspeed:
-                    ratio = self._airspeed / air
-                    nvx, nvy = nvx * ratio, nvy * ratio
+                if not nvx * nvx + nvy * nvy < self._airspeed2_below:
+                    air = _hypot(nvx, nvy)
+                    if air > self._airspeed:
+                        ratio = self._airspeed / air
+                        nvx, nvy = nvx * ratio, nvy * ratio
             else:
                 airx, airy = nvx - wind[0], nvy - wind[1]
-                air = _hypot(airx, airy)
+                air = 0.0 if airx * airx + airy * airy < self._airspeed2_below else _hypot(
+                    airx, airy)
                 if air > self._airspeed:
                     ratio = self._airspeed / air
                     nvx, nvy = airx * ratio + wind[0], airy * ratio + wind[1]
@@ -285,7 +295,12 @@ class SoloVehicle:
                 self.tracking = TRACK_NONE
                 events |= ARRIVED
         self.moving = moving = active and bool(nvx or nvy or nvz or self.yaw_tracking)
-        self._rows += (npx, npy, npz, self.yaw, 1.0 if moving else 0.0)
+        rows = self._rows  # appended one by one: compiled, no tuple is built
+        rows.append(npx)
+        rows.append(npy)
+        rows.append(npz)
+        rows.append(self.yaw)
+        rows.append(1.0 if moving else 0.0)
         if (-ACCEL_STEADY_M_S2 <= ax <= ACCEL_STEADY_M_S2
                 and -ACCEL_STEADY_M_S2 <= ay <= ACCEL_STEADY_M_S2
                 and -ACCEL_STEADY_M_S2 <= az <= ACCEL_STEADY_M_S2
@@ -302,6 +317,14 @@ class SoloVehicle:
         dyn.yaw_deg[k] = self.yaw
         dyn.tracking[k] = self.tracking
         dyn.yaw_tracking[k] = self.yaw_tracking
+
+
+def _surely_below(limit: float) -> float:
+    """A bound under limit**2: when x*x + y*y is below it, hypot(x, y) < limit for certain
+    (the sum of squares and hypot are both within a few ulps of exact), so the hypot, a call
+    out of compiled code, is needed only near or above the limit (then computed as before).
+    -1.0 (no shortcut) for a limit under 1e-12, the floor of the step's division, or NaN."""
+    return limit * limit * (1.0 - 1e-9) if limit >= 1e-12 else -1.0
 
 
 def _state(dyn: FleetDynamics, k: int) -> list[float]:
