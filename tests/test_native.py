@@ -130,3 +130,27 @@ def test_degrees_by_the_constant_are_math_degrees_to_the_last_bit() -> None:
     edges = [0.0, -0.0, math.pi, -math.pi, math.pi / 2, 5e-324, 1e308, math.inf, -math.inf]
     for x in [*angles.tolist(), *others.tolist(), *edges]:
         assert (x * DEG_PER_RAD).hex() == math.degrees(x).hex(), x
+
+
+@pytest.mark.parametrize("module", ["pure", "compiled"])
+def test_the_battery_deltas_in_floats_are_the_fleets_to_the_last_bit(module: str) -> None:
+    from emulator.flight import solo_battery
+    from emulator.flight.fleet import Fleet
+    from emulator.scenario import default_scenario
+
+    fleet_deltas = (solo_battery.fleet_deltas if module == "pure"
+                    else _built("solo_battery").fleet_deltas)
+    rng = np.random.default_rng(3)
+    fleet = Fleet(default_scenario(12))
+    for _ in range(50):
+        fleet.dyn = _random_dynamics(rng, 12, wind=True)
+        fleet.dyn.velocity_m_s[:3, 2] = (-0.0, 0.0, math.nan)  # maximum(vz, 0) keeps -0.0, NaN
+        fleet.airborne[:] = rng.random(12) < 0.7
+        fleet.armed[:] = rng.random(12) < 0.5
+        fleet.bat.hover_endurance_s[:] = rng.uniform(60.0, 3600.0, 12)
+        fleet.bat.charge_rate_pct_s[:] = np.where(rng.random(12) < 0.3, 0.5, 0.0)
+        dt_s = float(rng.choice([0.02, 0.1, 0.5]))
+        expected = fleet.bat.deltas(dt_s, fleet.airborne, fleet.armed, fleet.dyn.airspeed_m_s(),
+                                    fleet.dyn.velocity_m_s[:, 2])
+        got = np.array(fleet_deltas(fleet, dt_s))
+        assert got.tobytes() == expected.tobytes()

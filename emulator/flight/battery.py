@@ -104,12 +104,10 @@ class FleetBattery:
         self.pct = pct
         return self._update_levels()
 
-    def steps(self, count: int, dt_s: float, airborne: np.ndarray, armed: np.ndarray,
-              airspeed_m_s: np.ndarray, climb_m_s: np.ndarray) -> np.ndarray:
-        """`count` calls of `step` with the same inputs (steady flight), at once; returns the
-        charge before and after each, (count + 1, n). Level changes are not reported (the
-        levels are brought up to date)."""
-        delta = self.deltas(dt_s, airborne, armed, airspeed_m_s, climb_m_s)
+    def steps(self, count: int, delta: np.ndarray) -> np.ndarray:
+        """`count` calls of `step` with the same inputs (steady flight), at once, given their
+        `deltas`; returns the charge before and after each, (count + 1, n). Level changes are
+        not reported (the levels are brought up to date)."""
         charge = np.empty((count + 1, self.pct.size))
         charge[0] = self.pct
         charge[1:] = delta

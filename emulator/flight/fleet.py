@@ -23,6 +23,7 @@ from emulator.flight.native import (  # compiled where built (build_native.py)
     SoloBattery,
     SoloVehicle,
     cruise_plan,
+    fleet_deltas,
     run_solo_steps,
 )
 from emulator.flight.solo import (
@@ -240,8 +241,7 @@ class Fleet:
         offsets = (steps - self.step_count)[:, None, None] * dt
         positions = dyn.position_m + dyn.velocity_m_s * offsets
         due = _indices(steps % BATTERY_EVERY_STEPS == 0)
-        charge = self.bat.steps(due.size, dt * BATTERY_EVERY_STEPS, self.airborne, self.armed,
-                                dyn.airspeed_m_s(), dyn.velocity_m_s[:, 2])
+        charge = self.bat.steps(due.size, np.array(fleet_deltas(self, dt * BATTERY_EVERY_STEPS)))
         # Step i records the charge after every battery step at or before it.
         battery = charge[np.searchsorted(due, np.arange(count), side="right")]
         if self.targets is not None:

@@ -19,8 +19,8 @@ from types import ModuleType
 
 from emulator.flight import cruise, solo, solo_battery
 
-__all__ = ["COMPILED", "SoloBattery", "SoloVehicle", "compiled", "cruise_plan", "run_solo_steps",
-           "step_all"]
+__all__ = ["COMPILED", "SoloBattery", "SoloVehicle", "compiled", "cruise_plan", "fleet_deltas",
+           "run_solo_steps", "step_all"]
 
 log = logging.getLogger("mavswarm.native")
 
@@ -51,6 +51,7 @@ cruise_plan = cruise.cruise_plan if _cruise is None else _cruise.cruise_plan
 _battery = compiled("solo_battery")
 SoloBattery: type[solo_battery.SoloBattery] = (solo_battery.SoloBattery if _battery is None
                                                else _battery.SoloBattery)
+fleet_deltas = solo_battery.fleet_deltas if _battery is None else _battery.fleet_deltas
 COMPILED: frozenset[str] = frozenset(
     name for name, module in (("solo", _solo), ("cruise", _cruise), ("solo_battery", _battery))
     if module is not None)

@@ -23,7 +23,7 @@ from emulator.flight.battery import (
 from emulator.flight.fleet_view import FleetView
 from emulator.flight.solo import SoloVehicle
 
-__all__ = ["NO_LEVELS", "SoloBattery"]
+__all__ = ["NO_LEVELS", "SoloBattery", "fleet_deltas"]
 
 NO_LEVELS = np.empty(0, dtype=np.intp)
 _hypot: Final = math.hypot  # bound once (see emulator.flight.solo)
@@ -59,14 +59,10 @@ class SoloBattery:
         bat = self._bat
         deltas = self._deltas
         if deltas is None:
-            fleet, dyn = self._fleet, self._fleet.dyn
-            deltas = self._deltas = bat.deltas(self._dt_s, fleet.airborne, fleet.armed,
-                                               dyn.airspeed_m_s(),
-                                               dyn.velocity_m_s[:, 2]).tolist()
-            solo = self._solo
-            self._flags = list(zip(fleet.airborne[solo].tolist(), fleet.armed[solo].tolist(),
-                                   (100.0 / bat.hover_endurance_s[solo]).tolist(),
-                                   bat.charge_rate_pct_s[solo].tolist(), strict=True))
+            inputs = _DrainInputs(self._fleet)
+            deltas = self._deltas = inputs.deltas(self._dt_s)
+            self._flags = [(inputs.airborne[k], inputs.armed[k], inputs.full_pct_s[k],
+                            inputs.charge_pct_s[k]) for k in self._solo.tolist()]
         wind_x, wind_y, dt_s = self._wind_x, self._wind_y, self._dt_s
         for vehicle, (airborne, armed, full_pct_s, charge_pct_s) in zip(
                 solos, self._flags, strict=True):
@@ -92,6 +88,41 @@ class SoloBattery:
             self._levels_ok = not count_nonzero(bat.level)
         return bool(self.levels.size) or (
             self._any_charging and any(pct[k] >= 100.0 for k in self._charging_k))
+
+
+def fleet_deltas(fleet: FleetView, dt_s: float) -> list[float]:
+    """FleetBattery.deltas(dt_s, airborne, armed, dyn.airspeed_m_s(), vz) of every vehicle in
+    Python floats, one vehicle after the other: the same operations in the same order (the
+    airspeed is numpy's hypot, as there), so the same values to the last bit, for a fraction
+    of the calls into numpy."""
+    return _DrainInputs(fleet).deltas(dt_s)
+
+
+class _DrainInputs:
+    """What FleetBattery.deltas reads, as Python lists."""
+
+    def __init__(self, fleet: FleetView) -> None:
+        bat, dyn = fleet.bat, fleet.dyn
+        self.air: list[float] = dyn.airspeed_m_s().tolist()
+        self.climb: list[float] = dyn.velocity_m_s[:, 2].tolist()
+        self.full_pct_s: list[float] = (100.0 / bat.hover_endurance_s).tolist()
+        self.charge_pct_s: list[float] = bat.charge_rate_pct_s.tolist()
+        self.airborne: list[bool] = fleet.airborne.tolist()
+        self.armed: list[bool] = fleet.armed.tolist()
+
+    def deltas(self, dt_s: float) -> list[float]:
+        air, climb, airborne, armed = self.air, self.climb, self.airborne, self.armed
+        full_pct_s, charge_pct_s = self.full_pct_s, self.charge_pct_s
+        deltas: list[float] = []
+        for k in range(len(air)):
+            if airborne[k]:  # battery.power_factor; np.maximum(vz, 0.0) keeps a NaN
+                a, vz = air[k], climb[k]
+                power = (1.0 + SPEED_POWER_PER_M2_S2 * (a * a)
+                         + CLIMB_POWER_PER_M_S * (vz if vz >= 0.0 or vz != vz else 0.0))
+            else:
+                power = GROUND_IDLE_POWER if armed[k] else 0.0
+            deltas.append((charge_pct_s[k] - full_pct_s[k] * power) * dt_s)
+        return deltas
 
 
 def _bounds(values: list[float]) -> tuple[float, float]:
