@@ -351,11 +351,15 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
+                noted = False
                 while time.monotonic() < deadline:
                     watched = self.watches.advance_targets()  # the wait tools' deadlines
                     if not self._clock.should_step(watched):
                         break
-                    self.bursts.note_active()
+                    if not noted:  # once per run of slices: steps never wake a vehicle at
+                        # rest (commands do, between runs; a fault marks every vehicle)
+                        self.bursts.note_active()
+                        noted = True
                     # never past a fault's time either
                     allowed = self._clock.steps_allowed([*watched, self.faults.next_event_s()])
                     fleet.run(min(allowed, STEPS_PER_SLICE))
