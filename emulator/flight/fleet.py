@@ -212,6 +212,7 @@ class Fleet:
         while done < max_steps:
             was_busy = self.busy.copy()
             plan = None
+            acted = False  # only autopilots change `busy`
             if fast_forward and self._leap_retry_step <= self.step_count:
                 plan = cruise_plan(self, max_steps - done, max_solo=MAX_SOLO)
                 if plan is None:  # not steady: do not ask again for a few steps
@@ -219,15 +220,16 @@ class Fleet:
             if plan is None:
                 self.step()
                 done += 1
-                look = look or self._acted
+                acted = self._acted
             elif plan.solo.size:
                 done += self._cruise(plan)
-                look = look or self._acted
+                acted = self._acted
             else:
                 self._leap(plan.steps)  # no autopilot acts in steady flight
                 done += plan.steps
-            if look:
-                self.ended |= was_busy & ~self.busy
+            if look or acted:
+                if acted:
+                    self.ended |= was_busy & ~self.busy
                 if not _any(self.busy) or _any(self.ended & self.stop_on):
                     break
                 look = False
@@ -238,12 +240,14 @@ class Fleet:
         dyn, dt = self.dyn, self.dt_s
         first = self.step_count + 1
         steps = np.arange(first, first + count)
-        offsets = (steps - self.step_count)[:, None, None] * dt
+        offsets = np.arange(1, count + 1)[:, None, None] * dt  # steps - self.step_count
         positions = dyn.position_m + dyn.velocity_m_s * offsets
-        due = _indices(steps % BATTERY_EVERY_STEPS == 0)
-        charge = self.bat.steps(due.size, np.array(fleet_deltas(self, dt * BATTERY_EVERY_STEPS)))
+        every = BATTERY_EVERY_STEPS
+        first_due = -first % every  # the index of the first battery step among `steps`
+        due = len(range(first_due, count, every))
+        charge = self.bat.steps(due, np.array(fleet_deltas(self, dt * every)))
         # Step i records the charge after every battery step at or before it.
-        battery = charge[np.searchsorted(due, np.arange(count), side="right")]
+        battery = charge[(np.arange(count) + (every - first_due)) // every]
         if self.targets is not None:
             self.targets.advance(self.now_s, count * dt)
         self.step_count += count
