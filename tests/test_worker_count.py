@@ -29,10 +29,15 @@ from benchmark.running.worker_count import (
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_auto_for_an_instant_agent_follows_the_cores() -> None:
-    assert auto_workers("oracle", 125, cores=2) == 2 * INSTANT_SESSIONS_PER_CORE
-    assert auto_workers("noop", 125, cores=8) == 8 * INSTANT_SESSIONS_PER_CORE
-    assert auto_workers("oracle", 3, cores=8) == 3  # never more than the units
+def test_auto_for_an_instant_agent_follows_the_cores_and_the_memory() -> None:
+    plenty = 1e6
+    assert auto_workers("oracle", 125, cores=2, memory_mb=plenty) == 2 * INSTANT_SESSIONS_PER_CORE
+    assert auto_workers("noop", 125, cores=8, memory_mb=plenty) == 8 * INSTANT_SESSIONS_PER_CORE
+    assert auto_workers("oracle", 3, cores=8, memory_mb=plenty) == 3  # never more than the units
+    # a process per session: half the memory holds five of them here
+    memory = 2 * 5 * (PROCESS_MB + SESSION_MB)
+    assert auto_workers("oracle", 125, cores=64, memory_mb=memory) == 5
+    assert auto_workers("noop", 125, cores=64, memory_mb=10.0) == 1  # at least one
 
 
 def test_auto_for_a_thinking_agent_follows_the_memory_and_the_cores() -> None:

@@ -9,7 +9,8 @@ gateway only, not a process), and over more processes where a core's share would
 SESSIONS_PER_PROCESS. `--workers auto` picks N from the machine:
 
 - an agent that answers at once (the oracle, noop) keeps a core busy with a few sessions, so
-  N = INSTANT_SESSIONS_PER_CORE per core;
+  N = INSTANT_SESSIONS_PER_CORE per core, as far as half the available memory holds a process
+  of PROCESS_MB + SESSION_MB for each;
 - any other agent (a model, a plug-in, an external one) mostly thinks, so N is what memory
   allows: half the available memory, less one base footprint per process, at SESSION_MB per
   hosted session; and what the cores allow: THINKING_SESSIONS_PER_CORE per core, since a
@@ -51,8 +52,10 @@ SESSION_MB = 55.0
 PROCESS_MB = 100.0
 MEMORY_SHARE = 0.5  # of the memory available when the run starts
 # Sessions of an instant agent per core: each waits on MAVLink round trips about two thirds
-# of its wall time (perf/task_spans.py), so three keep a core busy.
-INSTANT_SESSIONS_PER_CORE = 3
+# of its wall time (perf/task_spans.py), and the lossy-link tasks on MAVSDK's retries for
+# seconds. The whole oracle suite on 2 cores: 6 at once 345.3 and 348.3 s (the cores 1.73
+# busy), 8 at once 324.4 s (1.88), 10 at once 327.0 s (1.94, with more CPU per task).
+INSTANT_SESSIONS_PER_CORE = 4
 # Sessions of an agent that thinks, per core: one hosted session costs 0.9-2.6 % of a core
 # while its agent thinks (3 to 30 drones, perf/idle_sessions.py) and its share of the flying
 # besides. The whole suite with 2 s of thought before each call (perf/think_latency.py, 2
@@ -113,9 +116,10 @@ def auto_workers(agent: str, units: int, *, cores: int | None = None,
     """Sessions to host at once for `agent` over `units` units (see the module docstring)."""
     cores = max(1, cores if cores is not None else usable_cores())
     units = max(1, units)
-    if agent in INSTANT_AGENTS:
-        return max(1, min(units, INSTANT_SESSIONS_PER_CORE * cores))
     memory = available_memory_mb() if memory_mb is None else memory_mb
+    if agent in INSTANT_AGENTS:  # a process of its own per session
+        by_memory = math.floor(memory * MEMORY_SHARE / (PROCESS_MB + SESSION_MB))
+        return max(1, min(units, by_memory, INSTANT_SESSIONS_PER_CORE * cores))
     by_memory = math.floor((memory * MEMORY_SHARE - PROCESS_MB * cores) / SESSION_MB)
     return max(1, min(units, by_memory, THINKING_SESSIONS_PER_CORE * cores))
 
