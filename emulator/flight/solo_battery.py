@@ -67,12 +67,8 @@ class SoloBattery:
         for vehicle, (airborne, armed, full_pct_s, charge_pct_s) in zip(
                 solos, self._flags, strict=True):
             # FleetBattery.delta, written out
-            if airborne:
-                air = _hypot(vehicle.vx - wind_x, vehicle.vy - wind_y)
-                power = (1.0 + SPEED_POWER_PER_M2_S2 * (air * air)
-                         + CLIMB_POWER_PER_M_S * max(vehicle.vz, 0.0))
-            else:
-                power = GROUND_IDLE_POWER if armed else 0.0
+            air = _hypot(vehicle.vx - wind_x, vehicle.vy - wind_y) if airborne else 0.0
+            power = _power(airborne, armed, air, vehicle.vz)
             deltas[vehicle.k] = (charge_pct_s - full_pct_s * power) * dt_s
         before = self.pct
         pct = [before[i] + deltas[i] for i in range(len(before))]
@@ -113,16 +109,17 @@ class _DrainInputs:
     def deltas(self, dt_s: float) -> list[float]:
         air, climb, airborne, armed = self.air, self.climb, self.airborne, self.armed
         full_pct_s, charge_pct_s = self.full_pct_s, self.charge_pct_s
-        deltas: list[float] = []
-        for k in range(len(air)):
-            if airborne[k]:  # battery.power_factor; np.maximum(vz, 0.0) keeps a NaN
-                a, vz = air[k], climb[k]
-                power = (1.0 + SPEED_POWER_PER_M2_S2 * (a * a)
-                         + CLIMB_POWER_PER_M_S * (vz if vz >= 0.0 or vz != vz else 0.0))
-            else:
-                power = GROUND_IDLE_POWER if armed[k] else 0.0
-            deltas.append((charge_pct_s[k] - full_pct_s[k] * power) * dt_s)
-        return deltas
+        return [(charge_pct_s[k] - full_pct_s[k] * _power(airborne[k], armed[k], air[k], climb[k]))
+                * dt_s for k in range(len(air))]
+
+
+def _power(airborne: bool, armed: bool, air_m_s: float, vz_m_s: float) -> float:
+    """FleetBattery.drain_pct_s' power factor of one vehicle: battery.power_factor in the air
+    (`max(vz, 0.0)` keeps a NaN and -0.0 as np.maximum does), idle power armed on the ground."""
+    if airborne:
+        return (1.0 + SPEED_POWER_PER_M2_S2 * (air_m_s * air_m_s)
+                + CLIMB_POWER_PER_M_S * max(vz_m_s, 0.0))
+    return GROUND_IDLE_POWER if armed else 0.0
 
 
 def _bounds(values: list[float]) -> tuple[float, float]:
