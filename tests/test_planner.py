@@ -225,6 +225,75 @@ def test_plans_are_deterministic() -> None:
         assert first == a.plan(start, goal) == b.plan(start, goal)
 
 
+def test_goals_tried_from_one_spot_reuse_one_search_and_plan_alike() -> None:
+    # A meeting tries goal after goal from one spot: the first search stops at its limit,
+    # the second searches the whole grid, the rest reuse it; every route is the one a fresh
+    # planner makes.
+    world = _random_world(3, count=40)
+    planner = PathPlanner(world)
+    start = (10.0, 10.0, 20.0)
+    # goals moving away (each a longer limit), then nearer ones
+    goals = [(540.0 + 6.0 * k, 560.0 + 2.5 * k, 20.0) for k in range(8)] + [(300.0, 590.0, 20.0)]
+    searched: list[float] = []
+    search = planner._search
+
+    def counted(band, grid, sources, limit_m):
+        kept = planner._searches.get((band.ids, tuple(sources)))
+        if kept is None or limit_m > kept.limit_m:
+            searched.append(limit_m)
+        return search(band, grid, sources, limit_m)
+
+    planner._search = counted  # type: ignore[method-assign]
+    for goal in goals:
+        assert planner.plan(start, goal) == PathPlanner(world).plan(start, goal)
+    assert len(searched) == 2  # the first goal's limited search, then the whole grid once
+    (kept,) = planner._searches.values()
+    assert kept.limit_m == math.inf
+
+
+def test_a_search_settles_the_same_nodes_alike_whatever_its_limit() -> None:
+    from scipy.sparse.csgraph import dijkstra
+    world = _random_world(11, count=40)
+    planner = PathPlanner(world)
+    planner.plan((10.0, 10.0, 20.0), (590.0, 590.0, 20.0))
+    (grid,) = planner._grids.values()
+    sources = [0, 1, 2]
+    full, full_pred = dijkstra(grid.graph, indices=sources, min_only=True,
+                               return_predecessors=True)[:2]
+    for limit_m in (50.0, 200.0, 400.0):
+        dist, pred = dijkstra(grid.graph, indices=sources, min_only=True,
+                              return_predecessors=True, limit=limit_m)[:2]
+        settled = np.isfinite(dist)
+        assert settled.sum() < np.isfinite(full).sum()
+        assert np.array_equal(settled, full <= limit_m)
+        assert np.array_equal(dist[settled], full[settled])
+        assert np.array_equal(pred[settled], full_pred[settled])
+
+
+def test_grid_graph_links_every_pair_of_free_neighbours() -> None:
+    from swarm_agents.oracle.planner import _grid_graph
+    rng = np.random.default_rng(5)
+    free = rng.random((13, 17)) < 0.7
+    cell_of_node = np.flatnonzero(free.ravel()).astype(np.int32)
+    node = np.full(free.shape, -1, dtype=np.int32)
+    node.ravel()[cell_of_node] = np.arange(cell_of_node.size, dtype=np.int32)
+    graph = _grid_graph(node, cell_of_node, 4.0)
+    rows: list[list[tuple[int, float]]] = []
+    for flat in cell_of_node.tolist():
+        iy, ix = divmod(flat, free.shape[1])
+        row = []
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                y, x = iy + dy, ix + dx
+                if (dy or dx) and 0 <= y < free.shape[0] and 0 <= x < free.shape[1] \
+                        and free[y, x]:
+                    row.append((int(node[y, x]), 4.0 * math.hypot(dy, dx)))
+        rows.append(row)
+    assert graph.indptr.tolist() == [0, *itertools.accumulate(len(r) for r in rows)]
+    assert graph.indices.tolist() == [n for r in rows for n, _ in r]
+    assert graph.data.tolist() == [w for r in rows for _, w in r]
+
+
 @pytest.mark.slow
 def test_random_worlds_every_leg_is_clear() -> None:
     planned = 0

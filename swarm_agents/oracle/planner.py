@@ -53,6 +53,9 @@ _EPS_M = 1e-6
 # Routes remembered by (start, goal): a route is a function of the world and its ends, and
 # an oracle asks some again (a tracking session: about one in ten).
 ROUTES_KEPT = 256
+# Grid searches kept by (band, sources): 12 bytes per grid node each (1.2 MB for an
+# extreme-level world); a meeting's goals are all tried from one spot, one after another.
+SEARCHES_KEPT = 1
 
 
 class NoPath(Exception):
@@ -66,6 +69,15 @@ class _Band:
     ids: tuple[int, ...]
     footprints: np.ndarray  # raw footprints of ids (object array)
     tree: shapely.STRtree | None
+
+
+@dataclass(frozen=True, slots=True)
+class _Search:
+    """A grid search from a set of sources: every node within limit_m settled."""
+
+    limit_m: float
+    dist: np.ndarray  # (n,) float64, inf where not settled
+    pred: np.ndarray  # (n,) int32, negative at sources and where not settled
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,6 +133,10 @@ class PathPlanner:
         self._bands: dict[tuple[int, ...], _Band] = {}
         self._grids: OrderedDict[tuple[int, ...], _Grid] = OrderedDict()
         self._routes: OrderedDict[bytes, tuple[Point3, ...]] = OrderedDict()
+        self._inflated: np.ndarray | None = None  # footprints grown by clearance_m
+        self._inflated_bounds = np.empty((0, 4))
+        self._searches: OrderedDict[tuple[tuple[int, ...], tuple[int, ...]], _Search] = \
+            OrderedDict()
 
     # ------------------------------------------------------------------ public
     def leg_clear(self, a_m: Sequence[float], b_m: Sequence[float]) -> bool:
@@ -219,9 +235,13 @@ class PathPlanner:
 
     def _build_grid(self, band: _Band) -> _Grid:
         cell = self.cell_m
-        inflated = shapely.buffer(band.footprints, self.clearance_m, quad_segs=_QUAD_SEGS)
-        shapely.prepare(inflated)
-        bounds = shapely.bounds(inflated)
+        if self._inflated is None:  # every obstacle's, once: a band takes its own
+            every = np.array([o.footprint for o in self.world.obstacles], dtype=object)
+            self._inflated = shapely.buffer(every, self.clearance_m, quad_segs=_QUAD_SEGS)
+            shapely.prepare(self._inflated)
+            self._inflated_bounds = shapely.bounds(self._inflated)
+        ids = list(band.ids)
+        inflated, bounds = self._inflated[ids], self._inflated_bounds[ids]
         pad = BORDER_CELLS * cell
         x0 = math.floor((bounds[:, 0].min() - pad) / cell) * cell
         y0 = math.floor((bounds[:, 1].min() - pad) / cell) * cell
@@ -236,8 +256,7 @@ class PathPlanner:
             ix1, iy1 = int((bx1 - x0) / cell) + 1, int((by1 - y0) / cell) + 1
             xs = x0 + (np.arange(ix0, ix1) + 0.5) * cell
             ys = y0 + (np.arange(iy0, iy1) + 0.5) * cell
-            gx, gy = np.meshgrid(xs, ys)
-            free[iy0:iy1, ix0:ix1] &= ~shapely.intersects_xy(poly, gx, gy)
+            free[iy0:iy1, ix0:ix1] &= ~shapely.intersects_xy(poly, xs[None, :], ys[:, None])
         cell_of_node = np.flatnonzero(free.ravel()).astype(np.int32)
         node = np.full((ny, nx), -1, dtype=np.int32)
         node.ravel()[cell_of_node] = np.arange(cell_of_node.size, dtype=np.int32)
@@ -259,14 +278,12 @@ class PathPlanner:
             raise NoPath(f"goal {goal} cannot be reached from open space at altitude {z_m} m")
         gx, gy = goal[0], goal[1]
         direct_m = math.hypot(gx - start[0], gy - start[1])
-        # scipy on first use: every `mavswarm` command imports the oracle (the task editor
-        # derives plans), few of them plan a path.
-        from scipy.sparse.csgraph import dijkstra
         for limit_m in (DETOUR_FACTOR * direct_m + DETOUR_EXTRA_CELLS * self.cell_m, math.inf):
-            dist, pred, _ = dijkstra(grid.graph, directed=True, indices=sources,
-                                     return_predecessors=True, min_only=True, limit=limit_m)
+            dist, pred = self._search(band, grid, sources, limit_m)
             best_node, best_cost = -1, math.inf
             for n in targets:
+                if not dist[n] <= limit_m:  # beyond the limit (or not reached)
+                    continue
                 cx, cy = grid.centre(grid.cell_of_node[n], self.cell_m)
                 cost = dist[n] + math.hypot(cx - gx, cy - gy)
                 if cost < best_cost:
@@ -287,6 +304,33 @@ class PathPlanner:
             if self.world.first_blockage(a, b) is not None:
                 raise NoPath(f"planned leg {a} -> {b} is blocked")
         return [(p[0], p[1]) for p in route]
+
+    def _search(self, band: _Band, grid: _Grid, sources: list[int], limit_m: float
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Shortest grid distances and predecessors from sources, settled for every node
+        within limit_m (nodes beyond it may be settled too: callers use only those within).
+
+        The first search from a set of sources stops at limit_m. A node's distance and its
+        predecessor do not depend on the limit (a limit only leaves farther nodes unsettled),
+        so when the same sources come again (an oracle trying goals for a meeting from one
+        spot) the whole grid is searched once and the later goals reuse it.
+        """
+        key = (band.ids, tuple(sources))
+        kept = self._searches.get(key)
+        if kept is not None and limit_m <= kept.limit_m:
+            return kept.dist, kept.pred
+        # scipy on first use: every `mavswarm` command imports the oracle (the task editor
+        # derives plans), few of them plan a path.
+        from scipy.sparse.csgraph import dijkstra
+        if kept is not None:
+            limit_m = math.inf
+        dist, pred, _ = dijkstra(grid.graph, directed=True, indices=sources,
+                                 return_predecessors=True, min_only=True, limit=limit_m)
+        self._searches[key] = _Search(limit_m, dist, pred)
+        self._searches.move_to_end(key)
+        while len(self._searches) > SEARCHES_KEPT:
+            self._searches.popitem(last=False)
+        return dist, pred
 
     def _attach(self, grid: _Grid, point: Point3, z_m: float, *, leaving: bool) -> list[int]:
         """Grid nodes joined to point by a clear straight leg (point -> cell when leaving)."""
@@ -363,14 +407,17 @@ def _grid_graph(node: np.ndarray, cell_of_node: np.ndarray, cell_m: float
                 ) -> scipy.sparse.csr_matrix:
     """8-connected directed graph between free cells (both directions of every edge)."""
     import scipy.sparse
-    ny, nx = node.shape
-    padded = np.pad(node, 1, constant_values=-1)
+    nx = node.shape[1]
+    row = nx + 2
+    padded = np.pad(node, 1, constant_values=-1).ravel()
+    at = cell_of_node + (cell_of_node // nx) * 2 + row + 1  # each free cell in padded
     steps = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
-    neighbours = np.stack([padded[1 + dy:1 + dy + ny, 1 + dx:1 + dx + nx].ravel()[cell_of_node]
-                           for dy, dx in steps], axis=1)
+    neighbours = np.stack([padded[at + (dy * row + dx)] for dy, dx in steps], axis=1)
     weights = np.array([cell_m * math.hypot(dy, dx) for dy, dx in steps])
     linked = neighbours >= 0
-    indptr = np.concatenate(([0], np.cumsum(linked.sum(axis=1))))
+    indptr = np.zeros(cell_of_node.size + 1, dtype=np.int32)
+    # a row's eight flags (one byte each) as one 64-bit word: its set bits count its edges
+    np.cumsum(np.bitwise_count(linked.view(np.uint64).ravel()), out=indptr[1:])
     data = np.broadcast_to(weights, neighbours.shape)[linked]
     n = cell_of_node.size
     return scipy.sparse.csr_matrix((data, neighbours[linked], indptr), shape=(n, n))
