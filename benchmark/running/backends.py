@@ -123,8 +123,9 @@ def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1,
             head: Sequence[Unit] = (), nice: int = 0) -> None:
     import os
 
-    from benchmark.running.worker_heap import return_large_blocks
-    return_large_blocks()  # what a finished task frees leaves the worker
+    if per_process > 1:  # hosting many units: what a finished task frees leaves the worker
+        from benchmark.running.worker_heap import return_large_blocks
+        return_large_blocks()
     if nice:
         os.nice(nice)
     if per_process > 1:
