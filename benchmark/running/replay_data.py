@@ -61,18 +61,18 @@ def thin_rows(rows: np.ndarray) -> np.ndarray:
     keep[1:] = bucket[1:] != bucket[:-1]
     keep[-1] = True
     rows = rows[keep]
+    columns = rows[:, :5].T.copy()  # t, x, y, z, yaw: each contiguous
     index = np.arange(rows.shape[0])
     for parity in range(MAX_THIN_PASSES * 2):
         if index.size <= 2:
             break
-        sel = rows[index]
-        prev, mid, nxt = sel[:-2], sel[1:-1], sel[2:]
-        span = nxt[:, 0] - prev[:, 0]
-        frac = np.where(span > 0, (mid[:, 0] - prev[:, 0]) / np.where(span > 0, span, 1.0), 0.0)
-        predicted = prev + (nxt - prev) * frac[:, None]
-        error_m = np.linalg.norm(predicted[:, 1:4] - mid[:, 1:4], axis=1)
-        dyaw = np.abs((predicted[:, 4] - mid[:, 4] + 180.0) % 360.0 - 180.0)
-        yaw_wraps = np.abs(nxt[:, 4] - prev[:, 4]) > 180.0
+        t, x, y, z, yaw = columns[:, index]
+        span = t[2:] - t[:-2]
+        frac = np.where(span > 0, (t[1:-1] - t[:-2]) / np.where(span > 0, span, 1.0), 0.0)
+        ex, ey, ez = _miss(x, frac), _miss(y, frac), _miss(z, frac)
+        error_m = np.sqrt(ex * ex + ey * ey + ez * ez)
+        dyaw = np.abs((_miss(yaw, frac) + 180.0) % 360.0 - 180.0)
+        yaw_wraps = np.abs(yaw[2:] - yaw[:-2]) > 180.0
         droppable = (error_m <= TOLERANCE_M) & (dyaw <= TOLERANCE_DEG) & ~yaw_wraps
         # Drop only every other candidate per pass, so each is judged on neighbours that stay.
         candidates = np.flatnonzero(droppable) + 1
@@ -83,6 +83,11 @@ def thin_rows(rows: np.ndarray) -> np.ndarray:
             continue
         index = np.delete(index, candidates)
     return rows[index]
+
+
+def _miss(column: np.ndarray, frac: np.ndarray) -> np.ndarray:
+    """Each inner value's interpolation between its neighbours (at frac) less the value."""
+    return column[:-2] + (column[2:] - column[:-2]) * frac - column[1:-1]
 
 
 def _encode_rows(rows: np.ndarray, t0_s: float) -> dict[str, list[int]]:
