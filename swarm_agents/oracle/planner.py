@@ -310,10 +310,11 @@ class PathPlanner:
         """Shortest grid distances and predecessors from sources, settled for every node
         within limit_m (nodes beyond it may be settled too: callers use only those within).
 
-        The first search from a set of sources stops at limit_m. A node's distance and its
-        predecessor do not depend on the limit (a limit only leaves farther nodes unsettled),
-        so when the same sources come again (an oracle trying goals for a meeting from one
-        spot) the whole grid is searched once and the later goals reuse it.
+        The first search from a set of sources stops at limit_m. A node's distance does not
+        depend on the limit (a limit only leaves farther nodes unsettled), nor does the
+        predecessor scipy's search gives it (tests/test_planner.py holds it to that), so when
+        the same sources come again (an oracle trying goals for a meeting from one spot) the
+        whole grid is searched once and the later goals reuse it.
         """
         key = (band.ids, tuple(sources))
         kept = self._searches.get(key)
