@@ -123,12 +123,11 @@ def _worker(work: UnitWork, units: Any, results: Any, per_process: int = 1,
             head: Sequence[Unit] = (), nice: int = 0) -> None:
     import os
 
-    if per_process > 1:  # hosting many units: what a finished task frees leaves the worker
-        from benchmark.running.worker_heap import return_large_blocks
-        return_large_blocks()
     if nice:
         os.nice(nice)
     if per_process > 1:
+        from benchmark.running.worker_heap import return_large_blocks
+        return_large_blocks()  # hosting many units: what a finished task frees leaves it
         asyncio.run(_host(work.hosted, units, results, per_process,  # type: ignore[attr-defined]
                           list(head)))
         return

@@ -9,6 +9,7 @@ tracking errors do not trip collision prevention.
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
 from collections import OrderedDict
@@ -133,8 +134,6 @@ class PathPlanner:
         self._bands: dict[tuple[int, ...], _Band] = {}
         self._grids: OrderedDict[tuple[int, ...], _Grid] = OrderedDict()
         self._routes: OrderedDict[bytes, tuple[Point3, ...]] = OrderedDict()
-        self._inflated: np.ndarray | None = None  # footprints grown by clearance_m
-        self._inflated_bounds = np.empty((0, 4))
         self._searches: OrderedDict[tuple[tuple[int, ...], tuple[int, ...]], _Search] = \
             OrderedDict()
 
@@ -229,19 +228,24 @@ class PathPlanner:
         shapely.prepare(footprints)
         return _Band(ids, footprints, shapely.STRtree(footprints))
 
+    @functools.cached_property
+    def _inflated(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every obstacle's footprint grown by clearance_m (prepared), and their bounds: made
+        once, a band's grid takes its own."""
+        every = np.array([o.footprint for o in self.world.obstacles], dtype=object)
+        inflated = shapely.buffer(every, self.clearance_m, quad_segs=_QUAD_SEGS)
+        shapely.prepare(inflated)
+        return inflated, shapely.bounds(inflated)
+
     def _grid(self, band: _Band) -> _Grid:
         """The routing grid of a band with obstacles (built again if it was dropped)."""
         return _remember(self._grids, band.ids, GRIDS_KEPT, lambda: self._build_grid(band))
 
     def _build_grid(self, band: _Band) -> _Grid:
         cell = self.cell_m
-        if self._inflated is None:  # every obstacle's, once: a band takes its own
-            every = np.array([o.footprint for o in self.world.obstacles], dtype=object)
-            self._inflated = shapely.buffer(every, self.clearance_m, quad_segs=_QUAD_SEGS)
-            shapely.prepare(self._inflated)
-            self._inflated_bounds = shapely.bounds(self._inflated)
+        every, every_bounds = self._inflated
         ids = list(band.ids)
-        inflated, bounds = self._inflated[ids], self._inflated_bounds[ids]
+        inflated, bounds = every[ids], every_bounds[ids]
         pad = BORDER_CELLS * cell
         x0 = math.floor((bounds[:, 0].min() - pad) / cell) * cell
         y0 = math.floor((bounds[:, 1].min() - pad) / cell) * cell
@@ -327,10 +331,7 @@ class PathPlanner:
             limit_m = math.inf
         dist, pred, _ = dijkstra(grid.graph, directed=True, indices=sources,
                                  return_predecessors=True, min_only=True, limit=limit_m)
-        self._searches[key] = _Search(limit_m, dist, pred)
-        self._searches.move_to_end(key)
-        while len(self._searches) > SEARCHES_KEPT:
-            self._searches.popitem(last=False)
+        _keep(self._searches, key, SEARCHES_KEPT, _Search(limit_m, dist, pred))
         return dist, pred
 
     def _attach(self, grid: _Grid, point: Point3, z_m: float, *, leaving: bool) -> list[int]:
@@ -398,7 +399,13 @@ def _remember(kept: OrderedDict[K, V], key: K, most: int, build: Callable[[], V]
     if value is not None:
         kept.move_to_end(key)
         return value
-    value = kept[key] = build()
+    return _keep(kept, key, most, build())
+
+
+def _keep(kept: OrderedDict[K, V], key: K, most: int, value: V) -> V:
+    """kept[key] = value as the one used last; only the `most` used last are kept."""
+    kept[key] = value
+    kept.move_to_end(key)
     while len(kept) > most:
         kept.popitem(last=False)
     return value
