@@ -7,6 +7,7 @@ import contextlib
 import json
 import logging
 import math
+import sys
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -54,7 +55,17 @@ TICKS_PER_PERIOD = 5
 # hosted session wakes twice a second instead of ten times.
 QUIET_TELEMETRY_TICK_MAX_S = 0.5
 STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the sockets
+# A lockstep clock steps in slices of STEPS_PER_SLICE: a fast-forward through steady flight
+# ends with its slice, so where the slices end is part of every result (the truth's last bits)
+# and lockstep results never change. A stepped clock without lockstep runs flat out, and where
+# its slices end already depends on when datagrams arrive; it takes slices of up to
+# FREE_STEPS_PER_SLICE (fewer cruise plans, leaps and truth writes) and looks at its sockets
+# after STEP_BUDGET_S of wall time or FREE_SIM_S_PER_LOOK of simulated time, whichever comes
+# first: however fast the machine, a client's command is read, and an outcome's budget held,
+# within that much simulated time of the clock's last look.
 STEPS_PER_SLICE = 50
+FREE_STEPS_PER_SLICE = 250
+FREE_SIM_S_PER_LOOK = 15.0
 LINK_TICK_S = 0.05
 log = logging.getLogger("mavswarm.swarm")
 
@@ -351,8 +362,9 @@ class Swarm:
             wall = time.monotonic()
             if self.clock.stepped:
                 deadline = wall + STEP_BUDGET_S
+                slice_steps, look_ends = self._slicing()
                 noted = False
-                while time.monotonic() < deadline:
+                while time.monotonic() < deadline and fleet.step_count < look_ends:
                     watched = self.watches.advance_targets()  # the wait tools' deadlines
                     if not self._clock.should_step(watched):
                         break
@@ -362,7 +374,7 @@ class Swarm:
                         noted = True
                     # never past a fault's time either
                     allowed = self._clock.steps_allowed([*watched, self.faults.next_event_s()])
-                    fleet.run(min(allowed, STEPS_PER_SLICE))
+                    fleet.run(min(allowed, slice_steps, look_ends - fleet.step_count))
                     if self.faults.fire_due():
                         self.bursts.all_changed()
                     self._clock.release_waiters()
@@ -410,6 +422,14 @@ class Swarm:
                         await self._wake.wait()
             else:
                 await asyncio.sleep(max(timeout, 0.0005))
+
+    def _slicing(self) -> tuple[int, int]:
+        """A stepped clock's steps per slice, and the step count at which its scheduler looks
+        at the sockets again whatever the wall time (none for a lockstep clock)."""
+        if self.clock.lockstep:
+            return STEPS_PER_SLICE, sys.maxsize
+        look_steps = max(1, round(FREE_SIM_S_PER_LOOK / self.fleet.dt_s))
+        return FREE_STEPS_PER_SLICE, self.fleet.step_count + look_steps
 
     def _send_telemetry(self, wall: float) -> None:
         due = self.streams.due(wall)

@@ -1,8 +1,8 @@
 """Stepped-clock speed-up: a 10-vehicle swarm flies MAVSDK mission_raw missions flat out.
 
     ./dev perf stepped_speedup [--drones 10] [--physics-hz 50,20,100] [--repeat 1]
-                                [--prflt -1|keep] [--timeout 60] [--profile FILE] [--core]
-                                [--sessions [ID ...]] [--tasks N]
+                                [--prflt -1|keep] [--timeout 60] [--profile FILE]
+                                [--core [--slice 50]] [--sessions [ID ...]] [--tasks N]
 
 The emulator (`Swarm(default_scenario(N), clock=ClockConfig(stepped=True, physics_hz=HZ))`)
 runs in its own process on 127.0.0.1; this process is the MAVSDK client (mavsdk.asyncio).
@@ -17,9 +17,11 @@ finish seen by MAVSDK; simulated time from just before it (the stepped clock sta
 while nothing flies) to the last vehicle's first mission_complete truth event.
 
 --core flies the same missions on the pure core instead (`Fleet`, no MAVLink, no sockets,
-run in slices of 50 steps as the stepped swarm runs them) and prints the simulated seconds per
-CPU second of the physics alone and a SHA-256 of the whole ground truth (every trajectory row
-and event), which must not change when the physics code is only made faster.
+run in slices of 50 steps as a lockstep swarm runs them; `--slice 250` as a stepped swarm
+without lockstep does, emulator.swarm.FREE_STEPS_PER_SLICE) and prints the simulated seconds
+per CPU second of the physics alone and a SHA-256 of the whole ground truth (every trajectory
+row and event), which must not change when the physics code is only made faster (each slice
+length has its own: a fast-forward ends with its slice).
 
 --sessions flies the oracle in lockstep over benchmark sessions (default: the five
 `*-extreme-1` sessions, 30 drones each; `--tasks N`: their first N tasks), each session in one
@@ -54,6 +56,7 @@ from emulator.clock import ClockConfig
 from emulator.flight.fleet import Fleet
 from emulator.flight.mission import MissionItem as CoreItem
 from emulator.scenario import default_scenario
+from emulator.swarm import FREE_STEPS_PER_SLICE, STEPS_PER_SLICE
 
 NAV_WAYPOINT = 16
 FRAME_GLOBAL_RELATIVE_ALT_INT = 6
@@ -176,9 +179,10 @@ async def fly(n: int, hz: float, prflt: float | None, timeout_s: float,
             "cpu_s": s1["cpu"] - s0["cpu"]}
 
 
-def fly_core(n: int, hz: float, *, digest: bool = True) -> dict:
-    """The same missions on the pure core: CPU seconds of the physics and a truth digest
-    (`digest=False`: none, "")."""
+def fly_core(n: int, hz: float, *, digest: bool = True,
+             slice_steps: int = STEPS_PER_SLICE) -> dict:
+    """The same missions on the pure core, `slice_steps` steps per `Fleet.run`: CPU seconds
+    of the physics and a truth digest (`digest=False`: none, "")."""
     scenario = default_scenario(n)
     fleet = Fleet(scenario, physics_hz=hz)
     for k, ap in enumerate(fleet.autopilots):
@@ -190,7 +194,7 @@ def fly_core(n: int, hz: float, *, digest: bool = True) -> dict:
         ap.arm()
     steps, cpu0 = 0, time.process_time()
     while fleet.any_busy:
-        steps += fleet.run(50)  # the stepped swarm's slice (STEPS_PER_SLICE)
+        steps += fleet.run(slice_steps)
     cpu = time.process_time() - cpu0
     return {"sim": fleet.now_s, "cpu": cpu, "steps": steps,
             "digest": core_digest(fleet) if digest else ""}
@@ -253,12 +257,12 @@ def sessions_main(args) -> None:
 
 def core_main(args, hzs: list[float]) -> None:
     print(f"stepped_speedup --core: {args.drones} vehicles, the same missions on the pure core "
-          f"(no MAVLink), {args.repeat} run(s) per physics Hz")
+          f"(no MAVLink) in slices of {args.slice} steps, {args.repeat} run(s) per physics Hz")
     print(machine_line(), flush=True)
     rows = []
     for hz in hzs:
         for _ in range(args.repeat):
-            r = fly_core(args.drones, hz)
+            r = fly_core(args.drones, hz, slice_steps=args.slice)
             rows.append([f"{hz:g}", f"{r['sim']:.2f}", r["steps"], f"{r['cpu']:.3f}",
                          f"{r['sim'] / r['cpu']:.0f}", f"{1e6 * r['cpu'] / r['steps']:.1f}",
                          r["digest"], f"{os.getloadavg()[0]:.1f}"])
@@ -284,6 +288,9 @@ def main() -> None:
     p.add_argument("--core", action="store_true",
                    help="fly the missions on the pure core (no MAVLink): physics speed and a "
                         "digest of the ground truth")
+    p.add_argument("--slice", type=int, default=STEPS_PER_SLICE,
+                   help="with --core: steps per slice (50: a lockstep swarm's; "
+                        f"{FREE_STEPS_PER_SLICE}: a stepped swarm's without lockstep)")
     p.add_argument("--sessions", nargs="*", metavar="ID",
                    help="fly the oracle over these benchmark sessions in lockstep (none "
                         "named: the five *-extreme-1 sessions) and print their speed-up")

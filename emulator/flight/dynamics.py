@@ -260,6 +260,12 @@ class FleetDynamics:
     def wind_m_s(self, value: np.ndarray) -> None:
         self._wind_m_s = value
         self._windy = bool(_count(value))
+        self._wind_speed_m_s = float(np.hypot(value[0], value[1]))
+
+    @property
+    def wind_speed_m_s(self) -> float:
+        """The wind's speed in m/s (numpy's hypot of the wind)."""
+        return self._wind_speed_m_s
 
     @property
     def windy(self) -> bool:

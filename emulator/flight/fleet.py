@@ -8,6 +8,7 @@ import numpy as np
 
 from emulator.flight.arrays import any_true as _any
 from emulator.flight.arrays import indices as _indices
+from emulator.flight.arrays import step_offsets_s, steps_done
 from emulator.flight.autopilot import Autopilot
 from emulator.flight.battery import FleetBattery
 from emulator.flight.collision import ClearanceGuard
@@ -193,8 +194,8 @@ class Fleet:
     def max_speed_m_s(self, k: int) -> float:
         """An upper bound of vehicle k's 3D speed (airspeed limit + wind + vertical rate)."""
         dyn = self.dyn
-        return float(dyn.airspeed_max_m_s[k] + np.hypot(*dyn.wind_m_s)
-                     + max(dyn.climb_m_s[k], dyn.descent_m_s[k]))
+        return (dyn.airspeed_max_m_s.item(k) + dyn.wind_speed_m_s
+                + max(dyn.climb_m_s.item(k), dyn.descent_m_s.item(k)))
 
     def mark_ended(self, k: int) -> None:
         """Vehicle k's goal was cut short by its autopilot (a failsafe took over)."""
@@ -240,14 +241,13 @@ class Fleet:
         dyn, dt = self.dyn, self.dt_s
         first = self.step_count + 1
         steps = np.arange(first, first + count)
-        offsets = np.arange(1, count + 1)[:, None, None] * dt  # steps - self.step_count
-        positions = dyn.position_m + dyn.velocity_m_s * offsets
+        positions = dyn.position_m + dyn.velocity_m_s * step_offsets_s(count, dt)
         every = BATTERY_EVERY_STEPS
         first_due = -first % every  # the index of the first battery step among `steps`
         due = len(range(first_due, count, every))
         charge = self.bat.steps(due, np.array(fleet_deltas(self, dt * every)))
         # Step i records the charge after every battery step at or before it.
-        battery = charge[(np.arange(count) + (every - first_due)) // every]
+        battery = charge[steps_done(count, first_due, every)]
         if self.targets is not None:
             self.targets.advance(self.now_s, count * dt)
         self.step_count += count
@@ -280,7 +280,7 @@ class Fleet:
         if battery.ran:
             bat.pct = np.array(battery.pct)
         steps = np.arange(start + 1, start + j + 1)
-        positions = dyn.position_m + dyn.velocity_m_s * ((steps - start)[:, None, None] * dt)
+        positions = dyn.position_m + dyn.velocity_m_s * step_offsets_s(j, dt)
         solo_rows = np.fromiter(rows, float, len(rows)).reshape(j, len(solos), 5)
         index = plan.solo
         positions[:, index] = solo_rows[:, :, :3]
@@ -300,8 +300,8 @@ class Fleet:
             yaw_step[solo.k] = solo.yaw_step
         dyn.yaw_step_deg = yaw_step
         # Step i records the charge after every battery step at or before it (the battery
-        # steps are first_battery, first_battery + BATTERY_EVERY_STEPS, ...).
-        done = (steps - (start + first_battery)) // BATTERY_EVERY_STEPS + 1
+        # steps are first_battery, first_battery + BATTERY_EVERY_STEPS, ... after start).
+        done = steps_done(j, first_battery - 1, BATTERY_EVERY_STEPS)
         self.recorder.record_fleet_steps(steps * dt, positions, yaw, np.array(charge)[done],
                                          moving_rows)
         events = _NO_EVENTS
