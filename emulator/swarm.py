@@ -61,8 +61,8 @@ STEP_BUDGET_S = 0.005  # stepped mode: wall time simulated between looks at the 
 # its slices end already depends on when datagrams arrive; it takes slices of up to
 # FREE_STEPS_PER_SLICE (fewer cruise plans, leaps and truth writes) and looks at its sockets
 # after STEP_BUDGET_S of wall time or FREE_SIM_S_PER_LOOK of simulated time, whichever comes
-# first: however fast the machine, a client's command is read, and an outcome's budget held,
-# within that much simulated time of the clock's last look.
+# first: however fast the machine, a datagram waits at most that much simulated time for the
+# scheduler to read it.
 STEPS_PER_SLICE = 50
 FREE_STEPS_PER_SLICE = 250
 FREE_SIM_S_PER_LOOK = 15.0

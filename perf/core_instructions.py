@@ -2,10 +2,11 @@
 does not depend on the machine's speed or load, so a change of a few percent shows where CPU
 time cannot (on a shared 2-core machine the same code's CPU time swings by a third).
 
-    ./dev perf core_instructions [--drones 10] [--physics-hz 50] [--runs 3]
+    ./dev perf core_instructions [--drones 10] [--physics-hz 50] [--runs 3] [--slice 50]
     ./dev perf core_instructions --session area_search-easy-1
 
-The missions of `stepped_speedup --core` (emulator.flight.Fleet in 50-step slices, no MAVLink)
+The missions of `stepped_speedup --core` (emulator.flight.Fleet in 50-step slices as a lockstep
+swarm runs them, `--slice 250` as one without lockstep does; no MAVLink)
 fly in two child processes under valgrind's callgrind, one flying them once and one `--runs`
 times; their difference over runs - 1 is the instructions of one flight, start-up and imports
 left out. Printed with the truth digest, which must not change when the physics is only made
@@ -33,12 +34,12 @@ from emulator.flight.native import COMPILED
 HERE = os.path.abspath(__file__)
 
 
-def child(drones: int, hz: float, runs: int) -> None:
+def child(drones: int, hz: float, runs: int, slice_steps: int) -> None:
     """Fly the missions `runs` times; print the truth digest of the last flight."""
     from stepped_speedup import fly_core
 
     for i in range(runs):
-        result = fly_core(drones, hz, digest=i == runs - 1)
+        result = fly_core(drones, hz, digest=i == runs - 1, slice_steps=slice_steps)
     print(f"digest {result['digest']}")
 
 
@@ -55,10 +56,10 @@ def callgrind(*args: str) -> tuple[int, str]:
     return int(found.group(1)), out.stdout
 
 
-def counted(drones: int, hz: float, runs: int) -> tuple[int, str]:
+def counted(drones: int, hz: float, runs: int, slice_steps: int) -> tuple[int, str]:
     """Instructions of a child flying `runs` times, and its digest."""
     count, out = callgrind(HERE, "--child", str(runs), "--drones", str(drones),
-                           "--physics-hz", str(hz))
+                           "--physics-hz", str(hz), "--slice", str(slice_steps))
     digest = re.search(r"digest (\w+)", out)
     if digest is None:
         raise RuntimeError(f"the child printed no digest:\n{out[-2000:]}")
@@ -82,12 +83,14 @@ def main() -> None:
     p.add_argument("--drones", type=int, default=10)
     p.add_argument("--physics-hz", type=float, default=50.0)
     p.add_argument("--runs", type=int, default=3, help="flights in the second child (>= 2)")
+    p.add_argument("--slice", type=int, default=50,
+                   help="steps per Fleet.run (50: a lockstep swarm's; 250: one's without)")
     p.add_argument("--session", metavar="ID",
                    help="count the oracle over this benchmark session instead (lockstep)")
     p.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.child is not None:
-        child(args.drones, args.physics_hz, args.child)
+        child(args.drones, args.physics_hz, args.child, args.slice)
         return
     if shutil.which("valgrind") is None:
         sys.exit("core_instructions needs valgrind (apt-get install valgrind)")
@@ -99,11 +102,13 @@ def main() -> None:
         return
     runs = max(2, args.runs)
     print(f"core_instructions: {args.drones} vehicles, {args.physics_hz:g} Hz, the stepped "
-          f"benchmark's missions on the core under callgrind (1 and {runs} flights); compiled: "
+          f"benchmark's missions on the core in slices of {args.slice} steps under callgrind "
+          f"(1 and {runs} flights); compiled: "
           f"{', '.join(sorted(COMPILED)) or 'none'}")
     print(machine_line(), flush=True)
     with ThreadPoolExecutor(2) as pool:
-        once, more = pool.map(lambda k: counted(args.drones, args.physics_hz, k), (1, runs))
+        once, more = pool.map(lambda k: counted(args.drones, args.physics_hz, k, args.slice),
+                              (1, runs))
     per_flight = (more[0] - once[0]) / (runs - 1)
     print(f"instructions per flight: {per_flight / 1e6:.1f} million; truth sha256 {more[1]}"
           + ("" if more[1] == once[1] else f" (the single flight: {once[1]})"))
